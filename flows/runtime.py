@@ -1,0 +1,94 @@
+"""Orchestration runtime: one Prefect API for the whole run, and the task runner choice.
+
+Prefect's ephemeral mode starts a temporary API server in *every* process that runs a task; with
+Ray that is one server per worker (8-15 s each). ``prefect_api()`` starts a single local server
+up front (unless ``PREFECT_API_URL`` already points at one, e.g. a ``prefect server start`` or Prefect
+Cloud) and exports its URL so Ray workers, which inherit the driver's environment, report to it.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import os
+from enum import Enum
+from typing import Iterator
+
+logger = logging.getLogger(__name__)
+
+
+class RunnerKind(str, Enum):
+    """Where mapped tasks run."""
+
+    ray = "ray"  # a local (or addressed) Ray cluster: one worker process per CPU
+    threads = "threads"  # a thread pool in this process (no start-up cost; good for small jobs)
+
+
+@contextlib.contextmanager
+def prefect_api(timeout_s: float = 90.0) -> Iterator[str]:
+    """Make sure a Prefect API is reachable for the duration of the block; yields its URL.
+
+    If ``PREFECT_API_URL`` is set it is used as is. Otherwise a local server is started in a
+    subprocess and stopped (after flushing logs) when the block exits.
+    """
+    existing = os.environ.get("PREFECT_API_URL")
+    if existing:
+        yield existing
+        return
+    os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
+    from prefect.server.api.server import SubprocessASGIServer
+    from prefect.settings import PREFECT_API_URL, temporary_settings
+
+    server = SubprocessASGIServer()
+    server.start(timeout=int(timeout_s))
+    logger.info("Prefect API for this run: %s", server.api_url)
+    os.environ["PREFECT_API_URL"] = server.api_url
+    try:
+        with temporary_settings({PREFECT_API_URL: server.api_url}):
+            yield server.api_url
+            _flush_prefect_logs()
+    finally:
+        shutdown_ray()
+        os.environ.pop("PREFECT_API_URL", None)
+        server.stop()
+
+
+def _flush_prefect_logs() -> None:
+    try:
+        from prefect.logging.handlers import APILogHandler
+
+        APILogHandler.flush()
+    except Exception:  # pragma: no cover - best effort at shutdown
+        logger.debug("could not flush Prefect logs", exc_info=True)
+
+
+def make_task_runner(kind: RunnerKind, num_cpus: int | None = None):
+    """Build the Prefect task runner for ``kind``.
+
+    Args:
+        kind: ``RunnerKind.ray`` connects to ``RAY_ADDRESS`` when set, else starts a local Ray with
+            ``num_cpus`` CPUs (default: all); ``RunnerKind.threads`` uses ``num_cpus`` threads.
+    """
+    if kind == RunnerKind.threads:
+        from prefect.task_runners import ThreadPoolTaskRunner
+
+        return ThreadPoolTaskRunner(max_workers=num_cpus or os.cpu_count() or 1)
+    from prefect_ray import RayTaskRunner
+
+    os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+    address = os.environ.get("RAY_ADDRESS")
+    if address:
+        return RayTaskRunner(address=address)
+    init_kwargs = {"num_cpus": num_cpus or os.cpu_count() or 1, "include_dashboard": False, "log_to_driver": True}
+    return RayTaskRunner(init_kwargs=init_kwargs)
+
+
+def shutdown_ray() -> None:
+    """Stop the local Ray instance if this process started one."""
+    try:
+        import ray
+
+        if ray.is_initialized():
+            ray.shutdown()
+    except ImportError:  # pragma: no cover
+        pass

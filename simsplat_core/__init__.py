@@ -1,0 +1,1 @@
+"""SIMSplat core algorithms: framework-free (torch, numpy, OpenCV only)."""

@@ -1,0 +1,22 @@
+"""Exceptions raised by the storage layer.
+
+Every message names the artifact (its URI) so that a failure in a fan-out run points at one file.
+"""
+
+from __future__ import annotations
+
+
+class StorageError(Exception):
+    """Base class of every storage-layer error."""
+
+
+class UnsafePathError(StorageError, ValueError):
+    """A relative artifact path is absolute, contains ``..`` or is otherwise outside the store root."""
+
+
+class SchemaError(StorageError, ValueError):
+    """A table does not match its declared schema; the message names the file and the column."""
+
+
+class CorruptArtifactError(StorageError, ValueError):
+    """A file exists but cannot be decoded (truncated Parquet, broken EXR, invalid JSON)."""

@@ -1,0 +1,433 @@
+"""The pyarrow schema of every persisted table, defined once (``DESIGN.md``, "Data contracts").
+
+Each schema carries file metadata ``schema_name`` and ``schema_version`` (and, for tables with a
+variable array width, the width: ``feature_dim``/``color_dim`` for ``gaussians``, ``dim`` for
+``nodes``). ``validate_table`` checks a table against a schema and raises ``SchemaError`` naming the
+file and every offending column.
+
+Type decisions:
+
+* Fixed-width arrays are ``FixedSizeList<float32>`` (``K[9]`` and 4x4 transforms row-major in
+  ``[16]``). Transforms are float32 too: the world frame is the first ego pose, so translations stay
+  within a log's extent (<= a few km), where float32 resolves better than 0.5 mm; rotation entries
+  keep ~1e-7 relative precision. Scalars that are measurements (``heading``, ``speed``, ``x``, ``y``)
+  are float32; metric ``value`` is float64 (aggregates must not lose digits).
+* Time is int64 microseconds; frame indices are int64; scene-graph ``node_id`` is int32 (it is
+  also written to the EXR ``id`` channel as float32, exact up to 2**24).
+* ``objects.attributes`` is ``map<string, string>`` (native, queryable, keeps insertion order).
+* ``map_features.points`` is ``list<FixedSizeList<float32, 3>>`` (one variable-length polyline).
+* Strings are never null: "absent" is the empty string (``image_uri``, ``deform_uri``,
+  ``failure_reason``, ``caption``). Every column is non-nullable.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import pyarrow as pa
+
+from storage.errors import SchemaError
+
+SCHEMA_NAME_KEY = "schema_name"
+SCHEMA_VERSION_KEY = "schema_version"
+
+
+def vec(width: int) -> pa.DataType:
+    """``FixedSizeList<float32>[width]``."""
+    return pa.list_(pa.float32(), width)
+
+
+def _schema(name: str, version: int, fields: list[tuple[str, pa.DataType]], **dims: int) -> pa.Schema:
+    metadata = {SCHEMA_NAME_KEY: name, SCHEMA_VERSION_KEY: str(version)}
+    metadata.update({key: str(value) for key, value in dims.items()})
+    return pa.schema([pa.field(n, t, nullable=False) for n, t in fields], metadata=metadata)
+
+
+# ----------------------------------------------------------------------------- log tables
+FRAMES_SCHEMA = _schema(
+    "frames",
+    1,
+    [
+        ("seq_id", pa.string()),
+        ("frame_idx", pa.int64()),
+        ("timestamp_us", pa.int64()),
+        ("camera", pa.string()),
+        ("image_uri", pa.string()),  # EXR path relative to the log directory; "" when no pixels
+        ("K", vec(9)),  # row-major 3x3 intrinsics
+        ("cam_to_world", vec(16)),  # row-major 4x4, OpenCV camera -> world
+        ("width", pa.int32()),
+        ("height", pa.int32()),
+        ("split", pa.string()),  # "train" | "test"
+    ],
+)
+
+EGO_POSES_SCHEMA = _schema(
+    "ego_poses",
+    1,
+    [
+        ("seq_id", pa.string()),
+        ("frame_idx", pa.int64()),
+        ("timestamp_us", pa.int64()),
+        ("ego_to_world", vec(16)),  # row-major 4x4
+    ],
+)
+
+TRACKS_SCHEMA = _schema(
+    "tracks",
+    1,
+    [
+        ("seq_id", pa.string()),
+        ("object_id", pa.string()),
+        ("frame_idx", pa.int64()),
+        ("category", pa.string()),
+        ("center", vec(3)),
+        ("size", vec(3)),  # length, width, height
+        ("heading", pa.float32()),
+        ("speed", pa.float32()),
+        ("visible", pa.bool_()),
+    ],
+)
+
+OBJECTS_SCHEMA = _schema(
+    "objects",
+    1,
+    [
+        ("seq_id", pa.string()),
+        ("object_id", pa.string()),
+        ("category", pa.string()),
+        ("node_type", pa.string()),  # "rigid" | "nonrigid" | "static"
+        ("instance_id", pa.int32()),
+        ("caption", pa.string()),
+        ("attributes", pa.map_(pa.string(), pa.string())),
+    ],
+)
+
+MAP_FEATURES_SCHEMA = _schema(
+    "map_features",
+    1,
+    [
+        ("seq_id", pa.string()),
+        ("feature_id", pa.string()),
+        ("kind", pa.string()),
+        ("points", pa.list_(vec(3))),  # [P, 3] world coordinates
+    ],
+)
+
+
+# ----------------------------------------------------------------------------- scene tables
+def gaussians_schema(feature_dim: int, color_dim: int = 3) -> pa.Schema:
+    """One row per Gaussian; ``color[color_dim]`` (3 for RGB, 3*(deg+1)**2 for SH), ``feature[feature_dim]``.
+
+    ``feature_dim == 0`` means the scene has no language features: the ``feature`` column is omitted.
+    """
+    if feature_dim < 0 or color_dim <= 0:
+        raise ValueError(f"gaussians_schema: need feature_dim >= 0 and color_dim > 0, got {feature_dim}, {color_dim}")
+    fields = [
+        ("scene_id", pa.string()),
+        ("node_id", pa.int32()),
+        ("mean", vec(3)),
+        ("log_scale", vec(3)),
+        ("quat", vec(4)),  # w, x, y, z
+        ("color", vec(color_dim)),
+        ("opacity_logit", pa.float32()),
+    ]
+    if feature_dim:
+        fields.append(("feature", vec(feature_dim)))
+    return _schema("gaussians", 1, fields, feature_dim=feature_dim, color_dim=color_dim)
+
+
+def nodes_schema(dim: int) -> pa.Schema:
+    """One row per scene-graph node; language features ``f_app``/``f_mot``/``f_loc`` of width ``dim``."""
+    if dim <= 0:
+        raise ValueError(f"nodes_schema: need dim > 0, got {dim}")
+    return _schema(
+        "nodes",
+        1,
+        [
+            ("scene_id", pa.string()),
+            ("node_id", pa.int32()),
+            ("node_type", pa.string()),  # "background" | "rigid" | "nonrigid" | "static"
+            ("object_id", pa.string()),  # "" for the background node
+            ("category", pa.string()),
+            ("f_app", vec(dim)),
+            ("f_mot", vec(dim)),
+            ("f_loc", vec(dim)),
+        ],
+        dim=dim,
+    )
+
+
+NODE_POSES_SCHEMA = _schema(
+    "node_poses",
+    1,
+    [
+        ("scene_id", pa.string()),
+        ("node_id", pa.int32()),
+        ("frame_idx", pa.int64()),
+        ("transform", vec(16)),  # row-major 4x4 node -> world
+        ("deform_uri", pa.string()),  # non-rigid deformation artifact; "" for rigid nodes
+    ],
+)
+
+# ----------------------------------------------------------------------------- run tables
+EDITS_SCHEMA = _schema(
+    "edits",
+    1,
+    [
+        ("run_id", pa.string()),
+        ("seq_id", pa.string()),
+        ("edit_id", pa.string()),
+        ("attempt", pa.int32()),
+        ("prompt", pa.string()),
+        ("command_json", pa.string()),
+        ("status", pa.string()),
+        ("failure_reason", pa.string()),  # "" when the attempt succeeded
+    ],
+)
+
+TRAJECTORIES_SCHEMA = _schema(
+    "trajectories",
+    1,
+    [
+        ("edit_id", pa.string()),
+        ("object_id", pa.string()),
+        ("step", pa.int32()),
+        ("x", pa.float32()),
+        ("y", pa.float32()),
+        ("heading", pa.float32()),
+        ("speed", pa.float32()),
+        ("source", pa.string()),  # "log" | "edited" | "refined"
+    ],
+)
+
+METRICS_SCHEMA = _schema(
+    "metrics",
+    1,
+    [
+        ("run_id", pa.string()),
+        ("seq_id", pa.string()),
+        ("stage", pa.string()),
+        ("name", pa.string()),
+        ("value", pa.float64()),
+        ("unit", pa.string()),
+    ],
+)
+
+
+# ----------------------------------------------------------------------------- registry
+@dataclass(frozen=True)
+class TableSpec:
+    """How to build the schema of one table.
+
+    Attributes:
+        name: the ``schema_name``.
+        build: keyword dims -> schema (dims are the integer metadata keys in ``dims``).
+        dims: names of the integer dimensions stored in the file metadata.
+        min_version: oldest ``schema_version`` this code still reads.
+    """
+
+    name: str
+    build: Callable[..., pa.Schema]
+    dims: tuple[str, ...] = ()
+    min_version: int = 1
+
+    @property
+    def version(self) -> int:
+        return schema_version(self.build(**{d: 1 for d in self.dims}))
+
+
+def _fixed(schema: pa.Schema) -> Callable[[], pa.Schema]:
+    return lambda: schema
+
+
+TABLES: dict[str, TableSpec] = {
+    spec.name: spec
+    for spec in (
+        TableSpec("frames", _fixed(FRAMES_SCHEMA)),
+        TableSpec("ego_poses", _fixed(EGO_POSES_SCHEMA)),
+        TableSpec("tracks", _fixed(TRACKS_SCHEMA)),
+        TableSpec("objects", _fixed(OBJECTS_SCHEMA)),
+        TableSpec("map_features", _fixed(MAP_FEATURES_SCHEMA)),
+        TableSpec("gaussians", gaussians_schema, dims=("feature_dim", "color_dim")),
+        TableSpec("nodes", nodes_schema, dims=("dim",)),
+        TableSpec("node_poses", _fixed(NODE_POSES_SCHEMA)),
+        TableSpec("edits", _fixed(EDITS_SCHEMA)),
+        TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA)),
+        TableSpec("metrics", _fixed(METRICS_SCHEMA)),
+    )
+}
+
+
+def _meta(metadata: Mapping[bytes, bytes] | None) -> dict[str, str]:
+    return {k.decode(): v.decode() for k, v in (metadata or {}).items()}
+
+
+def schema_name(schema: pa.Schema) -> str:
+    return _meta(schema.metadata)[SCHEMA_NAME_KEY]
+
+
+def schema_version(schema: pa.Schema) -> int:
+    return int(_meta(schema.metadata)[SCHEMA_VERSION_KEY])
+
+
+def schema_from_metadata(name: str, metadata: Mapping[bytes, bytes] | None, source: str) -> pa.Schema:
+    """Expected schema of table ``name`` with the dims recorded in a file's ``metadata``.
+
+    Raises:
+        SchemaError: unknown table, or a dim missing / not a valid integer in the metadata.
+    """
+    if name not in TABLES:
+        raise SchemaError(f"{source}: unknown table {name!r}; known: {sorted(TABLES)}")
+    spec = TABLES[name]
+    meta = _meta(metadata)
+    dims: dict[str, int] = {}
+    for dim in spec.dims:
+        try:
+            dims[dim] = int(meta[dim])
+        except (KeyError, ValueError):
+            raise SchemaError(
+                f"{source}: metadata key {dim!r} of table {name!r} is missing or not an integer "
+                f"(got {meta.get(dim)!r})"
+            ) from None
+    try:
+        return spec.build(**dims)
+    except ValueError as exc:
+        raise SchemaError(f"{source}: {exc}") from None
+
+
+def validate_table(table: pa.Table, schema: pa.Schema, source: str, *, require_metadata: bool = True) -> None:
+    """Check ``table`` against ``schema``; raise one ``SchemaError`` listing every problem.
+
+    Checks: ``schema_name`` (and ``schema_version`` not newer than supported nor older than the
+    oldest readable), each expected column present with the expected type (fixed widths named
+    explicitly), no unexpected columns, and no nulls (top-level or inside list values) in
+    non-nullable columns.
+
+    Args:
+        source: the file (URI) named in the message.
+        require_metadata: when False (tables built in memory before writing) missing metadata is
+            accepted; present but different metadata is still an error.
+    """
+    problems = _metadata_problems(_meta(table.schema.metadata), _meta(schema.metadata), require_metadata)
+    actual_names = set(table.schema.names)
+    for field in schema:
+        if field.name not in actual_names:
+            problems.append(f"column {field.name!r} is missing (expected {field.type})")
+            continue
+        actual = table.schema.field(field.name).type
+        if actual != field.type:
+            problems.append(_type_problem(field.name, actual, field.type))
+        elif not field.nullable:
+            nulls = _null_count(table.column(field.name))
+            if nulls:
+                problems.append(f"column {field.name!r} has {nulls} null value(s) but is not nullable")
+    extra = [n for n in table.schema.names if n not in set(schema.names)]
+    if extra:
+        problems.append(f"unexpected column(s) {extra} (not in schema)")
+    if problems:
+        name = _meta(schema.metadata).get(SCHEMA_NAME_KEY, "?")
+        raise SchemaError(f"{source}: does not match schema {name!r}: " + "; ".join(problems))
+
+
+def _metadata_problems(actual: dict[str, str], expected: dict[str, str], required: bool) -> list[str]:
+    problems: list[str] = []
+    name = expected[SCHEMA_NAME_KEY]
+    if SCHEMA_NAME_KEY not in actual:
+        if required:
+            problems.append(f"metadata has no {SCHEMA_NAME_KEY!r} (expected {name!r})")
+    elif actual[SCHEMA_NAME_KEY] != name:
+        problems.append(f"{SCHEMA_NAME_KEY} is {actual[SCHEMA_NAME_KEY]!r}, expected {name!r}")
+    if SCHEMA_VERSION_KEY not in actual:
+        if required:
+            problems.append(f"metadata has no {SCHEMA_VERSION_KEY!r}")
+        return problems
+    current = int(expected[SCHEMA_VERSION_KEY])
+    oldest = TABLES[name].min_version if name in TABLES else current
+    try:
+        version = int(actual[SCHEMA_VERSION_KEY])
+    except ValueError:
+        return [*problems, f"{SCHEMA_VERSION_KEY} {actual[SCHEMA_VERSION_KEY]!r} is not an integer"]
+    if version > current:
+        problems.append(f"{SCHEMA_VERSION_KEY} {version} is newer than supported version {current} (upgrade simsplat)")
+    elif version < oldest:
+        problems.append(f"{SCHEMA_VERSION_KEY} {version} is older than the oldest readable version {oldest}")
+    return problems
+
+
+def _type_problem(column: str, actual: pa.DataType, expected: pa.DataType) -> str:
+    if (
+        pa.types.is_fixed_size_list(actual)
+        and pa.types.is_fixed_size_list(expected)
+        and actual.value_type == expected.value_type
+    ):
+        return f"column {column!r} has fixed width {actual.list_size}, expected {expected.list_size}"
+    return f"column {column!r} has type {actual}, expected {expected}"
+
+
+def _is_list(t: pa.DataType) -> bool:
+    return pa.types.is_list(t) or pa.types.is_large_list(t) or pa.types.is_fixed_size_list(t)
+
+
+def _null_count(column: pa.ChunkedArray) -> int:
+    """Nulls in ``column`` and in the values of (nested) list columns."""
+    total = 0
+    for chunk in column.chunks:
+        array: pa.Array = chunk
+        total += array.null_count
+        while _is_list(array.type):
+            array = array.flatten()
+            total += array.null_count
+    return total
+
+
+# ----------------------------------------------------------------------------- JSON Schema export
+def json_schema(schema: pa.Schema) -> dict:
+    """JSON Schema (draft 2020-12) of one row of ``schema``, for documentation and external tools."""
+    meta = _meta(schema.metadata)
+    return {
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": meta.get(SCHEMA_NAME_KEY, ""),
+        "description": f"one row of table {meta.get(SCHEMA_NAME_KEY, '')!r}, schema_version "
+        f"{meta.get(SCHEMA_VERSION_KEY, '?')}",
+        "type": "object",
+        "properties": {field.name: _json_type(field.type) for field in schema},
+        "required": [field.name for field in schema if not field.nullable],
+        "additionalProperties": False,
+    }
+
+
+def _json_type(t: pa.DataType) -> dict:
+    if pa.types.is_string(t) or pa.types.is_large_string(t):
+        return {"type": "string"}
+    if pa.types.is_boolean(t):
+        return {"type": "boolean"}
+    if pa.types.is_integer(t):
+        return {"type": "integer"}
+    if pa.types.is_floating(t):
+        return {"type": "number"}
+    if pa.types.is_fixed_size_list(t):
+        return {"type": "array", "items": _json_type(t.value_type), "minItems": t.list_size, "maxItems": t.list_size}
+    if pa.types.is_map(t):
+        return {"type": "object", "additionalProperties": _json_type(t.item_type)}
+    if pa.types.is_list(t) or pa.types.is_large_list(t):
+        return {"type": "array", "items": _json_type(t.value_type)}
+    raise TypeError(f"no JSON Schema mapping for arrow type {t}")
+
+
+# ----------------------------------------------------------------------------- column helpers
+def vectors_to_arrow(values: np.ndarray, width: int) -> pa.FixedSizeListArray:
+    """``[N, width]`` (or anything reshapeable to it) -> ``FixedSizeList<float32>[width]`` array (N rows)."""
+    flat = np.ascontiguousarray(np.asarray(values, dtype=np.float32).reshape(-1))
+    if flat.size % width:
+        raise ValueError(f"cannot split {flat.size} values into rows of width {width}")
+    return pa.FixedSizeListArray.from_arrays(pa.array(flat, pa.float32()), width)
+
+
+def arrow_to_vectors(column: pa.ChunkedArray | pa.Array) -> np.ndarray:
+    """``FixedSizeList<float32>[w]`` column -> ``[N, w]`` float32 array."""
+    array = column.combine_chunks() if isinstance(column, pa.ChunkedArray) else column
+    width = array.type.list_size
+    values = array.flatten().to_numpy(zero_copy_only=False)
+    return np.asarray(values, dtype=np.float32).reshape(len(array), width)

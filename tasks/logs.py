@@ -1,0 +1,91 @@
+"""Tasks that put driving logs into the artifact store: synthetic generation and real-log ingest.
+
+Each task is thin: compute the content key of its inputs, skip if the store already holds a complete
+log under that key, else load/generate with ``simsplat_core`` and write with ``storage``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from prefect import task
+from prefect.cache_policies import NO_CACHE
+
+from simsplat_core.summary import LogSummary, summarize_log
+from simsplat_core.types import SceneLog
+from simsplat_core.world import WORLD_VERSION, WorldConfig, generate_log, default_seq_id
+from storage import ArtifactStore, content_key, manifest_bytes, read_log_manifest, write_scene_log
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class StoredLog:
+    """What a log-producing task returns (small: it crosses process boundaries).
+
+    Attributes:
+        summary: counts describing the log.
+        relpath: where the log lives in the store (``logs/<seq_id>``).
+        bytes_on_disk: total size of the log's files.
+        seconds: wall time spent producing and writing it (0 when skipped).
+        skipped: True when a complete log with the same content key was already stored.
+    """
+
+    summary: LogSummary
+    relpath: str
+    bytes_on_disk: int
+    seconds: float
+    skipped: bool
+
+
+def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[], SceneLog]) -> StoredLog:
+    relpath = f"logs/{seq_id}"
+    manifest = read_log_manifest(store, seq_id)
+    provenance = (manifest or {}).get("provenance", {})
+    if provenance.get("producer_key") == key and "summary" in provenance:
+        logger.info("%s: already stored for producer key %s, skipping", seq_id, key[:12])
+        return StoredLog(LogSummary(**provenance["summary"]), relpath, manifest_bytes(manifest), 0.0, True)
+    started = time.perf_counter()
+    log = produce()
+    summary = summarize_log(log)
+    written = write_scene_log(store, log, provenance={"producer_key": key, "summary": summary.to_dict()})
+    seconds = time.perf_counter() - started
+    logger.info("%s: wrote %d bytes in %.1f s", seq_id, written.bytes, seconds)
+    return StoredLog(summary, relpath, written.bytes, round(seconds, 3), False)
+
+
+@task(name="generate-synthetic-log", retries=1, retry_delay_seconds=2, cache_policy=NO_CACHE)
+def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> StoredLog:
+    """Generate the synthetic sequence of ``seed`` into ``<store>/logs/<seq_id>``."""
+    seq_id = default_seq_id(seed)
+    key = content_key("synthetic-log", WORLD_VERSION, seed, dataclasses.asdict(config))
+    return _store_log(ArtifactStore(store_root), seq_id, key, lambda: generate_log(seed=seed, config=config, seq_id=seq_id))
+
+
+@task(name="ingest-real-log", retries=0, cache_policy=NO_CACHE)
+def ingest_real_log(store_root: str, source: str, path: str, image_scale: float = 1.0) -> StoredLog:
+    """Decode a real driving log (``source`` = ``waymo-frame`` or ``av2``) and store it.
+
+    Decoding always runs (the seq_id comes from the file); the write is skipped when the store already
+    holds an identical log.
+    """
+    from simsplat_core.data import load_av2_log, load_waymo_frames
+
+    started = time.perf_counter()
+    if source == "waymo-frame":
+        log = load_waymo_frames(Path(path), image_scale=image_scale)
+    elif source == "av2":
+        log = load_av2_log(Path(path))
+    else:
+        raise ValueError(f"unknown log source {source!r}: expected 'waymo-frame' or 'av2'")
+    summary = summarize_log(log)
+    provenance = {"source_path": str(path), "image_scale": image_scale, "summary": summary.to_dict()}
+    written = write_scene_log(ArtifactStore(store_root), log, provenance=provenance)
+    seconds = time.perf_counter() - started
+    logger.info("%s: ingested from %s (%d bytes, %.1f s)", log.seq_id, path, written.bytes, seconds)
+    return StoredLog(summary, written.relpath, written.bytes, round(seconds, 3), written.skipped)

@@ -1,0 +1,73 @@
+"""The ``simsplat`` CLI: world generation, inspection, ingest of real logs, and error handling."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from flows.cli import app
+from storage import ArtifactStore, list_logs, read_scene_log
+
+runner = CliRunner()
+
+
+def _tree_digest(root: Path) -> dict[str, str]:
+    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
+
+
+@pytest.mark.parametrize("command", [[], ["run"], ["world"], ["ingest"], ["ingest", "waymo-frame"], ["ingest", "av2"], ["inspect"]])
+def test_every_command_has_help(command):
+    result = runner.invoke(app, [*command, "--help"])
+    assert result.exit_code == 0, result.output
+    assert "Usage" in result.output
+
+
+@pytest.mark.orchestration
+def test_world_then_inspect_writes_logs_and_contact_sheet(prefect_api_url, tmp_path):
+    store = tmp_path / "store"
+    result = runner.invoke(app, ["world", "--out", str(store), "--sequences", "2", "--seed", "5", "--frames", "6",
+                                 "--width", "96", "--height", "64"])
+    assert result.exit_code == 0, result.output
+    assert list_logs(ArtifactStore(str(store))) == ["synth-000005", "synth-000006"]
+    for name in ("frames", "tracks", "objects", "map_features"):
+        assert (store / "logs" / "synth-000005" / f"{name}.parquet").is_file()
+    assert list((store / "logs" / "synth-000005" / "images").rglob("*.exr"))
+
+    sheet = tmp_path / "sheet.png"
+    result = runner.invoke(app, ["inspect", str(store / "logs" / "synth-000005"), "--sheet", str(sheet), "--frame", "3"])
+    assert result.exit_code == 0, result.output
+    assert "vehicle" in result.output and "front" in result.output
+    image = cv2.imread(str(sheet))
+    assert image is not None and image.shape[0] > 100 and image.std() > 5
+
+
+def test_inspect_rejects_a_path_that_is_not_a_log(tmp_path):
+    result = runner.invoke(app, ["inspect", str(tmp_path / "nowhere")])
+    assert result.exit_code != 0
+    assert "STORE/logs/<seq_id>" in result.output
+
+
+@pytest.mark.orchestration
+@pytest.mark.shared_data
+def test_ingest_av2_and_corrupt_waymo_leaves_store_unchanged(prefect_api_url, shared_data, tmp_path):
+    store = tmp_path / "store"
+    result = runner.invoke(app, ["ingest", "av2", str(shared_data / "av2" / "sensor-log-7fab2350"), "--out", str(store)])
+    assert result.exit_code == 0, result.output
+    (seq_id,) = list_logs(ArtifactStore(str(store)))
+    log = read_scene_log(ArtifactStore(str(store)), seq_id)
+    assert len(log.tracks) == 114
+
+    before = _tree_digest(store)
+    corrupt = tmp_path / "corrupt.tfrecord"
+    data = bytearray((shared_data / "waymo" / "pvps_data_one_frame.tfrecord").read_bytes())
+    data[len(data) // 2] ^= 0xFF
+    corrupt.write_bytes(bytes(data))
+    result = runner.invoke(app, ["ingest", "waymo-frame", str(corrupt), "--out", str(store)])
+    assert result.exit_code != 0
+    assert "corrupt.tfrecord" in str(result.exception) + result.output
+    assert _tree_digest(store) == before
