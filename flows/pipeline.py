@@ -81,3 +81,25 @@ def main_flow(store_root: str, seeds: list[int], config: WorldConfig) -> list[St
         lines.append(f"| {s.summary.seq_id} | {s.summary.num_frames} | {objects} | {s.bytes_on_disk / 1e6:.1f} | {s.seconds:.1f} |")
     create_markdown_artifact("\n".join(lines), key="main-summary", description="SIMSplat main job")
     return logs
+
+
+@flow(name="simsplat-scheduled-main")
+def scheduled_main_flow(
+    store_root: str,
+    sequences: int = 2,
+    seed: int = 0,
+    frames: int = 40,
+    width: int = 240,
+    height: int = 160,
+    runner: str = "ray",
+) -> list[StoredLog]:
+    """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
+
+    A deployment cannot choose a task runner per run, so this parent flow picks it and runs
+    ``main_flow`` as a subflow.
+    """
+    from flows.runtime import RunnerKind, make_task_runner
+
+    config = WorldConfig(num_frames=frames, width=width, height=height)
+    task_runner = make_task_runner(RunnerKind(runner))
+    return main_flow.with_options(task_runner=task_runner)(store_root, list(range(seed, seed + sequences)), config)
