@@ -40,7 +40,7 @@ _NEAR = 0.05
 def _to_uint8(image: np.ndarray | None, width: int, height: int) -> np.ndarray:
     if image is None:
         canvas = np.full((height, width, 3), 48, np.uint8)
-        cv2.putText(canvas, "no pixels in this log", (10, 30), cv2.FONT_HERSHEY_SIMPLEX, max(width / 1200, 0.4),
+        cv2.putText(canvas, "no pixels in this log", (10, height // 2), cv2.FONT_HERSHEY_SIMPLEX, max(width / 1200, 0.4),
                     (160, 160, 160), 1, cv2.LINE_AA)
         return canvas
     return np.clip(np.asarray(image) * 255.0 + 0.5, 0, 255).astype(np.uint8)
