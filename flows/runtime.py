@@ -37,7 +37,7 @@ def prefect_api(timeout_s: float = 90.0) -> Iterator[str]:
         return
     os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
     from prefect.server.api.server import SubprocessASGIServer
-    from prefect.settings import PREFECT_API_URL, temporary_settings
+    from prefect.settings import PREFECT_API_URL, PREFECT_LOGGING_TO_API_ENABLED, temporary_settings
 
     server = SubprocessASGIServer()
     server.start(timeout=int(timeout_s))
@@ -48,16 +48,20 @@ def prefect_api(timeout_s: float = 90.0) -> Iterator[str]:
             yield server.api_url
             _flush_prefect_logs()
     finally:
-        shutdown_ray()
-        os.environ.pop("PREFECT_API_URL", None)
-        server.stop()
+        # Whatever is logged from here on (Ray shutdown, the server's own goodbye) must not be queued
+        # for an API that is about to disappear.
+        with temporary_settings({PREFECT_LOGGING_TO_API_ENABLED: False}):
+            shutdown_ray()
+            os.environ.pop("PREFECT_API_URL", None)
+            server.stop()
 
 
-def _flush_prefect_logs() -> None:
+def _flush_prefect_logs(timeout_s: float = 10.0) -> None:
+    """Send every queued log record to the API while it is still up (blocks up to ``timeout_s``)."""
     try:
-        from prefect.logging.handlers import APILogHandler
+        from prefect.logging.handlers import APILogWorker
 
-        APILogHandler.flush()
+        APILogWorker.drain_all(timeout=timeout_s)
     except Exception:  # pragma: no cover - best effort at shutdown
         logger.debug("could not flush Prefect logs", exc_info=True)
 
