@@ -1,0 +1,171 @@
+"""Object trajectories prepared for motion labelling and encoding: smoothed velocities, ego frames, map facts.
+
+Conventions (``types.py``): world frame = first ego pose, right-handed, z up; the ego frame has x
+forward and y to the left, so a positive yaw change is a left (counter-clockwise) turn and a negative
+ego-frame ``y`` velocity is motion from the ego's left to its right.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from simsplat_core.geometry import invert_transform, yaw_of_rotation
+from simsplat_core.language.map_context import MapContext, MapFacts
+from simsplat_core.types import SceneLog, Track
+
+#: Agent kinds with a motion codebook.
+AGENT_KINDS: tuple[str, ...] = ("vehicle", "pedestrian")
+
+
+def agent_kind(category: str) -> str | None:
+    """Motion codebook of an object category: pedestrians walk; vehicles, cyclists and other movers drive;
+    static objects and signs have none (``None``)."""
+    if category == "pedestrian":
+        return "pedestrian"
+    if category in ("vehicle", "cyclist", "other"):
+        return "vehicle"
+    return None
+
+
+def smoothed_velocity(t: np.ndarray, xy: np.ndarray, half_window_s: float) -> np.ndarray:
+    """``[T, 2]`` velocity by a local least-squares line fit over samples within ``half_window_s``.
+
+    Args:
+        t: ``[T]`` seconds, strictly increasing.
+        xy: ``[T, 2]`` positions.
+    Rows whose window holds a single sample get zero velocity.
+    """
+    w = (np.abs(t[:, None] - t[None, :]) <= half_window_s + 1e-9).astype(np.float64)  # [T, T]
+    count = w.sum(axis=1, keepdims=True)
+    t_mean = (w @ t[:, None]) / count  # [T, 1]
+    xy_mean = (w @ xy) / count  # [T, 2]
+    dt = t[None, :] - t_mean  # [T, T]
+    var = (w * dt * dt).sum(axis=1, keepdims=True)
+    cov = np.einsum("ij,ij,jk->ik", w, dt, xy) - xy_mean * (w * dt).sum(axis=1, keepdims=True)
+    return np.where(var > 1e-12, cov / np.maximum(var, 1e-12), 0.0)
+
+
+def ego_yaw(ego_pose: np.ndarray) -> float:
+    """Yaw of a ``[4, 4]`` ego pose in the world frame."""
+    return float(yaw_of_rotation(ego_pose[:3, :3]))
+
+
+def to_ego_frame(xy: np.ndarray, ego_pose: np.ndarray) -> np.ndarray:
+    """``[N, 2]`` world points in the ego frame of ``ego_pose`` ``[4, 4]`` (x forward, y left)."""
+    inv = invert_transform(ego_pose)
+    return np.asarray(xy)[:, :2] @ inv[:2, :2].T + inv[:2, 3]
+
+
+def rotate_to_ego(vectors: np.ndarray, ego_pose: np.ndarray) -> np.ndarray:
+    """``[N, 2]`` world direction vectors (velocities) expressed in the ego frame of ``ego_pose``."""
+    return np.asarray(vectors)[:, :2] @ ego_pose[:2, :2]
+
+
+@dataclass(frozen=True)
+class ObjectTrajectory:
+    """One movable object's trajectory, column-wise over the ``T`` frames where it exists.
+
+    Attributes:
+        object_id, category: from the log.
+        kind: ``agent_kind(category)``.
+        frame_idx: ``[T]`` log frame indices.
+        t: ``[T]`` seconds since the log's first frame.
+        xy: ``[T, 2]`` world box centres.
+        heading: ``[T]`` unwrapped box yaw, radians.
+        velocity: ``[T, 2]`` smoothed world velocity, m/s.
+        visible: ``[T]`` seen by some camera.
+        facts: per-row map facts, ``None`` when the log has no map.
+    """
+
+    object_id: str
+    category: str
+    kind: str
+    frame_idx: np.ndarray
+    t: np.ndarray
+    xy: np.ndarray
+    heading: np.ndarray
+    velocity: np.ndarray
+    visible: np.ndarray
+    facts: MapFacts | None = None
+
+    def __len__(self) -> int:
+        return int(self.frame_idx.shape[0])
+
+    @property
+    def speed(self) -> np.ndarray:
+        """``[T]`` smoothed speed, m/s."""
+        return np.linalg.norm(self.velocity, axis=1)
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self) else 0.0
+
+    def window(self, rows: slice) -> "ObjectTrajectory":
+        """The rows ``rows`` (a contiguous slice) as a trajectory of their own; velocities are kept."""
+        return replace(
+            self,
+            frame_idx=self.frame_idx[rows],
+            t=self.t[rows],
+            xy=self.xy[rows],
+            heading=self.heading[rows],
+            velocity=self.velocity[rows],
+            visible=self.visible[rows],
+            facts=self.facts.take(rows) if self.facts is not None else None,
+        )
+
+    def reference_row(self) -> int:
+        """Row that location refers to: the median visible row (lower median), else the middle row."""
+        rows = np.flatnonzero(self.visible) if self.visible.any() else np.arange(len(self))
+        return int(rows[(len(rows) - 1) // 2])
+
+    @classmethod
+    def from_track(
+        cls,
+        track: Track,
+        category: str,
+        timestamps_us: np.ndarray,
+        map_context: MapContext | None = None,
+        half_window_s: float = 0.5,
+    ) -> "ObjectTrajectory":
+        """Prepare a ``Track`` (``timestamps_us`` ``[F]`` of the log; velocities smoothed over ``±half_window_s``)."""
+        kind = agent_kind(category)
+        if kind is None:
+            raise ValueError(f"object {track.object_id!r} of category {category!r} has no motion")
+        t = (timestamps_us[track.frame_idx] - timestamps_us[0]).astype(np.float64) * 1e-6
+        xy = np.asarray(track.center[:, :2], dtype=np.float64)
+        heading = np.unwrap(np.asarray(track.heading, dtype=np.float64))
+        facts = map_context.facts(xy, heading) if map_context is not None else None
+        return cls(
+            object_id=track.object_id,
+            category=category,
+            kind=kind,
+            frame_idx=np.asarray(track.frame_idx, dtype=np.int64),
+            t=t,
+            xy=xy,
+            heading=heading,
+            velocity=smoothed_velocity(t, xy, half_window_s),
+            visible=np.asarray(track.visible, dtype=bool),
+            facts=facts,
+        )
+
+
+def log_trajectories(
+    log: SceneLog, map_context: MapContext | None = None, half_window_s: float = 0.5, min_frames: int = 2
+) -> dict[str, ObjectTrajectory]:
+    """Trajectories of the log's movable objects with at least ``min_frames`` frames, in log order.
+
+    ``map_context`` defaults to one built from ``log.map_features`` (``None`` when the log has no map).
+    """
+    if map_context is None and log.map_features:
+        map_context = MapContext.from_features(log.map_features)
+    out: dict[str, ObjectTrajectory] = {}
+    for obj in log.objects:
+        if agent_kind(obj.category) is None:
+            continue
+        track = log.track(obj.object_id)
+        if len(track) < min_frames:
+            continue
+        out[obj.object_id] = ObjectTrajectory.from_track(track, obj.category, log.timestamps_us, map_context, half_window_s)
+    return out

@@ -1,0 +1,127 @@
+"""Trajectory encoder + codebooks: convex features, training, grounding on a held-out log, persistence."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from simsplat_core.language.codebooks import MotionCodebooks
+from simsplat_core.language.motion_dataset import mirror_log
+from simsplat_core.language.motion_labels import label_log
+from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig, MotionAlignerState
+from simsplat_core.language.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, PEDESTRIAN_MOTION, VEHICLE_MOTION
+
+
+def test_prototypes_are_unit_text_embeddings(aligner: MotionAligner, encoder) -> None:
+    books = aligner.codebooks
+    assert books.encoder_name == encoder.name
+    for book, vocab in ((books.vehicle, VEHICLE_MOTION), (books.pedestrian, PEDESTRIAN_MOTION),
+                        (books.sector, LOCATION_SECTOR), (books.context, LOCATION_CONTEXT)):
+        assert book.classes == vocab.names
+        assert book.prototypes.shape == (len(vocab), encoder.dim)
+        np.testing.assert_allclose(np.linalg.norm(book.prototypes, axis=1), 1.0, atol=1e-5)
+    phrase = encoder.encode_passages(list(VEHICLE_MOTION["turning_left"].prototypes)).mean(axis=0)
+    np.testing.assert_allclose(books.vehicle.prototypes[0], phrase / np.linalg.norm(phrase), atol=1e-6)
+
+
+def test_features_are_convex_combinations_of_prototypes(aligner: MotionAligner, held_out_log) -> None:
+    feats = aligner.features(held_out_log)
+    movable = {o.object_id for o in held_out_log.objects if o.category in ("vehicle", "pedestrian")}
+    assert set(feats) == movable
+    books = aligner.codebooks
+    for f in feats.values():
+        w_mot = np.array(list(f.motion_probs.values()))
+        w_loc = np.array(list(f.location_probs.values()))
+        assert (w_mot >= 0).all() and (w_loc >= 0).all()
+        assert w_mot.sum() == pytest.approx(1.0, abs=1e-5) and w_loc.sum() == pytest.approx(1.0, abs=1e-5)
+        assert tuple(f.motion_probs) == books.motion(f.kind).classes
+        np.testing.assert_allclose(f.f_mot, w_mot @ books.motion(f.kind).prototypes, atol=1e-5)
+        np.testing.assert_allclose(f.f_loc, w_loc @ books.location_prototypes, atol=1e-5)
+        assert f.f_mot.shape == f.f_loc.shape == (384,) and f.f_mot.dtype == np.float32
+
+
+def test_training_reduces_the_loss(aligner: MotionAligner, held_out_log) -> None:
+    first, last = aligner.history[0], aligner.history[-1]
+    assert last["total"] < 0.3 * first["total"]
+    assert last["mot"] < first["mot"] and last["loc"] < first["loc"]
+    untrained = MotionAligner(aligner.config, aligner.codebooks, MotionAligner._new_network(aligner.config, aligner.codebooks))
+    assert aligner.evaluate_loss([held_out_log])["total"] < 0.5 * untrained.evaluate_loss([held_out_log])["total"]
+
+
+QUERIES = {
+    "turning_right": "the vehicle making a right at the junction",
+    "turning_left": "a car that takes a left turn",
+    "parked": "a car left parked by the roadside",
+    "standing": "a person who stands still",
+    "walking_along": "someone walking on the pavement",
+}
+
+
+def test_trained_aligner_ranks_the_right_object_first(aligner: MotionAligner, encoder, held_out_log) -> None:
+    feats = aligner.features(held_out_log)
+    kind_of = {c: "vehicle" for c in VEHICLE_MOTION.names} | {c: "pedestrian" for c in PEDESTRIAN_MOTION.names}
+    checked = 0
+    for cls, text in QUERIES.items():
+        cands = {oid: f for oid, f in feats.items() if f.kind == kind_of[cls]}
+        labels = [f.labels.motion for f in cands.values()]
+        if cls not in labels or set(labels) == {cls}:
+            continue
+        mot_sim, _ = aligner.score(encoder.encode_queries([text])[0], cands)
+        best = list(cands.values())[int(np.argmax(mot_sim))]
+        assert best.labels.motion == cls, (text, best.object_id, best.motion_probs)
+        checked += 1
+    assert checked >= 3
+    # a location query: the object most "ahead of me" among vehicles is in front of the ego
+    vehicles = {oid: f for oid, f in feats.items() if f.kind == "vehicle"}
+    _, loc_sim = aligner.score(encoder.encode_queries(["the car right ahead of us"])[0], vehicles)
+    assert list(vehicles.values())[int(np.argmax(loc_sim))].labels.sector == "in_front_of_ego"
+
+
+def test_save_load_round_trip_gives_identical_features(aligner: MotionAligner, held_out_log, tmp_path) -> None:
+    path = tmp_path / "aligner.npz"
+    aligner.save(path)
+    restored = MotionAligner.load(path)
+    assert restored.config == aligner.config
+    before, after = aligner.features(held_out_log), restored.features(held_out_log)
+    assert before.keys() == after.keys()
+    for oid in before:
+        np.testing.assert_array_equal(before[oid].f_mot, after[oid].f_mot)
+        np.testing.assert_array_equal(before[oid].f_loc, after[oid].f_loc)
+        assert before[oid].motion_probs == after[oid].motion_probs
+    state = MotionAlignerState.load(path)
+    assert all(isinstance(v, np.ndarray) for v in {**state.weights, **state.prototypes}.values())
+
+
+def test_score_checks_the_query_width(aligner: MotionAligner, held_out_log) -> None:
+    with pytest.raises(ValueError, match="dims"):
+        aligner.score(np.ones(10), aligner.features(held_out_log))
+
+
+def test_training_is_deterministic_for_a_seed(train_logs, encoder) -> None:
+    config = MotionAlignerConfig(epochs=2, seed=5)
+    config = dataclasses.replace(config, samples=dataclasses.replace(config.samples, windows_per_track=1, mirror=False))
+    a = MotionAligner.fit(train_logs[:1], config, encoder).state()
+    b = MotionAligner.fit(train_logs[:1], config, encoder).state()
+    for key in a.weights:
+        np.testing.assert_array_equal(a.weights[key], b.weights[key])
+
+
+def test_mirroring_swaps_left_and_right(train_logs) -> None:
+    log = train_logs[0]
+    def mirrored(name: str) -> str:
+        return name.replace("left", "\0").replace("right", "left").replace("\0", "right")
+
+    labels, flipped = label_log(log), label_log(mirror_log(log))
+    for oid, lb in labels.items():
+        assert flipped[oid].motion == mirrored(lb.motion)
+        assert flipped[oid].sector == mirrored(lb.sector)
+
+
+def test_codebooks_round_trip_through_arrays(aligner: MotionAligner) -> None:
+    books = aligner.codebooks
+    classes = {cb.name: cb.classes for cb in (books.vehicle, books.pedestrian, books.sector, books.context)}
+    again = MotionCodebooks.from_arrays(books.encoder_name, classes, books.arrays())
+    np.testing.assert_array_equal(again.location_prototypes, books.location_prototypes)
+    np.testing.assert_array_equal(again.motion_centre, books.motion_centre)
