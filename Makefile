@@ -4,6 +4,8 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 STORE ?= artifacts/demo
+# Reconstruction iterations per sequence for `make demo` (empty: the ReconstructionConfig default).
+ITERATIONS ?=
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export RAY_AUTH_MODE := disabled
 
@@ -18,8 +20,11 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/simsplat run --store $(STORE)
+	$(VENV)/bin/simsplat run --store $(STORE) $(if $(ITERATIONS),--iterations $(ITERATIONS))
 	$(VENV)/bin/simsplat inspect $(STORE)/logs/synth-000000 --sheet $(STORE)/contact_sheet.png --frame 20
+	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --out $(STORE)/render_frame20.png
+	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --shift-left 1 \
+		--out $(STORE)/novel_view_frame20_left1m.png
 
 test: $(STAMP)
 	$(VENV)/bin/pytest -q

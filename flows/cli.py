@@ -29,6 +29,8 @@ logger = logging.getLogger("flows.cli")
 
 RunnerOption = Annotated[RunnerKind, typer.Option(help="Where per-sequence tasks run: a local Ray cluster or threads.")]
 WorkersOption = Annotated[Optional[int], typer.Option(help="Parallel workers (default: all CPUs).")]
+IterationsOption = Annotated[Optional[int], typer.Option(min=1, help="Reconstruction iterations per sequence "
+                                                         "(default: the ReconstructionConfig default).")]
 
 
 @app.callback()
@@ -37,21 +39,39 @@ def _configure(verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Lo
 
 
 def _run_flow(flow_fn, runner: RunnerKind, workers: int | None, **params):
-    """Run ``flow_fn`` with the chosen task runner against one shared Prefect API."""
+    """Run ``flow_fn`` with the chosen task runner against one shared Prefect API.
+
+    With the threads runner, tasks' step progress (e.g. reconstruction iterations) is drawn live.
+    """
+    from flows.progress import StepBars
     from flows.runtime import make_task_runner, prefect_api
 
-    with prefect_api():
+    with prefect_api(), StepBars():
         return flow_fn.with_options(task_runner=make_task_runner(runner, workers))(**params)
 
 
 def _print_logs(logs) -> None:
     table = Table(title="Driving logs")
-    for col in ("sequence", "source", "frames", "cameras", "objects", "MB", "seconds", ""):
-        table.add_column(col)
+    for col in ("sequence", "source", "frames", "cameras", "MB", "seconds", "status"):
+        table.add_column(col, no_wrap=True)
+    table.add_column("objects")
     for s in logs:
         objects = ", ".join(f"{n} {c}" for c, n in s.summary.objects_by_category.items())
         table.add_row(s.summary.seq_id, s.summary.source, str(s.summary.num_frames), str(len(s.summary.cameras)),
-                      objects, f"{s.bytes_on_disk / 1e6:.2f}", f"{s.seconds:.1f}", "skipped (up to date)" if s.skipped else "")
+                      f"{s.bytes_on_disk / 1e6:.1f}", f"{s.seconds:.1f}", "skipped" if s.skipped else "written",
+                      objects)
+    console.print(table)
+
+
+def _print_scenes(scenes) -> None:
+    table = Table(title="Reconstructed scenes (PSNR/SSIM on held-out test frames)")
+    for col in ("sequence", "scene", "PSNR dB", "SSIM", "Gaussians", "seconds", ""):
+        table.add_column(col, no_wrap=True)
+    for s in scenes:
+        m = s.metrics
+        table.add_row(s.seq_id, s.scene_hash[:8], f"{m.get('psnr_test', float('nan')):.2f}",
+                      f"{m.get('ssim_test', float('nan')):.3f}", str(int(m.get("num_gaussians", 0))),
+                      f"{s.seconds:.1f}", "skipped" if s.skipped else "")
     console.print(table)
 
 
@@ -71,14 +91,74 @@ def run(
     height: Annotated[int, typer.Option(min=16)] = 160,
     runner: RunnerOption = RunnerKind.ray,
     workers: WorkersOption = None,
+    iterations: IterationsOption = None,
 ) -> None:
-    """Run the main job on the embedded default data (synthetic sequences)."""
-    from flows.pipeline import main_flow
+    """Run the main job on the embedded default data: synthetic sequences, then one scene per sequence."""
+    from flows.pipeline import main_flow, reconstruction_config
 
-    logs = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
-                     config=_world_config(frames, width, height))
-    _print_logs(logs)
-    console.print(f"Artifacts under [bold]{store}[/bold]: logs/<seq_id>/ (Parquet tables, EXR images).")
+    result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
+                       config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations))
+    _print_logs(result.logs)
+    _print_scenes(result.scenes)
+    console.print(f"Artifacts under [bold]{store}[/bold]: logs/<seq_id>/ (Parquet tables, EXR images), "
+                  "scenes/<seq_id>/<scene_hash>/ (Gaussians, nodes, poses, metrics, test renders).")
+
+
+@app.command()
+def reconstruct(
+    store: Annotated[str, typer.Option(help="Artifact store root holding logs/<seq_id>/.")],
+    seq: Annotated[Optional[list[str]], typer.Option(help="Sequence to reconstruct (repeatable; default: every log).")] = None,
+    iterations: IterationsOption = None,
+    runner: RunnerOption = RunnerKind.threads,
+    workers: WorkersOption = None,
+) -> None:
+    """Reconstruct stored logs into scene-graph Gaussian scenes under STORE/scenes/<seq_id>/<scene_hash>/."""
+    from flows.pipeline import reconstruct_flow, reconstruction_config
+    from storage import ArtifactStore, list_logs
+
+    available = list_logs(ArtifactStore(store))
+    seq_ids = list(seq) if seq else available
+    unknown = [s for s in seq_ids if s not in available]
+    if unknown or not seq_ids:
+        raise typer.BadParameter(f"no complete log {unknown or ''} in {store}/logs; available: {available}",
+                                 param_hint="--seq")
+    scenes = _run_flow(reconstruct_flow, runner, workers, store_root=store, seq_ids=seq_ids,
+                       config=reconstruction_config(iterations))
+    _print_scenes(scenes)
+
+
+@app.command()
+def render(
+    store: Annotated[str, typer.Option(help="Artifact store root.")],
+    seq: Annotated[str, typer.Option(help="Sequence whose reconstructed scene to render.")],
+    frame: Annotated[int, typer.Option(min=0, help="Frame index to render.")],
+    out: Annotated[str, typer.Option(help="PNG to write (cameras side by side).")],
+    camera: Annotated[Optional[list[str]], typer.Option(help="Camera to render (repeatable; default: all).")] = None,
+    shift_left: Annotated[float, typer.Option(help="Move the cameras this many metres to the ego's left (negative: right).")] = 0.0,
+    shift_forward: Annotated[float, typer.Option(help="Move the cameras this many metres forward (ego frame).")] = 0.0,
+    scene: Annotated[Optional[str], typer.Option(help="Scene hash (or unique prefix); default: the newest scene.")] = None,
+) -> None:
+    """Render a stored scene at one frame from the log's cameras, optionally shifted in the ego frame."""
+    from simsplat_core.scene import SceneGraph
+    from simsplat_core.scene_view import render_views, shifted_cameras, side_by_side
+    from storage import ArtifactStore, list_logs, read_scene, read_scene_log
+    from storage.png import write_png
+
+    artifacts = ArtifactStore(store)
+    available = list_logs(artifacts)
+    if seq not in available:
+        raise typer.BadParameter(f"no complete log {seq!r} in {artifacts.uri('logs')}; available: {available}",
+                                 param_hint="--seq")
+    log = read_scene_log(artifacts, seq, load_images=False)
+    try:
+        loaded = read_scene(artifacts, seq, scene)
+        views = shifted_cameras(log, frame, camera, shift_left=shift_left, shift_forward=shift_forward)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    images = render_views(SceneGraph.from_records(loaded.records), frame, views)
+    uri = write_png(out, side_by_side(images))
+    console.print(f"{seq} frame {frame} (scene {loaded.scene_hash[:12]}, shift left {shift_left:g} m, "
+                  f"forward {shift_forward:g} m): {uri}")
 
 
 @app.command()
@@ -137,11 +217,10 @@ def inspect(
     frame: Annotated[int, typer.Option(help="Frame shown on the contact sheet.")] = 0,
 ) -> None:
     """Summarise a stored log and optionally draw its projected 3D boxes on one frame."""
-    import cv2
-
     from simsplat_core.summary import summarize_log
     from simsplat_core.viz.contact_sheet import contact_sheet
     from storage import ArtifactStore, read_scene_log
+    from storage.png import write_png
 
     root, seq_id = _split_log_dir(log_dir)
     log = read_scene_log(ArtifactStore(root), seq_id, load_images=sheet is not None)
@@ -153,11 +232,11 @@ def inspect(
     table.add_row("map", ", ".join(f"{n} {k}" for k, n in summary.map_by_kind.items()) or "none")
     console.print(table)
     if sheet is not None:
-        image = contact_sheet(log, frame)
-        sheet.parent.mkdir(parents=True, exist_ok=True)
-        if not cv2.imwrite(str(sheet), cv2.cvtColor(image, cv2.COLOR_RGB2BGR)):
-            raise typer.BadParameter(f"could not write {sheet}", param_hint="--sheet")
-        console.print(f"contact sheet: {sheet}")
+        try:
+            uri = write_png(sheet, contact_sheet(log, frame))
+        except (OSError, ValueError) as exc:
+            raise typer.BadParameter(f"could not write {sheet}: {exc}", param_hint="--sheet") from exc
+        console.print(f"contact sheet: {uri}")
 
 
 def _split_log_dir(log_dir: str) -> tuple[str, str]:

@@ -2,28 +2,38 @@
 
 from __future__ import annotations
 
+import dataclasses
 import logging
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
 
 from prefect import flow
 from prefect.artifacts import create_markdown_artifact, create_table_artifact
 from prefect.futures import as_completed
 
 from flows.progress import FlowProgress
+from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log
+from tasks.reconstruct import StoredScene, reconstruct_scene
 
 logger = logging.getLogger(__name__)
 
 
-def _gather(futures: list, stage: str) -> list[StoredLog]:
+def _log_label(result: StoredLog) -> str:
+    return result.summary.seq_id
+
+
+def _gather(futures: list, stage: str, label: Callable = _log_label) -> list:
     """Wait for ``futures`` as they finish, reporting progress; results in submission order."""
     order = {id(f): i for i, f in enumerate(futures)}
-    results: list[StoredLog | None] = [None] * len(futures)
+    results: list = [None] * len(futures)
     with FlowProgress(stage, total=len(futures)) as progress:
         for future in as_completed(futures):
             result = future.result()
             results[order[id(future)]] = result
-            progress.advance(result.summary.seq_id)
+            progress.advance(label(result))
     return [r for r in results if r is not None]
 
 
@@ -52,6 +62,40 @@ def generate_logs(store_root: str, seeds: list[int], config: WorldConfig) -> lis
     return logs
 
 
+def _rounded(value: float | None, digits: int = 4) -> float | None:
+    """``value`` rounded, ``None`` for missing or non-finite values (artifacts are strict JSON)."""
+    return round(float(value), digits) if value is not None and math.isfinite(value) else None
+
+
+def _publish_scenes_table(scenes: list[StoredScene]) -> None:
+    names = ("psnr_test", "ssim_test", "psnr_test_dynamic", "ssim_test_dynamic", "psnr_train", "num_gaussians", "iterations")
+    rows = [
+        {
+            "seq_id": s.seq_id,
+            "scene": s.scene_hash[:12],
+            **{name: _rounded(s.metrics.get(name)) for name in names},
+            "seconds": s.seconds,
+            "skipped": s.skipped,
+        }
+        for s in scenes
+    ]
+    create_table_artifact(rows, key="reconstruction", description="Reconstruction metrics per sequence (test frames)")
+
+
+def reconstruction_config(iterations: int | None = None, base: ReconstructionConfig | None = None) -> ReconstructionConfig:
+    """``base`` (default ``ReconstructionConfig()``) with the iteration count overridden when given."""
+    base = base or ReconstructionConfig()
+    return base if iterations is None else dataclasses.replace(base, iterations=iterations)
+
+
+def reconstruct_scenes(store_root: str, seq_ids: list[str], config: ReconstructionConfig) -> list[StoredScene]:
+    """Fan out one reconstruction task per sequence; publish the metrics table."""
+    futures = [reconstruct_scene.submit(store_root, seq_id, config) for seq_id in seq_ids]
+    scenes = _gather(futures, "reconstruct", label=lambda s: s.seq_id)
+    _publish_scenes_table(scenes)
+    return scenes
+
+
 @flow(name="simsplat-generate-world")
 def generate_world_flow(store_root: str, seeds: list[int], config: WorldConfig) -> list[StoredLog]:
     """Generate one synthetic sequence per seed into the store, in parallel."""
@@ -67,20 +111,50 @@ def ingest_flow(store_root: str, source: str, paths: list[str], image_scale: flo
     return logs
 
 
-@flow(name="simsplat-main")
-def main_flow(store_root: str, seeds: list[int], config: WorldConfig) -> list[StoredLog]:
-    """The main job: synthetic logs in (later stages extend this flow), then a summary.
+@dataclass(frozen=True)
+class MainResult:
+    """What the main job produced: one stored log and one stored scene per sequence."""
 
-    Returns:
-        one ``StoredLog`` per sequence.
+    logs: list[StoredLog]
+    scenes: list[StoredScene]
+
+
+def _summary_markdown(result: MainResult) -> str:
+    lines = [
+        "| sequence | frames | objects | MB | PSNR test (dB) | SSIM test | PSNR dynamic (dB) | Gaussians | reconstruct s |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for log, scene in zip(result.logs, result.scenes):
+        m = scene.metrics
+        objects = ", ".join(f"{n} {c}" for c, n in log.summary.objects_by_category.items())
+        lines.append(
+            f"| {log.summary.seq_id} | {log.summary.num_frames} | {objects} | {log.bytes_on_disk / 1e6:.1f} "
+            f"| {m.get('psnr_test', float('nan')):.2f} | {m.get('ssim_test', float('nan')):.3f} "
+            f"| {m.get('psnr_test_dynamic', float('nan')):.2f} | {int(m.get('num_gaussians', 0))} | {scene.seconds:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+@flow(name="simsplat-main")
+def main_flow(
+    store_root: str, seeds: list[int], config: WorldConfig, reconstruction: ReconstructionConfig | None = None
+) -> MainResult:
+    """The main job: synthetic logs in, one reconstructed scene per log, then a summary.
+
+    Args:
+        reconstruction: scene reconstruction settings (default ``ReconstructionConfig()``).
     """
     logs = generate_logs(store_root, seeds, config)
-    lines = ["| sequence | frames | objects | MB | s |", "|---|---|---|---|---|"]
-    for s in logs:
-        objects = ", ".join(f"{n} {c}" for c, n in s.summary.objects_by_category.items())
-        lines.append(f"| {s.summary.seq_id} | {s.summary.num_frames} | {objects} | {s.bytes_on_disk / 1e6:.1f} | {s.seconds:.1f} |")
-    create_markdown_artifact("\n".join(lines), key="main-summary", description="SIMSplat main job")
-    return logs
+    scenes = reconstruct_scenes(store_root, [s.summary.seq_id for s in logs], reconstruction or ReconstructionConfig())
+    result = MainResult(logs, scenes)
+    create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
+    return result
+
+
+@flow(name="simsplat-reconstruct")
+def reconstruct_flow(store_root: str, seq_ids: list[str], config: ReconstructionConfig) -> list[StoredScene]:
+    """Reconstruct stored logs (one task per sequence) into scene-graph Gaussian scenes."""
+    return reconstruct_scenes(store_root, seq_ids, config)
 
 
 @flow(name="simsplat-scheduled-main")
@@ -92,14 +166,16 @@ def scheduled_main_flow(
     width: int = 240,
     height: int = 160,
     runner: str = "ray",
-) -> list[StoredLog]:
+    iterations: int | None = None,
+) -> MainResult:
     """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
 
     A deployment cannot choose a task runner per run, so this parent flow picks it and runs
-    ``main_flow`` as a subflow.
+    ``main_flow`` as a subflow. ``iterations`` overrides the reconstruction iteration count.
     """
     from flows.runtime import RunnerKind, make_task_runner
 
     config = WorldConfig(num_frames=frames, width=width, height=height)
     task_runner = make_task_runner(RunnerKind(runner))
-    return main_flow.with_options(task_runner=task_runner)(store_root, list(range(seed, seed + sequences)), config)
+    seeds = list(range(seed, seed + sequences))
+    return main_flow.with_options(task_runner=task_runner)(store_root, seeds, config, reconstruction_config(iterations))

@@ -1,17 +1,36 @@
-"""Progress reporting for flows: a Prefect progress artifact plus, on a terminal, a rich progress bar."""
+"""Progress reporting for flows: a Prefect progress artifact plus, on a terminal, rich progress bars.
+
+``FlowProgress`` counts finished tasks of a stage. ``StepBars`` (used by the CLI around a flow run)
+draws one live bar per unit of work from the step reports of tasks running in this process
+(``tasks.progress``; i.e. with the threads runner). Both share one rich display while ``StepBars`` is
+active (rich allows only one live display at a time).
+"""
 
 from __future__ import annotations
 
 import logging
 import os
 import sys
+import threading
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from prefect.artifacts import create_progress_artifact, update_progress_artifact
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
+from tasks.progress import listening
+
 logger = logging.getLogger(__name__)
+
+#: The live display of an active ``StepBars``; ``FlowProgress`` adds its bar to it instead of starting one.
+_shared_bar: Progress | None = None
+
+
+def _new_bar() -> Progress:
+    return Progress(
+        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), transient=False
+    )
 
 
 def _want_bar() -> bool:
@@ -39,6 +58,7 @@ class FlowProgress:
     _artifact_id: Any = None
     _bar: Progress | None = None
     _bar_task: Any = None
+    _owns_bar: bool = False
     _extra: dict[str, Any] = field(default_factory=dict)
 
     def __enter__(self) -> "FlowProgress":
@@ -46,12 +66,13 @@ class FlowProgress:
             self._artifact_id = create_progress_artifact(0.0, description=f"{self.stage}: 0/{self.total}")
         except Exception:  # the API may be unreachable; progress must never break the work
             logger.warning("could not create a Prefect progress artifact for %s", self.stage, exc_info=True)
-        if _want_bar():
-            self._bar = Progress(
-                TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
-                transient=False,
-            )
+        if _shared_bar is not None:
+            self._bar = _shared_bar
+        elif _want_bar():
+            self._bar = _new_bar()
             self._bar.start()
+            self._owns_bar = True
+        if self._bar is not None:
             self._bar_task = self._bar.add_task(self.stage, total=self.total)
         return self
 
@@ -68,5 +89,46 @@ class FlowProgress:
             self._bar.update(self._bar_task, advance=1, description=f"{self.stage} {label}".strip())
 
     def __exit__(self, *exc: object) -> None:
-        if self._bar is not None:
+        if self._bar is not None and self._owns_bar:
             self._bar.stop()
+
+
+class StepBars:
+    """One live bar per unit of work (e.g. per sequence), fed by ``tasks.progress`` step reports.
+
+    Only reports made in this process arrive (tasks on Ray workers report to Prefect only). Does
+    nothing unless a bar is wanted (interactive terminal or ``SIMSPLAT_PROGRESS=1``)::
+
+        with StepBars():
+            flow(...)
+    """
+
+    def __init__(self, headline: str = "psnr") -> None:
+        self.headline = headline
+        self._bar: Progress | None = None
+        self._tasks: dict[str, Any] = {}
+        self._lock = threading.Lock()
+        self._listening: Any = None
+
+    def __enter__(self) -> "StepBars":
+        global _shared_bar
+        if _shared_bar is None and _want_bar():
+            self._bar = _shared_bar = _new_bar()
+            self._bar.start()
+            self._listening = listening(self._on_step)
+            self._listening.__enter__()
+        return self
+
+    def _on_step(self, label: str, step: int, total: int, metrics: Mapping[str, float]) -> None:
+        description = label + (f" {self.headline} {metrics[self.headline]:.2f}" if self.headline in metrics else "")
+        with self._lock:
+            if label not in self._tasks:
+                self._tasks[label] = self._bar.add_task(label, total=total)
+            self._bar.update(self._tasks[label], completed=step, total=total, description=description)
+
+    def __exit__(self, *exc: object) -> None:
+        global _shared_bar
+        if self._bar is not None:
+            self._listening.__exit__(None, None, None)
+            self._bar.stop()
+            _shared_bar = None

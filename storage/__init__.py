@@ -1,6 +1,7 @@
 """Storage layer: artifact store, Parquet schemas, EXR I/O, content keys and atomic writes.
 
-Imports ``simsplat_core.types`` only; never prefect or ray. ``simsplat_core`` never imports this.
+Imports ``simsplat_core.types`` (and, only when a scene is read, ``simsplat_core.scene.SceneRecords``);
+never prefect or ray. ``simsplat_core`` never imports this.
 """
 
 from storage.errors import CorruptArtifactError, SchemaError, StorageError, UnsafePathError
@@ -27,7 +28,20 @@ from storage.logs import (
     write_scene_log,
 )
 from storage.markers import MARKER_NAME, is_done, mark_done, read_marker
+from storage.scenes import (
+    LoadedScene,
+    WrittenScene,
+    list_scenes,
+    read_scene,
+    read_scene_manifest,
+    read_scene_render,
+    resolve_scene_hash,
+    scene_dir,
+    scene_exists,
+    write_scene,
+)
 from storage.schemas import (
+    DEFORMATIONS_SCHEMA,
     EDITS_SCHEMA,
     EGO_POSES_SCHEMA,
     FRAMES_SCHEMA,
@@ -54,6 +68,7 @@ from storage.store import ArtifactStore, join_relpath, normalize_relpath
 
 __all__ = [
     "BASE_CHANNELS",
+    "DEFORMATIONS_SCHEMA",
     "EDITS_SCHEMA",
     "EGO_POSES_SCHEMA",
     "FRAMES_SCHEMA",
@@ -102,6 +117,16 @@ __all__ = [
     "write_exr",
     "write_scene_log",
     "WrittenLog",
+    "LoadedScene",
+    "WrittenScene",
+    "list_scenes",
+    "read_scene",
+    "read_scene_manifest",
+    "read_scene_render",
+    "resolve_scene_hash",
+    "scene_dir",
+    "scene_exists",
+    "write_scene",
     "manifest_bytes",
     "read_log_manifest",
 ]

@@ -16,6 +16,8 @@ Type decisions:
   also written to the EXR ``id`` channel as float32, exact up to 2**24).
 * ``objects.attributes`` is ``map<string, string>`` (native, queryable, keeps insertion order).
 * ``map_features.points`` is ``list<FixedSizeList<float32, 3>>`` (one variable-length polyline).
+* ``deformations.offsets`` is ``list<FixedSizeList<float32, 3>>`` too: the ``[N_h, 3]`` offsets of one
+  non-rigid node's Gaussians at one frame (one file per node, ``node_poses.deform_uri`` points at it).
 * Strings are never null: "absent" is the empty string (``image_uri``, ``deform_uri``,
   ``failure_reason``, ``caption``). Every column is non-nullable.
 """
@@ -151,6 +153,8 @@ def nodes_schema(dim: int) -> pa.Schema:
             ("node_type", pa.string()),  # "background" | "rigid" | "nonrigid" | "static"
             ("object_id", pa.string()),  # "" for the background node
             ("category", pa.string()),
+            ("scale", pa.float32()),  # characteristic size in metres (scene radius, box half-diagonal)
+            ("center", vec(3)),  # background: scene centre (world); objects: zeros
             ("f_app", vec(dim)),
             ("f_mot", vec(dim)),
             ("f_loc", vec(dim)),
@@ -168,6 +172,17 @@ NODE_POSES_SCHEMA = _schema(
         ("frame_idx", pa.int64()),
         ("transform", vec(16)),  # row-major 4x4 node -> world
         ("deform_uri", pa.string()),  # non-rigid deformation artifact; "" for rigid nodes
+    ],
+)
+
+DEFORMATIONS_SCHEMA = _schema(
+    "deformations",
+    1,
+    [
+        ("scene_id", pa.string()),
+        ("node_id", pa.int32()),
+        ("frame_idx", pa.int64()),
+        ("offsets", pa.list_(vec(3))),  # [N_h, 3] per-Gaussian offsets of a non-rigid node at this frame
     ],
 )
 
@@ -253,6 +268,7 @@ TABLES: dict[str, TableSpec] = {
         TableSpec("gaussians", gaussians_schema, dims=("feature_dim", "color_dim")),
         TableSpec("nodes", nodes_schema, dims=("dim",)),
         TableSpec("node_poses", _fixed(NODE_POSES_SCHEMA)),
+        TableSpec("deformations", _fixed(DEFORMATIONS_SCHEMA)),
         TableSpec("edits", _fixed(EDITS_SCHEMA)),
         TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA)),
         TableSpec("metrics", _fixed(METRICS_SCHEMA)),

@@ -11,7 +11,8 @@ import pytest
 from typer.testing import CliRunner
 
 from flows.cli import app
-from storage import ArtifactStore, list_logs, read_scene_log
+from simsplat_core.world import WorldConfig, generate_log
+from storage import ArtifactStore, list_logs, list_scenes, read_scene_log, write_scene_log
 
 runner = CliRunner()
 
@@ -20,7 +21,8 @@ def _tree_digest(root: Path) -> dict[str, str]:
     return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
 
 
-@pytest.mark.parametrize("command", [[], ["run"], ["world"], ["ingest"], ["ingest", "waymo-frame"], ["ingest", "av2"], ["inspect"]])
+@pytest.mark.parametrize("command", [[], ["run"], ["world"], ["ingest"], ["ingest", "waymo-frame"], ["ingest", "av2"], ["inspect"],
+                                     ["reconstruct"], ["render"]])
 def test_every_command_has_help(command):
     result = runner.invoke(app, [*command, "--help"])
     assert result.exit_code == 0, result.output
@@ -71,3 +73,46 @@ def test_ingest_av2_and_corrupt_waymo_leaves_store_unchanged(prefect_api_url, sh
     assert result.exit_code != 0
     assert "corrupt.tfrecord" in str(result.exception) + result.output
     assert _tree_digest(store) == before
+
+
+@pytest.mark.orchestration
+def test_reconstruct_then_render_a_shifted_view(prefect_api_url, tmp_path):
+    store = tmp_path / "store"
+    world = WorldConfig(num_frames=4, width=64, height=48, test_every=2)
+    write_scene_log(ArtifactStore(str(store)), generate_log(seed=3, config=world, seq_id="synth-000003"))
+    command = ["reconstruct", "--store", str(store), "--iterations", "10", "--runner", "threads"]
+    result = runner.invoke(app, command)
+    assert result.exit_code == 0, result.output
+    assert "synth-000003" in result.output and "Reconstructed scenes" in result.output
+    (scene_hash,) = list_scenes(ArtifactStore(str(store)), "synth-000003")
+    again = runner.invoke(app, [*command, "--seq", "synth-000003"])
+    assert again.exit_code == 0 and "skipped" in again.output, again.output
+
+    png = tmp_path / "views" / "left.png"
+    result = runner.invoke(app, ["render", "--store", str(store), "--seq", "synth-000003", "--frame", "1",
+                                 "--out", str(png), "--shift-left", "1", "--scene", scene_hash[:10]])
+    assert result.exit_code == 0, result.output
+    image = cv2.imread(str(png))
+    assert image.shape == (48, 3 * 64 + 2 * 4, 3) and image.std() > 1
+    front = tmp_path / "front.png"
+    result = runner.invoke(app, ["render", "--store", str(store), "--seq", "synth-000003", "--frame", "1",
+                                 "--out", str(front), "--camera", "front"])
+    assert result.exit_code == 0, result.output
+    assert cv2.imread(str(front)).shape == (48, 64, 3)
+    assert not np.array_equal(cv2.imread(str(front)), image[:, :64])  # shifted view differs
+    assert sorted(p.name for p in png.parent.iterdir()) == ["left.png"]  # no temporary left behind
+
+
+def test_render_names_an_unknown_sequence_or_missing_scene(tmp_path):
+    store = tmp_path / "store"
+    result = runner.invoke(app, ["render", "--store", str(store), "--seq", "nope", "--frame", "0", "--out",
+                                 str(tmp_path / "x.png")])
+    assert result.exit_code != 0
+    assert "nope" in result.output
+    write_scene_log(ArtifactStore(str(store)), generate_log(seed=0, config=WorldConfig(num_frames=2, width=32, height=24),
+                                                            seq_id="s0"))
+    result = runner.invoke(app, ["render", "--store", str(store), "--seq", "s0", "--frame", "0", "--out",
+                                 str(tmp_path / "x.png")])
+    assert result.exit_code != 0
+    assert "no complete reconstructed scene" in result.output
+    assert not (tmp_path / "x.png").exists()

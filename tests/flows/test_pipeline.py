@@ -1,38 +1,54 @@
-"""The main flow fans out one task per sequence on Ray, stores complete logs, and skips finished work."""
+"""The main flow fans out one task per sequence on Ray, stores complete logs and scenes, and skips finished work."""
 
 from __future__ import annotations
 
 import pytest
 
-from flows.pipeline import main_flow
+from flows.pipeline import main_flow, reconstruction_config
 from flows.runtime import RunnerKind, make_task_runner
 from simsplat_core.world import WorldConfig
-from storage import ArtifactStore, list_logs, read_scene_log
+from storage import ArtifactStore, list_logs, list_scenes, read_scene, read_scene_log
 from tests.flows.test_cli import _tree_digest
 
 pytestmark = pytest.mark.orchestration
 
+#: Tiny: 6 frames at 80x56, frames 2 and 5 held out for test; 30 reconstruction iterations.
+WORLD = WorldConfig(num_frames=6, width=80, height=56, test_every=3)
+RECON = reconstruction_config(30)
 
-def test_main_flow_on_ray_generates_then_skips_then_redoes_on_config_change(prefect_api_url, tmp_path):
-    config = WorldConfig(num_frames=6, width=80, height=56)
+
+def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_config_change(prefect_api_url, tmp_path):
     flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.ray, 2))
 
-    first = flow(store_root=str(tmp_path), seeds=[1, 2], config=config)
-    assert [s.summary.seq_id for s in first] == ["synth-000001", "synth-000002"]
-    assert not any(s.skipped for s in first)
+    first = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON)
+    assert [s.summary.seq_id for s in first.logs] == ["synth-000001", "synth-000002"]
+    assert [s.seq_id for s in first.scenes] == ["synth-000001", "synth-000002"]
+    assert not any(s.skipped for s in first.logs + first.scenes)
     store = ArtifactStore(str(tmp_path))
     assert list_logs(store) == ["synth-000001", "synth-000002"]
-    for stored in first:
+    for stored in first.logs:
         log = read_scene_log(store, stored.summary.seq_id)
         assert log.num_frames == 6
         assert stored.summary.num_images == len(log.images) == 6 * len(log.cameras)
         assert stored.bytes_on_disk > 0
+    for scene in first.scenes:
+        loaded = read_scene(store, scene.seq_id)
+        assert loaded.scene_hash == scene.scene_hash and loaded.metrics == scene.metrics
+        assert scene.metrics["iterations"] == 30 and scene.metrics["psnr_test"] > 5.0
+        assert len(loaded.records.gaussians["mean"]) == scene.metrics["num_gaussians"]
+        renders = sorted(p for p in store.walk(f"{scene.relpath}/renders"))
+        assert renders == sorted(f"{cam}/{f:06d}.exr" for cam in log.cameras for f in (2, 5))
 
     digest = _tree_digest(tmp_path)
-    second = flow(store_root=str(tmp_path), seeds=[1, 2], config=config)
-    assert all(s.skipped for s in second)
+    second = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON)
+    assert all(s.skipped for s in second.logs + second.scenes)
+    assert [s.metrics for s in second.scenes] == [s.metrics for s in first.scenes]
     assert _tree_digest(tmp_path) == digest
 
-    third = flow(store_root=str(tmp_path), seeds=[1], config=WorldConfig(num_frames=7, width=80, height=56))
-    assert not third[0].skipped
+    changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
+    third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20))
+    assert not third.logs[0].skipped and not third.scenes[0].skipped
     assert read_scene_log(store, "synth-000001", load_images=False).num_frames == 7
+    assert list_scenes(store, "synth-000001") == [first.scenes[0].scene_hash, third.scenes[0].scene_hash]
+    newest = read_scene(store, "synth-000001")
+    assert newest.scene_hash == third.scenes[0].scene_hash and newest.metrics["iterations"] == 20

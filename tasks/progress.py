@@ -1,0 +1,104 @@
+"""Step-level progress of long tasks: a throttled Prefect progress artifact plus in-process listeners.
+
+A task hands ``StepProgress(label)`` to a core function as its ``progress(step, total, metrics)``
+callback. Each call
+
+* notifies the listeners registered in *this process* (``listening``) — the CLI uses this to draw a
+  live bar per sequence when tasks run in threads; tasks on Ray workers have no listeners;
+* updates a Prefect progress artifact (created on the first call, only inside a task or flow run),
+  at most every ``min_interval_s`` seconds and always on the last step.
+
+Progress reporting never raises: a failing listener or an unreachable API is logged and ignored.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+import time
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
+from typing import Any
+
+logger = logging.getLogger(__name__)
+
+#: ``listener(label, step, total, metrics)``.
+Listener = Callable[[str, int, int, Mapping[str, float]], None]
+
+_listeners: list[Listener] = []
+_lock = threading.Lock()
+
+
+@contextmanager
+def listening(listener: Listener) -> Iterator[None]:
+    """Call ``listener`` for every progress report made in this process while the block runs."""
+    with _lock:
+        _listeners.append(listener)
+    try:
+        yield
+    finally:
+        with _lock:
+            _listeners.remove(listener)
+
+
+def _in_prefect_run() -> bool:
+    from prefect.context import FlowRunContext, TaskRunContext
+
+    return TaskRunContext.get() is not None or FlowRunContext.get() is not None
+
+
+class StepProgress:
+    """``progress(step, total, metrics)`` callback for one unit of work (e.g. one sequence).
+
+    Args:
+        label: names the work in the artifact description and for listeners (``"reconstruct seq0"``).
+        min_interval_s: minimum time between two Prefect artifact updates.
+        headline: metric shown in the artifact description when present (e.g. ``"psnr"``).
+    """
+
+    def __init__(self, label: str, min_interval_s: float = 2.0, headline: str = "psnr") -> None:
+        self.label = label
+        self.min_interval_s = min_interval_s
+        self.headline = headline
+        self._artifact_id: Any = None
+        self._artifact_failed = False
+        self._last_update = float("-inf")
+
+    def __call__(self, step: int, total: int, metrics: Mapping[str, float] | None = None) -> None:
+        metrics = dict(metrics or {})
+        with _lock:
+            listeners = list(_listeners)
+        for listener in listeners:
+            try:
+                listener(self.label, step, total, metrics)
+            except Exception:
+                logger.debug("progress listener failed", exc_info=True)
+        now = time.monotonic()
+        if step >= total or now - self._last_update >= self.min_interval_s:
+            self._last_update = now
+            self._publish(step, total, metrics)
+
+    def _describe(self, step: int, total: int, metrics: Mapping[str, float]) -> str:
+        text = f"{self.label}: {step}/{total}"
+        if self.headline in metrics:
+            text += f" ({self.headline} {metrics[self.headline]:.2f})"
+        return text
+
+    def _publish(self, step: int, total: int, metrics: Mapping[str, float]) -> None:
+        if self._artifact_failed:
+            return
+        percent = 100.0 * min(step, total) / max(total, 1)
+        description = self._describe(step, total, metrics)
+        logger.debug("%s", description)
+        try:
+            from prefect.artifacts import create_progress_artifact, update_progress_artifact
+
+            if self._artifact_id is None:
+                if not _in_prefect_run():
+                    return
+                self._artifact_id = create_progress_artifact(percent, description=description)
+            else:
+                update_progress_artifact(self._artifact_id, percent, description=description)
+        except Exception:  # the API may be unreachable; progress must never break the work
+            self._artifact_failed = True
+            logger.warning("could not publish Prefect progress for %s", self.label, exc_info=True)

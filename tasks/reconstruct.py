@@ -1,0 +1,89 @@
+"""Task that reconstructs one stored driving log into a scene-graph Gaussian scene.
+
+Thin, like ``tasks.logs``: compute the scene hash from the stored log's content key and the config,
+skip when a complete scene with that hash is stored, else load the log, call
+``simsplat_core.scene.reconstruct`` (reporting per-iteration progress) and write the scene with
+``storage.scenes``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass
+
+from prefect import task
+from prefect.cache_policies import NO_CACHE
+
+from simsplat_core.scene import ReconstructionConfig, reconstruct
+from storage import ArtifactStore, canonical, content_key, read_log_manifest, read_scene_log
+from storage.scenes import (
+    SCENE_FORMAT_VERSION,
+    metrics_from_json,
+    read_scene_manifest,
+    scene_dir,
+    scene_id_for,
+    write_scene,
+)
+from tasks.progress import StepProgress
+
+logger = logging.getLogger(__name__)
+
+#: Version of the reconstruction stage; bump it to invalidate every stored scene.
+SCENE_VERSION = "reconstruct-v1"
+
+
+@dataclass(frozen=True)
+class StoredScene:
+    """What the reconstruct task returns (small: it crosses process boundaries).
+
+    Attributes:
+        seq_id: the reconstructed sequence.
+        scene_hash: content key of (log, config, versions); the scene's directory name.
+        relpath: ``scenes/<seq_id>/<scene_hash>``.
+        metrics: ``name -> value`` (PSNR/SSIM on test frames, timings, counts).
+        seconds: wall time spent reconstructing and writing (0 when skipped).
+        skipped: True when a complete scene with this hash was already stored.
+    """
+
+    seq_id: str
+    scene_hash: str
+    relpath: str
+    metrics: dict[str, float]
+    seconds: float
+    skipped: bool
+
+
+def scene_hash(log_key: str, config: ReconstructionConfig) -> str:
+    """Content key of a reconstruction: the stored log's content key, the config and the versions."""
+    return content_key("reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, dataclasses.asdict(config))
+
+
+@task(name="reconstruct-scene", retries=0, cache_policy=NO_CACHE)
+def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig) -> StoredScene:
+    """Reconstruct ``<store>/logs/<seq_id>`` into ``<store>/scenes/<seq_id>/<scene_hash>``.
+
+    Raises:
+        FileNotFoundError: the store holds no complete log ``seq_id``.
+    """
+    store = ArtifactStore(store_root)
+    log_manifest = read_log_manifest(store, seq_id)
+    if log_manifest is None:
+        raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log to reconstruct")
+    key = scene_hash(log_manifest["key"], config)
+    relpath = scene_dir(seq_id, key)
+    existing = read_scene_manifest(store, seq_id, key)
+    if existing is not None:
+        logger.info("%s: scene %s already stored, skipping", seq_id, key[:12])
+        return StoredScene(seq_id, key, relpath, metrics_from_json(existing.get("metrics", {})), 0.0, True)
+
+    started = time.perf_counter()
+    log = read_scene_log(store, seq_id)
+    result = reconstruct(log, config, progress=StepProgress(f"reconstruct {seq_id}"))
+    provenance = {"log_key": log_manifest["key"], "scene_version": SCENE_VERSION, "config": canonical(dataclasses.asdict(config))}
+    write_scene(store, seq_id, key, result.graph.to_records(scene_id_for(seq_id, key)), result.metrics,
+                result.test_renders, provenance=provenance)
+    seconds = time.perf_counter() - started
+    logger.info("%s: reconstructed in %.1f s (test PSNR %.2f dB)", seq_id, seconds, result.metrics.get("psnr_test", float("nan")))
+    return StoredScene(seq_id, key, relpath, {k: float(v) for k, v in result.metrics.items()}, round(seconds, 3), False)
