@@ -101,7 +101,7 @@ class DensifyConfig:
     prune_opacity: float = 0.005
     prune_scale3d: float = 0.5
     reset_every: int = 0
-    max_gaussians: int = 160_000
+    max_gaussians: int = 150_000
 
     def validate(self, prefix: str) -> None:
         _positive(self, prefix, ("refine_every", "grad_threshold", "grow_scale3d", "split_factor", "prune_scale3d",
@@ -144,7 +144,8 @@ class LossWeights:
 
     def validate(self, prefix: str) -> None:
         _check(0 <= self.dssim <= 1, f"{prefix}.dssim", "must be in [0, 1]", self.dssim)
-        _positive(self, prefix, ("object_mask", "depth", "deform_smooth", "deform_accel", "deform_magnitude", "pose_delta"), allow_zero=True)
+        _positive(self, prefix, ("object_mask", "depth", "deform_smooth", "deform_accel", "deform_magnitude",
+                                 "pose_delta"), allow_zero=True)
         _check(self.object_weight >= 1, f"{prefix}.object_weight", "must be >= 1", self.object_weight)
 
 
@@ -227,7 +228,7 @@ class ReconstructionConfig:
         num_threads: torch intra-op threads (0 = leave torch's default).
     """
 
-    iterations: int = 1000
+    iterations: int = 900
     cameras_per_step: int = 3
     lr: LearningRates = field(default_factory=LearningRates)
     densify: DensifyConfig = field(default_factory=DensifyConfig)

@@ -16,7 +16,6 @@ The row operations (:meth:`index`, :meth:`cat`, :meth:`map_rows`) are what densi
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
@@ -177,7 +176,3 @@ class GaussianSet:
             extras={k: parts[k] for k in sets[0].extras},
         )
 
-
-def isotropic_log_scale(distance: Tensor, min_scale: float = 1e-3, max_scale: float = math.inf) -> Tensor:
-    """``[N]`` -> ``[N, 3]`` log-scales of isotropic Gaussians of radius ``distance`` (clamped)."""
-    return torch.log(distance.clamp(min=min_scale, max=max_scale))[:, None].expand(-1, 3).contiguous()

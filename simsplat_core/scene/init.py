@@ -123,6 +123,12 @@ def normal_map(img: CameraImage) -> np.ndarray:
     return out
 
 
+def _group_mean(inverse: np.ndarray, counts: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``[G, D]`` mean of ``values [M, D]`` per group (``inverse [M]`` group of each row, ``counts [G]``)."""
+    sums = np.stack([np.bincount(inverse, values[:, j], minlength=counts.size) for j in range(values.shape[1])], 1)
+    return sums / counts[:, None]
+
+
 def voxel_merge(points: np.ndarray, rgb: np.ndarray, size: np.ndarray, normals: np.ndarray | None = None
                 ) -> PointCloud:
     """Average points (colours, normals) falling in the same voxel; ``size [M]`` is each point's voxel
@@ -140,14 +146,13 @@ def voxel_merge(points: np.ndarray, rgb: np.ndarray, size: np.ndarray, normals: 
         | idx[:, 2]
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
-    mean = lambda a: np.stack([np.bincount(inverse, a[:, j]) for j in range(a.shape[1])], axis=1) / counts[:, None]  # noqa: E731
+    mean = lambda a: _group_mean(inverse, counts, a)  # noqa: E731
     out_size = np.zeros(counts.shape[0])
     out_size[inverse] = size
     out_normals = None
     if normals is not None:
-        known = np.stack([np.bincount(inverse, np.any(normals != 0, axis=1).astype(np.float64))], axis=1)
-        summed = mean(normals) * counts[:, None]
-        avg = summed / np.maximum(known, 1.0)
+        known = np.bincount(inverse, np.any(normals != 0, axis=1).astype(np.float64), minlength=counts.size)
+        avg = mean(normals) * (counts / np.maximum(known, 1.0))[:, None]  # mean over members with a normal
         length = np.linalg.norm(avg, axis=1, keepdims=True)
         out_normals = np.where(length >= 0.5, avg / np.maximum(length, 1e-12), 0.0)
     return PointCloud(mean(points), mean(rgb), out_size, out_normals)
@@ -184,7 +189,7 @@ def _sky_cloud(dirs: np.ndarray, rgb: np.ndarray, center: np.ndarray, cfg: InitC
     key = (el_bin + 4096) * 1_000_000 + az_bin
     _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     inverse = inverse.ravel()
-    mean = lambda a: np.stack([np.bincount(inverse, a[:, j]) for j in range(a.shape[1])], axis=1) / counts[:, None]  # noqa: E731
+    mean = lambda a: _group_mean(inverse, counts, a)  # noqa: E731
     d = mean(unit)
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     pts = center[None] + cfg.sky_radius * d

@@ -181,8 +181,9 @@ def nodes_from_records(records: SceneRecords, device: torch.device | str = "cpu"
             nodes.append(BackgroundNode(**common, center=center))
             continue
         prow = p_ids == nid
-        pos = np.searchsorted(frames, records.node_poses["frame_idx"][prow])
-        if np.any(pos >= n_frames) or np.any(frames[np.minimum(pos, n_frames - 1)] != records.node_poses["frame_idx"][prow]):
+        pose_frames = records.node_poses["frame_idx"][prow]
+        pos = np.searchsorted(frames, pose_frames)
+        if np.any(pos >= n_frames) or np.any(frames[np.minimum(pos, n_frames - 1)] != pose_frames):
             raise ValueError(f"SceneRecords.node_poses: node {nid} has frames outside frame_indices")
         poses = np.tile(np.eye(4, dtype=np.float32), (n_frames, 1, 1))
         poses[pos] = records.node_poses["transform"][prow].reshape(-1, 4, 4)

@@ -22,7 +22,7 @@ from torch import Tensor
 
 from simsplat_core.eval.image_metrics import dssim_loss, psnr_from_mse
 from simsplat_core.scene.config import ReconstructionConfig
-from simsplat_core.scene.densify import DensifyStrategy
+from simsplat_core.scene.densify import DensifyState, DensifyStrategy
 from simsplat_core.scene.evaluate import TestFrameRender, render_views, summarise
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.init import initial_graph
@@ -43,7 +43,7 @@ class ReconstructionResult:
     """What ``reconstruct`` returns.
 
     Attributes:
-        graph: the trained scene graph (on the training device).
+        graph: the trained scene graph (on the training device, tensors detached).
         metrics: ``psnr_test``, ``ssim_test``, ``psnr_test_dynamic``, ``ssim_test_dynamic``, ``psnr_train``
             (and the other train figures), ``iterations``, ``wall_time_s``, ``seconds_per_iteration``,
             ``init_time_s``, ``train_time_s``, ``eval_time_s``, ``num_gaussians``, ``num_nodes``,
@@ -110,6 +110,39 @@ def image_loss(render: SceneRender, batch: ViewBatch, config: ReconstructionConf
     return loss, (rgb.detach() - gt).square().mean()
 
 
+def train_step(graph: SceneGraph, optimizer: torch.optim.Optimizer, strategy: DensifyStrategy, state: DensifyState,
+               batch: ViewBatch, step: int, config: ReconstructionConfig, holdout: bool, use_mask: bool
+               ) -> tuple[float, float]:
+    """One optimisation step on one view batch: compose, render, loss, Adam, densification.
+
+    Returns ``(loss, mse)`` of the step (the MSE of the colour render, for a running PSNR).
+    """
+    set_means_lr(optimizer, step, config.iterations, config.lr.means_final_factor)
+    composed = graph.at(batch.frame_idx, holdout_offsets=holdout)
+    extra = (composed.node_ids != BACKGROUND_ID).to(composed.means.dtype)[:, None] if use_mask else None
+    render = render_composed(composed, batch.cam_to_world, batch.Ks, batch.width, batch.height,
+                             with_node_ids=False, backend=config.backend, extra=extra, eps2d=graph.eps2d)
+    loss, mse = image_loss(render, batch, config)
+    loss = loss + regularisers(graph, config)
+    info = {"meta": render.meta, "composed": composed}
+    strategy.step_pre_backward(state, info)
+    loss.backward()
+    optimizer.step()
+    optimizer.zero_grad(set_to_none=True)
+    stats = strategy.step_post_backward(graph, optimizer, state, step, info)
+    if stats:
+        logger.debug("step %d: %s, %d Gaussians", step, stats, graph.num_gaussians)
+    return float(loss.detach()), float(mse)
+
+
+def freeze(graph: SceneGraph) -> None:
+    """Detach every learnable tensor of a trained graph (no grad, no optimizer references)."""
+    for node in graph.nodes:
+        node.gaussians = node.gaussians.detach()
+        if isinstance(node, RigidNode) and node.pose_deltas is not None:
+            node.pose_deltas = node.pose_deltas.detach()
+
+
 def _add_pose_refinement(graph: SceneGraph) -> None:
     for node in graph.object_nodes:
         if not node.static:
@@ -153,30 +186,17 @@ def reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressF
 
     use_mask = config.loss.object_mask > 0 and all(b.instance is not None for b in train)
     order: list[int] = []
-    loss_value, mse_value = math.nan, math.nan
+    loss_value = math.nan
     for step in range(config.iterations):
         if not order:
             order = rng.permutation(len(train)).tolist()
         batch = train[order.pop()]
         if config.cameras_per_step < batch.num_cameras:
             batch = batch.subset(sorted(rng.choice(batch.num_cameras, config.cameras_per_step, replace=False).tolist()))
-        set_means_lr(optimizer, step, config.iterations, config.lr.means_final_factor)
-        composed = graph.at(batch.frame_idx, holdout_offsets=bool(rng.random() < config.deform_holdout))
-        extra = (composed.node_ids != BACKGROUND_ID).to(composed.means.dtype)[:, None] if use_mask else None
-        render = render_composed(composed, batch.cam_to_world, batch.Ks, batch.width, batch.height,
-                                 with_node_ids=False, backend=config.backend, extra=extra, eps2d=graph.eps2d)
-        loss, mse = image_loss(render, batch, config)
-        loss = loss + regularisers(graph, config)
-        info = {"meta": render.meta, "composed": composed}
-        strategy.step_pre_backward(state, info)
-        loss.backward()
-        optimizer.step()
-        optimizer.zero_grad(set_to_none=True)
-        stats = strategy.step_post_backward(graph, optimizer, state, step, info)
-        if stats:
-            logger.debug("step %d: %s, %d Gaussians", step, stats, graph.num_gaussians)
-        loss_value, mse_value = float(loss.detach()), float(mse)
-        report = {"loss": loss_value, "psnr": float(psnr_from_mse(mse_value)), "num_gaussians": float(graph.num_gaussians)}
+        holdout = bool(rng.random() < config.deform_holdout)
+        loss_value, mse_value = train_step(graph, optimizer, strategy, state, batch, step, config, holdout, use_mask)
+        report = {"loss": loss_value, "psnr": float(psnr_from_mse(mse_value)),
+                  "num_gaussians": float(graph.num_gaussians)}
         if config.eval_every and (step + 1) % config.eval_every == 0 and test:
             scores = summarise(render_views(graph, test, log.objects, config.backend, with_node_ids=False), "test")
             report.update(psnr_test=scores["psnr_test"], psnr_test_dynamic=scores["psnr_test_dynamic"])
@@ -185,6 +205,7 @@ def reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressF
         if progress is not None and (step % config.progress_every == 0 or step == config.iterations - 1
                                      or "psnr_test" in report):
             progress(step + 1, config.iterations, report)
+    freeze(graph)
     t_train = time.perf_counter()
 
     test_renders = render_views(graph, test, log.objects, backend=config.backend)

@@ -67,8 +67,8 @@ def test_fractional_time_interpolates_pose() -> None:
     center, heading = rigid_track()
     composed = graph.at(1.5)
     rows = _block(composed, 1)
-    torch.testing.assert_close(composed.means[rows][0], torch.tensor(0.5 * (center[1] + center[2]), dtype=torch.float32),
-                               atol=1e-5, rtol=0)
+    midpoint = torch.tensor(0.5 * (center[1] + center[2]), dtype=torch.float32)
+    torch.testing.assert_close(composed.means[rows][0], midpoint, atol=1e-5, rtol=0)
     yaw = 0.5 * (heading[1] + heading[2])
     ahead = composed.means[rows][1] - composed.means[rows][0]
     assert math.atan2(float(ahead[1]), float(ahead[0])) == pytest.approx(yaw, abs=1e-5)
@@ -88,6 +88,20 @@ def test_nonrigid_offsets_interpolate_and_clamp() -> None:
     expected = (ped.gaussians.means.detach() + offsets[:, 2]) @ pose[:3, :3].T + pose[:3, 3]
     composed = graph.at(4)
     torch.testing.assert_close(composed.means[_block(composed, 3)], expected, atol=1e-5, rtol=0)
+
+
+def test_holdout_offsets_interpolate_from_neighbours() -> None:
+    graph = make_graph()
+    ped = graph.node(3)
+    offsets = ped.offsets.detach()
+    # at stored frame 2 the held-out value is the interpolation of frames 0 and 4
+    torch.testing.assert_close(ped.offsets_at(2.0, holdout=True), 0.5 * (offsets[:, 0] + offsets[:, 2]))
+    # between stored frames nothing is held out
+    torch.testing.assert_close(ped.offsets_at(3.0, holdout=True), ped.offsets_at(3.0))
+    normal, held = graph.at(2), graph.at(2, holdout_offsets=True)
+    rows = _block(normal, 3)
+    assert not torch.allclose(normal.means[rows], held.means[rows])
+    torch.testing.assert_close(normal.means[_block(normal, 1)], held.means[_block(held, 1)])
 
 
 def test_presence_and_exclusion() -> None:

@@ -83,7 +83,8 @@ def test_split_replaces_parents_by_two_smaller_children() -> None:
         torch.testing.assert_close(after[name][1][:2], m1[keep])
         assert float(after[name][1][2:].abs().sum()) == 0.0
     parent_log_scale = before["log_scales"][0][1]
-    torch.testing.assert_close(after["log_scales"][0][2:], (parent_log_scale - torch.log(torch.tensor(1.6))).expand(2, 3))
+    expected = (parent_log_scale - torch.log(torch.tensor(1.6))).expand(2, 3)
+    torch.testing.assert_close(after["log_scales"][0][2:], expected)
     # children stay within a few parent sigmas of the parent
     parent_mean = before["means"][0][1]
     assert float((after["means"][0][2:] - parent_mean).norm(dim=-1).max()) < 5 * float(parent_log_scale.exp().max())
