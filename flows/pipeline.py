@@ -12,6 +12,7 @@ from prefect import flow
 from prefect.artifacts import create_markdown_artifact, create_table_artifact
 from prefect.futures import as_completed
 
+from flows.cpu_shares import reserving_cpus, task_cpu_share
 from flows.progress import FlowProgress
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
@@ -89,8 +90,12 @@ def reconstruction_config(iterations: int | None = None, base: ReconstructionCon
 
 
 def reconstruct_scenes(store_root: str, seq_ids: list[str], config: ReconstructionConfig) -> list[StoredScene]:
-    """Fan out one reconstruction task per sequence; publish the metrics table."""
-    futures = [reconstruct_scene.submit(store_root, seq_id, config) for seq_id in seq_ids]
+    """Fan out one reconstruction task per sequence, each with its share of the cores; publish the metrics
+    table. ``config.num_threads`` set by the caller wins over the computed share."""
+    threads = config.num_threads or task_cpu_share(len(seq_ids))
+    config = dataclasses.replace(config, num_threads=threads)
+    with reserving_cpus(threads):
+        futures = [reconstruct_scene.submit(store_root, seq_id, config) for seq_id in seq_ids]
     scenes = _gather(futures, "reconstruct", label=lambda s: s.seq_id)
     _publish_scenes_table(scenes)
     return scenes

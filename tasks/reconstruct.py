@@ -55,9 +55,15 @@ class StoredScene:
     skipped: bool
 
 
+#: Config fields that change how a run reports or how many cores it uses, never what it produces.
+RUN_ONLY_FIELDS = ("progress_every", "eval_every", "num_threads")
+
+
 def scene_hash(log_key: str, config: ReconstructionConfig) -> str:
-    """Content key of a reconstruction: the stored log's content key, the config and the versions."""
-    return content_key("reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, dataclasses.asdict(config))
+    """Content key of a reconstruction: the stored log's content key, the config (less its run-only
+    fields, so the same scene is found whatever the core count) and the versions."""
+    settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_FIELDS}
+    return content_key("reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, settings)
 
 
 @task(name="reconstruct-scene", retries=0, cache_policy=NO_CACHE)

@@ -225,7 +225,8 @@ class ReconstructionConfig:
         progress_every: steps between ``progress`` callbacks.
         eval_every: every this many steps the test frames are scored and logged (and reported to
             ``progress`` as ``psnr_test``); 0 = only at the end.
-        num_threads: torch intra-op threads (0 = leave torch's default).
+        num_threads: torch and numba threads (0 = leave the process's setting); process-wide, see
+            ``simsplat_core.compute_threads``.
     """
 
     iterations: int = 900

@@ -20,6 +20,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
+from simsplat_core.compute_threads import set_compute_threads
 from simsplat_core.eval.image_metrics import dssim_loss, psnr_from_mse
 from simsplat_core.scene.config import ReconstructionConfig
 from simsplat_core.scene.densify import DensifyState, DensifyStrategy
@@ -162,7 +163,7 @@ def reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressF
     the CPU (CUDA atomics may differ in the last bits)."""
     t_start = time.perf_counter()
     if config.num_threads:
-        torch.set_num_threads(config.num_threads)
+        set_compute_threads(config.num_threads)
     device = resolve_device(config.device)
     torch.manual_seed(config.seed)
     rng = np.random.default_rng(config.seed)

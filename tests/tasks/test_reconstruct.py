@@ -70,6 +70,12 @@ def test_scene_hash_depends_on_log_and_config():
     assert scene_hash("a", config) != scene_hash("a", dataclasses.replace(config, seed=1))
 
 
+def test_scene_hash_ignores_run_only_settings():
+    config = ReconstructionConfig(iterations=6)
+    for run_only in (dict(num_threads=1), dict(progress_every=3), dict(eval_every=2)):
+        assert scene_hash("a", dataclasses.replace(config, **run_only)) == scene_hash("a", config)
+
+
 def test_missing_log_is_named(tmp_path):
     with pytest.raises(FileNotFoundError, match="logs/nope: no complete scene log"):
         reconstruct_scene.fn(str(tmp_path), "nope", ReconstructionConfig(iterations=1))
