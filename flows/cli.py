@@ -162,6 +162,41 @@ def render(
 
 
 @app.command()
+def query(
+    text: Annotated[str, typer.Argument(help='A free-form description, e.g. "the black car turning left at the intersection".')],
+    store: Annotated[str, typer.Option(help="Artifact store root holding aligned scenes (alignment/...).")],
+    seq: Annotated[str, typer.Option(help="Sequence to search.")],
+    out: Annotated[Optional[str], typer.Option(help="PNG to write: the matched masks over the cameras and the "
+                                               "relevance maps (default: STORE/queries/<seq>/<query>.png).")] = None,
+    frame: Annotated[Optional[int], typer.Option(min=0, help="Frame shown (default: where the match is largest).")] = None,
+    top: Annotated[int, typer.Option(min=1, help="Candidates listed.")] = 5,
+) -> None:
+    """Ground a description to scene-graph nodes of a stored, aligned scene; print them and write a PNG."""
+    from tasks.query import answer_query
+
+    try:
+        answer = answer_query(store, seq, text, out=out, frame=frame)
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    grounding = answer.grounding
+    table = Table(title=f"{seq}: {text!r}")
+    for column in ("rank", "node", "object", "category", "caption", "motion", "score", "app", "mot", "loc", "chosen"):
+        table.add_column(column)
+    chosen = set(grounding.node_ids)
+    for rank, match in enumerate(grounding.ranking[:top], start=1):
+        node = answer.scene.node(match.node_id)
+        motion = node.motion.motion if node.motion is not None else "-"
+        caption = node.caption.text if node.caption is not None else "-"
+        table.add_row(str(rank), str(match.node_id), match.object_id, node.category, caption, motion,
+                      f"{match.score:.3f}", *(f"{v:.2f}" for v in (match.appearance, match.motion, match.location)),
+                      "yes" if match.node_id in chosen else "")
+    console.print(table)
+    console.print(grounding.message)
+    if answer.png_uri:
+        console.print(f"frame {answer.frame}: {answer.png_uri}")
+
+
+@app.command()
 def world(
     out: Annotated[str, typer.Option(help="Artifact store root to write into.")],
     sequences: Annotated[int, typer.Option(min=1)] = 1,

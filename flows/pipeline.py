@@ -14,8 +14,11 @@ from prefect.futures import as_completed
 
 from flows.cpu_shares import reserving_cpus, task_cpu_share
 from flows.progress import FlowProgress
+from simsplat_core.language.motion_training import MotionAlignerConfig
+from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
+from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log
 from tasks.reconstruct import StoredScene, reconstruct_scene
 
@@ -99,6 +102,31 @@ def reconstruct_scenes(store_root: str, seq_ids: list[str], config: Reconstructi
     scenes = _gather(futures, "reconstruct", label=lambda s: s.seq_id)
     _publish_scenes_table(scenes)
     return scenes
+
+
+def _publish_language_table(aligner: StoredAligner, scenes: list[StoredLanguageScene]) -> None:
+    names = ("objects", "objects_with_appearance", "objects_with_motion", "mask_miou", "fit_cosine_after")
+    rows = [
+        {"seq_id": s.seq_id, "scene": s.scene_hash[:12], "aligner": aligner.model_hash[:12],
+         **{name: _rounded(s.metrics.get(name)) for name in names}, "seconds": s.seconds, "skipped": s.skipped}
+        for s in scenes
+    ]
+    create_table_artifact(rows, key="language-alignment", description="Language-aligned scenes per sequence")
+
+
+def align_scenes(store_root: str, scenes: list[StoredScene], training_seq_ids: list[str],
+                 config: AlignmentConfig, aligner_config: MotionAlignerConfig | None = None
+                 ) -> tuple[StoredAligner, list[StoredLanguageScene]]:
+    """Train the motion/location aligner on ``training_seq_ids`` (one task), then align every scene (one
+    task per sequence, each with its share of the cores); publish the alignment table."""
+    aligner = train_motion_aligner.submit(store_root, training_seq_ids, aligner_config).result()
+    threads = task_cpu_share(len(scenes))
+    with reserving_cpus(threads):
+        futures = [align_scene.submit(store_root, s.seq_id, s.scene_hash, aligner.model_hash, config, threads)
+                   for s in scenes]
+    aligned = _gather(futures, "align", label=lambda s: s.seq_id)
+    _publish_language_table(aligner, aligned)
+    return aligner, aligned
 
 
 @flow(name="simsplat-generate-world")

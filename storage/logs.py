@@ -319,6 +319,16 @@ def read_scene_log(store: ArtifactStore, seq_id: str, load_images: bool = True) 
     return log.validate()
 
 
+def read_image_rgb(store: ArtifactStore, seq_id: str, camera: str, frame_idx: int) -> np.ndarray | None:
+    """``[H, W, 3]`` float32 pixels of one stored camera image (``None`` when the log has no pixels
+    there), for callers that read a log with ``load_images=False`` and need a few frames only."""
+    rel = join_relpath(log_dir(seq_id), IMAGES_DIR, _check_name("camera", camera), f"{int(frame_idx):06d}.exr")
+    if not store.exists(rel):
+        return None
+    channels = read_exr(store, rel)
+    return np.stack([channels[c] for c in "RGB"], axis=-1) if all(c in channels for c in "RGB") else None
+
+
 def _read_images(store: ArtifactStore, rel: str, frames: pa.Table, load_images: bool) -> tuple[CameraImage, ...]:
     names = ("frame_idx", "timestamp_us", "camera", "image_uri", "width", "height", "split")
     cols = {name: frames.column(name).to_pylist() for name in names}

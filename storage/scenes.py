@@ -258,8 +258,8 @@ def write_scene(
     scene_id = str(records.scene_id)
     deformations = _deformations(records)
     tables = {
-        "gaussians": _gaussians_table(scene_id, records.gaussians),
-        "nodes": _nodes_table(scene_id, records.nodes, feature_dim),
+        "gaussians": gaussians_table(scene_id, records.gaussians),
+        "nodes": nodes_table(scene_id, records.nodes, feature_dim),
         "node_poses": _node_poses_table(scene_id, records.node_poses, set(deformations)),
         "metrics": _metrics_table(run_id or scene_hash, seq_id, metrics),
     }
@@ -324,7 +324,7 @@ def _equal_lengths(where: str, arrays: Mapping[str, np.ndarray]) -> int:
     return next(iter(lengths.values()), 0)
 
 
-def _gaussians_table(scene_id: str, columns: Mapping[str, Any]) -> tuple[pa.Table, pa.Schema]:
+def gaussians_table(scene_id: str, columns: Mapping[str, Any]) -> tuple[pa.Table, pa.Schema]:
     where = "gaussians"
     arrays = {name: _column(columns, name, np.float32, where) for name in GAUSSIAN_COLUMNS if name != "node_id"}
     arrays["node_id"] = _column(columns, "node_id", np.int32, where)
@@ -343,7 +343,10 @@ def _gaussians_table(scene_id: str, columns: Mapping[str, Any]) -> tuple[pa.Tabl
     return pa.table(data), gaussians_schema(feature_dim=feature_dim, color_dim=color_dim)
 
 
-def _nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int) -> tuple[pa.Table, pa.Schema]:
+def nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int,
+                features: Mapping[str, np.ndarray] | None = None) -> tuple[pa.Table, pa.Schema]:
+    """The ``nodes`` table of ``nodes`` (node dicts as ``SceneGraph.to_records`` makes them); ``features``
+    maps ``f_app``/``f_mot``/``f_loc`` to ``[len(nodes), dim]`` values (default zeros)."""
     for i, node in enumerate(nodes):
         missing = [k for k in NODE_KEYS if k not in node]
         unknown = [k for k in node if k not in NODE_KEYS + NODE_GEOMETRY_KEYS]
@@ -362,9 +365,8 @@ def _nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int) ->
             "category": pa.array([str(nd["category"]) for nd in nodes], pa.string()),
             "scale": pa.array([float(nd.get("scale", 1.0)) for nd in nodes], pa.float32()),
             "center": vectors_to_arrow(centers, 3),
-            "f_app": zeros,
-            "f_mot": zeros,
-            "f_loc": zeros,
+            **{name: zeros if name not in (features or {}) else vectors_to_arrow(
+                np.asarray(features[name], np.float32).reshape(n, dim), dim) for name in ("f_app", "f_mot", "f_loc")},
         }
     )
     return table, nodes_schema(dim)
@@ -478,7 +480,7 @@ def read_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None = None)
     records = _records_class()(
         scene_id=str(manifest.get("scene_id", "")),
         frame_indices=np.asarray(manifest.get("frame_indices", []), dtype=np.int64),
-        gaussians=_gaussian_columns(gaussians),
+        gaussians=gaussian_columns(gaussians),
         nodes=_node_dicts(nodes),
         node_poses={
             "node_id": poses.column("node_id").to_numpy().astype(np.int32),
@@ -513,7 +515,7 @@ def _node_dicts(nodes: pa.Table) -> list[dict[str, Any]]:
     return result
 
 
-def _gaussian_columns(table: pa.Table) -> dict[str, np.ndarray]:
+def gaussian_columns(table: pa.Table) -> dict[str, np.ndarray]:
     columns = {"node_id": table.column("node_id").to_numpy().astype(np.int32)}
     for name in ("mean", "log_scale", "quat", "color"):
         columns[name] = arrow_to_vectors(table.column(name))

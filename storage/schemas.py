@@ -163,6 +163,23 @@ def nodes_schema(dim: int) -> pa.Schema:
     )
 
 
+NODE_LANGUAGE_SCHEMA = _schema(
+    "node_language",
+    1,
+    [
+        ("scene_id", pa.string()),
+        ("node_id", pa.int32()),
+        ("object_id", pa.string()),
+        ("category", pa.string()),
+        ("kind", pa.string()),  # motion codebook: "vehicle" | "pedestrian" | "" (static)
+        ("has_appearance", pa.bool_()),  # nodes.f_app is real (the log had pixels of the object)
+        ("has_motion", pa.bool_()),  # nodes.f_mot / f_loc are real (a moving agent with an aligner)
+        ("caption", pa.string()),  # the captioner's description ("" without pixels)
+        ("caption_json", pa.string()),  # AppearanceCaption fields as JSON ("" without pixels)
+        ("motion_json", pa.string()),  # motion/location probabilities and auto-labels as JSON ("" if none)
+    ],
+)
+
 NODE_POSES_SCHEMA = _schema(
     "node_poses",
     1,
@@ -268,6 +285,7 @@ TABLES: dict[str, TableSpec] = {
         TableSpec("gaussians", gaussians_schema, dims=("feature_dim", "color_dim")),
         TableSpec("nodes", nodes_schema, dims=("dim",)),
         TableSpec("node_poses", _fixed(NODE_POSES_SCHEMA)),
+        TableSpec("node_language", _fixed(NODE_LANGUAGE_SCHEMA)),
         TableSpec("deformations", _fixed(DEFORMATIONS_SCHEMA)),
         TableSpec("edits", _fixed(EDITS_SCHEMA)),
         TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA)),

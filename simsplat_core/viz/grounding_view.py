@@ -1,0 +1,63 @@
+"""Pictures of a grounding answer: the matched masks over the camera images, and relevance maps.
+
+    panel = grounding_picture(images, masks, relevance)   # uint8 [H', W', 3] for a PNG
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+
+from simsplat_core.scene_view import side_by_side
+
+#: Tint of matched pixels (RGB in [0, 1]).
+MATCH_COLOR = (1.0, 0.25, 0.1)
+
+
+def mask_overlay(image: np.ndarray, mask: np.ndarray, color: Sequence[float] = MATCH_COLOR, alpha: float = 0.5
+                 ) -> np.ndarray:
+    """``[H, W, 3]`` float image in ``[0, 1]`` with ``mask [H, W]`` bool tinted by ``color`` and outlined."""
+    if image.shape[:2] != mask.shape:
+        raise ValueError(f"mask_overlay: mask {mask.shape} does not match image {image.shape[:2]}")
+    out = np.clip(np.asarray(image, np.float32), 0.0, 1.0).copy()
+    tint = np.asarray(color, np.float32).reshape(1, 3)
+    out[mask] = (1.0 - alpha) * out[mask] + alpha * tint
+    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    cv2.drawContours(out, contours, -1, tuple(float(c) for c in color), 1)
+    return out
+
+
+def relevance_image(relevance: np.ndarray, low: float | None = None, high: float | None = None) -> np.ndarray:
+    """``[H, W]`` similarity -> ``[H, W, 3]`` float heat map in ``[0, 1]`` (blue low, red high), scaled
+    between ``low`` and ``high`` (default: the map's own 2nd and 99.5th percentiles)."""
+    values = np.asarray(relevance, np.float32)
+    lo = float(np.percentile(values, 2)) if low is None else low
+    hi = float(np.percentile(values, 99.5)) if high is None else high
+    scaled = np.clip((values - lo) / max(hi - lo, 1e-6), 0.0, 1.0)
+    heat = cv2.applyColorMap((scaled * 255).astype(np.uint8), cv2.COLORMAP_JET)  # BGR
+    return heat[..., ::-1].astype(np.float32) / 255.0
+
+
+def grounding_picture(images: Sequence[np.ndarray], masks: np.ndarray, relevance: np.ndarray | None = None
+                      ) -> np.ndarray:
+    """Cameras side by side with the matched masks; below them the relevance maps when given.
+
+    Args:
+        images: ``C`` float ``[H, W, 3]`` camera images in ``[0, 1]``.
+        masks: ``[C, H, W]`` bool matched pixels.
+        relevance: ``[C, H, W]`` similarity maps (one colour scale shared by all cameras), or ``None``.
+
+    Returns:
+        uint8 ``[H', W', 3]``.
+    """
+    if len(images) != masks.shape[0]:
+        raise ValueError(f"grounding_picture: {len(images)} images but masks for {masks.shape[0]} cameras")
+    top = side_by_side([mask_overlay(img, m) for img, m in zip(images, masks)])
+    if relevance is None:
+        return top
+    lo, hi = float(np.percentile(relevance, 2)), float(np.percentile(relevance, 99.5))
+    bottom = side_by_side([relevance_image(r, lo, hi) for r in relevance])
+    gap = np.zeros((4, top.shape[1], 3), np.uint8)
+    return np.concatenate([top, gap, bottom], axis=0)

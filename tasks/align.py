@@ -1,0 +1,177 @@
+"""Tasks of the language-alignment stage: train the motion/location aligner on stored logs, then align
+each reconstructed scene (captions, appearance autoencoder, per-Gaussian features, motion features).
+
+Thin like the other tasks: compute a content key, skip when the store already holds the result, else
+call ``simsplat_core.language`` and write through ``storage``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from dataclasses import dataclass
+
+from prefect import task
+from prefect.cache_policies import NO_CACHE
+
+from simsplat_core.compute_threads import set_compute_threads
+from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
+from simsplat_core.language.text import default_text_encoder
+from simsplat_core.scene import SceneGraph
+from storage import ArtifactStore, canonical, content_key, read_log_manifest, read_scene, read_scene_log
+from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
+from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
+
+logger = logging.getLogger(__name__)
+
+#: Version of the aligner-training stage; bump it to invalidate every stored model.
+ALIGNER_VERSION = "motion-aligner-v1"
+#: Version of the scene-alignment stage; bump it to invalidate every stored language scene.
+LANGUAGE_VERSION = "language-scene-v1"
+
+
+@dataclass(frozen=True)
+class StoredAligner:
+    """What ``train_motion_aligner`` returns (small: it crosses process boundaries).
+
+    Attributes:
+        model_hash: content key of (training logs, config, text encoder, version).
+        relpath: ``alignment/<model_hash>/model``.
+        seq_ids: the logs it was trained on.
+        metrics: training figures (samples, final loss, seconds).
+        seconds: wall time spent (0 when skipped).
+        skipped: True when the model was already stored.
+    """
+
+    model_hash: str
+    relpath: str
+    seq_ids: tuple[str, ...]
+    metrics: dict[str, float]
+    seconds: float
+    skipped: bool
+
+
+def aligner_hash(log_keys: list[str], config: MotionAlignerConfig, encoder_name: str) -> str:
+    """Content key of an aligner: the training logs' keys (order-free), config, encoder, version."""
+    return content_key("align-model", ALIGNER_VERSION, sorted(log_keys), config.to_json(), encoder_name)
+
+
+@task(name="train-motion-aligner", retries=0, cache_policy=NO_CACHE)
+def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None
+                         ) -> StoredAligner:
+    """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories).
+
+    Raises:
+        FileNotFoundError: a log is missing from the store (named).
+        ValueError: ``seq_ids`` is empty.
+    """
+    if not seq_ids:
+        raise ValueError("train_motion_aligner: no logs to train on")
+    config = config or MotionAlignerConfig()
+    store = ArtifactStore(store_root)
+    keys = []
+    for seq_id in seq_ids:
+        manifest = read_log_manifest(store, seq_id)
+        if manifest is None:
+            raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log to train the aligner on")
+        keys.append(manifest["key"])
+    encoder = default_text_encoder()
+    key = aligner_hash(keys, config, encoder.name)
+    existing = read_aligner_manifest(store, key)
+    if existing is not None:
+        logger.info("motion aligner %s already stored, skipping", key[:12])
+        return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
+    started = time.perf_counter()
+    logs = [read_scene_log(store, seq_id, load_images=False) for seq_id in seq_ids]
+    aligner = MotionAligner.fit(logs, config, encoder)
+    final = aligner.history[-1] if aligner.history else {}
+    metrics = {"train_seconds": float(aligner.train_seconds), "logs": float(len(logs)),
+               **{f"final_{k}": float(v) for k, v in final.items() if isinstance(v, (int, float))}}
+    provenance = {"seq_ids": list(seq_ids), "log_keys": keys, "config": config.to_json(), "text_encoder": encoder.name,
+                  "version": ALIGNER_VERSION}
+    write_aligner_model(store, key, aligner.state(), metrics=metrics, provenance=provenance)
+    seconds = time.perf_counter() - started
+    logger.info("trained motion aligner %s on %d logs in %.1f s", key[:12], len(logs), seconds)
+    return StoredAligner(key, model_dir(key), tuple(seq_ids), metrics, round(seconds, 3), False)
+
+
+def load_motion_aligner(store: ArtifactStore, model_hash: str) -> MotionAligner:
+    """The stored aligner ``model_hash`` (raises ``FileNotFoundError`` naming the path when absent)."""
+    return MotionAligner.from_state(read_aligner_state(store, model_hash))
+
+
+@dataclass(frozen=True)
+class StoredLanguageScene:
+    """What ``align_scene`` returns.
+
+    Attributes:
+        seq_id, scene_hash: the reconstructed scene that was aligned.
+        model_hash: the motion aligner used.
+        language_hash: content key of (aligner, scene, config, version); the directory name.
+        relpath: ``alignment/<model_hash>/scenes/<seq_id>/<language_hash>``.
+        metrics: stage times, counts, fit and mask-agreement figures.
+        seconds: wall time (0 when skipped).
+        skipped: True when already stored.
+    """
+
+    seq_id: str
+    scene_hash: str
+    model_hash: str
+    language_hash: str
+    relpath: str
+    metrics: dict[str, float]
+    seconds: float
+    skipped: bool
+
+
+#: AlignmentConfig fields that never change what is stored.
+RUN_ONLY_ALIGNMENT_FIELDS = ("eval_views", "measure_masks")
+
+
+def language_hash(model_hash: str, scene_hash: str, config: AlignmentConfig, encoder_name: str) -> str:
+    """Content key of one aligned scene."""
+    settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_ALIGNMENT_FIELDS}
+    return content_key("align-scene", LANGUAGE_VERSION, model_hash, scene_hash, settings, encoder_name)
+
+
+@task(name="align-scene", retries=0, cache_policy=NO_CACHE)
+def align_scene(store_root: str, seq_id: str, scene_hash: str, model_hash: str, config: AlignmentConfig | None = None,
+                threads: int = 0) -> StoredLanguageScene:
+    """Build and store the language scene of ``scenes/<seq_id>/<scene_hash>`` with aligner ``model_hash``.
+
+    Args:
+        threads: torch/numba threads for this task (0 = leave the process setting).
+
+    Raises:
+        FileNotFoundError: the log, scene or aligner is missing (named).
+    """
+    config = (config or AlignmentConfig()).validate()
+    store = ArtifactStore(store_root)
+    encoder = default_text_encoder()
+    key = language_hash(model_hash, scene_hash, config, encoder.name)
+    relpath = language_dir(model_hash, seq_id, key)
+    existing = read_language_manifest(store, model_hash, seq_id, key)
+    if existing is not None:
+        logger.info("%s: language scene %s already stored, skipping", seq_id, key[:12])
+        return StoredLanguageScene(seq_id, scene_hash, model_hash, key, relpath, dict(existing.get("metrics", {})),
+                                   0.0, True)
+    if threads:
+        set_compute_threads(threads)
+    started = time.perf_counter()
+    aligner = load_motion_aligner(store, model_hash)
+    loaded = read_scene(store, seq_id, scene_hash)
+    graph = SceneGraph.from_records(loaded.records)
+    log = read_scene_log(store, seq_id)
+    built = build_language_scene(graph, log, text_encoder=encoder, aligner=aligner, config=config,
+                                 scene_hash=loaded.scene_hash)
+    provenance = {"scene_hash": loaded.scene_hash, "model_hash": model_hash, "version": LANGUAGE_VERSION,
+                  "config": canonical(dataclasses.asdict(config)), "text_encoder": encoder.name}
+    write_language_scene(store, model_hash, key, built.scene, graph.to_records(loaded.records.scene_id),
+                         autoencoder_state=None if built.autoencoder is None else built.autoencoder.state(),
+                         metrics=built.metrics, provenance=provenance)
+    seconds = time.perf_counter() - started
+    logger.info("%s: aligned scene %s in %.1f s", seq_id, loaded.scene_hash[:12], seconds)
+    return StoredLanguageScene(seq_id, loaded.scene_hash, model_hash, key, relpath,
+                               {k: float(v) for k, v in built.metrics.items()}, round(seconds, 3), False)

@@ -1,0 +1,367 @@
+"""QueryEngine: look-alikes told apart by motion, location or colour; groups; no-match answers; ablations."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from simsplat_core.language.codebooks import MotionCodebooks
+from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.query import QueryConfig, QueryEngine, calibrate_thresholds
+from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.language.text import TextEncoder
+from simsplat_core.world import generate_log
+from tests.simsplat_core.language.language_scene_factory import (
+    SMALL_WORLD,
+    ObjectSpec,
+    hand_built_scene,
+    language_scene_from_log,
+    motion_label,
+    node_ids_of,
+    pedestrian_caption,
+    vehicle_caption,
+)
+
+# node ids follow the spec order (1-based)
+SPECS = [
+    # three red sedans: A and B differ in motion only, A and C in location only; D is A in blue
+    ObjectSpec("A", "vehicle", vehicle_caption("red", "sedan"), motion_label("A", "turning_left", "in_front_of_ego", "at_the_intersection")),
+    ObjectSpec("B", "vehicle", vehicle_caption("red", "sedan"), motion_label("B", "going_straight", "in_front_of_ego", "at_the_intersection")),
+    ObjectSpec("C", "vehicle", vehicle_caption("red", "sedan"), motion_label("C", "turning_left", "left_of_ego", "on_the_road")),
+    ObjectSpec("D", "vehicle", vehicle_caption("blue", "sedan"), motion_label("D", "turning_left", "in_front_of_ego", "at_the_intersection")),
+    # two parked white SUVs and a stopped white van
+    ObjectSpec("E", "vehicle", vehicle_caption("white", "SUV"), motion_label("E", "parked", "right_of_ego", "by_the_curb")),
+    ObjectSpec("F", "vehicle", vehicle_caption("white", "SUV"), motion_label("F", "parked", "behind_ego", "by_the_curb")),
+    ObjectSpec("G", "vehicle", vehicle_caption("white", "van"), motion_label("G", "stopped", "in_front_of_ego", "on_the_road")),
+    # pedestrians: P1/P2 dress alike (crossing vs standing); P3/P4 swap top and trousers colours
+    ObjectSpec("P1", "pedestrian", pedestrian_caption("white", "gray"), motion_label("P1", "crossing_left_to_right", "in_front_of_ego", "on_the_crosswalk")),
+    ObjectSpec("P2", "pedestrian", pedestrian_caption("white", "gray"), motion_label("P2", "standing", "in_front_of_ego", "on_the_sidewalk")),
+    ObjectSpec("P3", "pedestrian", pedestrian_caption("blue", "red"), motion_label("P3", "walking_along", "left_of_ego", "on_the_sidewalk")),
+    ObjectSpec("P4", "pedestrian", pedestrian_caption("red", "blue"), motion_label("P4", "walking_along", "right_of_ego", "on_the_sidewalk")),
+    # street furniture: no motion features
+    ObjectSpec("cone", "static", vehicle_caption("orange", "traffic cone", "static")),
+]
+ID = {spec.object_id: k + 1 for k, spec in enumerate(SPECS)}
+
+
+@pytest.fixture(scope="module")
+def codebooks(encoder: TextEncoder) -> MotionCodebooks:
+    return MotionCodebooks.build(encoder)
+
+
+@pytest.fixture(scope="module")
+def scene(encoder: TextEncoder, codebooks: MotionCodebooks) -> LanguageScene:
+    return hand_built_scene(SPECS, encoder, codebooks)
+
+
+@pytest.fixture(scope="module")
+def engine(encoder: TextEncoder, codebooks: MotionCodebooks) -> QueryEngine:
+    return QueryEngine(encoder, QueryConfig(), codebooks=codebooks)
+
+
+def ids(*names: str) -> tuple[int, ...]:
+    return tuple(ID[n] for n in names)
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        # motion-only look-alikes
+        ("the red sedan turning left at the intersection", "A"),
+        ("the red sedan that is going straight", "B"),
+        ("Where is the red car driving straight ahead?", "B"),
+        # location-only look-alikes (both turn left)
+        ("the red sedan turning left on my left", "C"),
+        ("the red car making a left turn in the junction", "A"),
+        # colour-only look-alikes
+        ("the blue sedan turning left", "D"),
+        ("the blue car", "D"),
+        # pedestrians: motion, garments in order, crossing direction
+        ("the pedestrian in a white top and gray pants crossing the street", "P1"),
+        ("the person in a white shirt and grey trousers who is standing still", "P2"),
+        ("find me the pedestrian in a red shirt and blue pants", "P4"),
+        ("the person wearing a blue jacket and red pants", "P3"),
+        ("someone crossing from left to right", "P1"),
+        # location alone, static objects
+        ("the white SUV on my right", "E"),
+        ("the white SUV parked behind us", "F"),
+        ("the orange traffic cone", "cone"),
+        ("the stopped van", "G"),
+    ],
+)
+def test_single_queries_pick_the_right_node(engine: QueryEngine, scene: LanguageScene, text: str, expected: str) -> None:
+    g = engine.ground(scene, text)
+    assert g.node_ids == ids(expected), (g.message, g.ranking[:3])
+    assert not g.group
+    assert expected in g.message
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("every parked SUV", {"E", "F"}),
+        ("all the white SUVs", {"E", "F"}),
+        ("all red sedans", {"A", "B", "C"}),
+        ("all cars turning left", {"A", "C", "D"}),
+        ("the pedestrians walking along the sidewalk", {"P3", "P4"}),
+        ("all crossing pedestrians", {"P1"}),
+        ("Which vehicles are stationary?", {"E", "F", "G"}),
+    ],
+)
+def test_group_queries_return_every_member(engine: QueryEngine, scene: LanguageScene, text: str, expected: set[str]) -> None:
+    g = engine.ground(scene, text)
+    assert g.group
+    assert set(g.node_ids) == set(ids(*expected)), (g.message, g.ranking[:5])
+    assert list(g.matches) == sorted(g.matches, key=lambda m: -m.score)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("the purple bus", "no purple bus in this scene"),
+        ("the pedestrian crossing from right to left", "no pedestrian in this scene is crossing from right to left"),
+        ("the red sedan that is reversing", "no red sedan in this scene is reversing"),
+        ("the blue sedan going straight", "no blue sedan in this scene is going straight"),
+        ("the person in a gray shirt and white pants", "no person in a gray top and white trousers in this scene"),
+        ("the bicycle", "no bicycle in this scene"),
+        ("the giraffe", "no giraffe in this scene"),
+        ("all reversing trucks", "no truck in this scene"),
+    ],
+)
+def test_queries_that_match_nothing_say_so(engine: QueryEngine, scene: LanguageScene, text: str, message: str) -> None:
+    g = engine.ground(scene, text)
+    assert g.matches == () and g.node_ids == ()
+    assert g.message.startswith(message), g.message
+    assert not g.masks(scene).any()
+
+
+def test_crossing_pedestrian_absent(engine: QueryEngine, encoder: TextEncoder, codebooks: MotionCodebooks) -> None:
+    no_crossing = hand_built_scene([s for s in SPECS if s.object_id != "P1"], encoder, codebooks)
+    g = engine.ground(no_crossing, "the crossing pedestrian")
+    assert g.matches == ()
+    assert g.message == "no pedestrian in this scene is crossing"
+    assert engine.ground(no_crossing, "all crossing pedestrians").message == "no pedestrian in this scene is crossing"
+
+
+def test_named_category_is_a_hard_filter(engine: QueryEngine, scene: LanguageScene) -> None:
+    g = engine.ground(scene, "the pedestrian turning left at the intersection")
+    assert {m.node_id for m in g.ranking} == set(ids("P1", "P2", "P3", "P4"))
+    assert g.matches == ()
+
+
+def test_contradicted_colour_sinks_the_score(engine: QueryEngine, scene: LanguageScene) -> None:
+    ranking = {m.node_id: m for m in engine.ground(scene, "the blue sedan turning left at the intersection").ranking}
+    assert ranking[ID["D"]].score > 0.5
+    assert ranking[ID["A"]].score < 0.1 * ranking[ID["D"]].score
+    assert ranking[ID["A"]].motion == pytest.approx(ranking[ID["D"]].motion)
+
+
+def test_ranking_scores_every_compatible_node(engine: QueryEngine, scene: LanguageScene) -> None:
+    g = engine.ground(scene, "the red sedan turning left at the intersection")
+    vehicles = [s.object_id for s in SPECS if s.category == "vehicle"]
+    assert {m.object_id for m in g.ranking} == set(vehicles)
+    assert g.ranking[0].node_id == ID["A"]
+    for m in g.ranking:
+        assert 0.0 <= m.score <= 1.0
+        assert all(0.0 <= v <= 1.0 for v in (m.appearance, m.motion, m.location))
+    candidates = [m for m in g.ranking if m.candidate]
+    assert [m.score for m in candidates] == sorted((m.score for m in candidates), reverse=True)
+    assert not next(m for m in g.ranking if m.object_id == "D").candidate  # narrowed out by colour
+
+
+# ---------------------------------------------------------------------------------------------- ablations
+def test_without_motion_motion_look_alikes_tie(engine: QueryEngine, scene: LanguageScene) -> None:
+    app = engine.with_config(QueryConfig(use_motion=False, use_location=False))
+    g = app.ground(scene, "the red sedan turning left")
+    scores = {m.node_id: m for m in g.ranking}
+    assert scores[ID["A"]].score == pytest.approx(scores[ID["B"]].score)
+    assert math.isnan(scores[ID["A"]].motion) and math.isnan(scores[ID["A"]].location)
+    with_motion = {m.node_id: m.score for m in engine.ground(scene, "the red sedan turning left").ranking}
+    assert with_motion[ID["A"]] > 5 * with_motion[ID["B"]]
+
+
+def test_without_location_location_look_alikes_tie(engine: QueryEngine, scene: LanguageScene) -> None:
+    text = "the red sedan turning left on my left"
+    no_loc = {m.node_id: m for m in engine.with_config(QueryConfig(use_location=False)).ground(scene, text).ranking}
+    assert no_loc[ID["A"]].score == pytest.approx(no_loc[ID["C"]].score)
+    assert math.isnan(no_loc[ID["C"]].location)
+    app_loc = engine.with_config(QueryConfig(use_motion=False)).ground(scene, text)
+    assert app_loc.node_ids == ids("C")
+    assert math.isnan(app_loc.matches[0].motion)
+
+
+def test_without_appearance_no_category_or_colour_filter(engine: QueryEngine, scene: LanguageScene) -> None:
+    no_app = engine.with_config(QueryConfig(use_appearance=False))
+    g = no_app.ground(scene, "the blue sedan turning left at the intersection")
+    scores = {m.node_id: m for m in g.ranking}
+    assert scores[ID["A"]].score == pytest.approx(scores[ID["D"]].score)  # colour no longer counts
+    assert math.isnan(scores[ID["D"]].appearance)
+    assert len(g.ranking) == len(SPECS)  # pedestrians and the cone are scored too
+    assert no_app.ground(scene, "all crossing pedestrians").node_ids == ids("P1")  # motion alone still finds it
+
+
+def test_a_query_with_no_usable_part(engine: QueryEngine, scene: LanguageScene) -> None:
+    g = engine.with_config(QueryConfig(use_motion=False, use_location=False)).ground(scene, "something reversing")
+    assert g.matches == ()
+    assert g.message.startswith("nothing to compare")
+
+
+# ---------------------------------------------------------------------------------------------- calibration
+def test_calibrate_thresholds_separates_matches_from_near_misses(engine: QueryEngine, scene: LanguageScene) -> None:
+    examples = [
+        (scene, "the red sedan turning left at the intersection", frozenset(ids("A"))),
+        (scene, "the blue sedan turning left", frozenset(ids("D"))),
+        (scene, "the person in a red shirt and blue pants walking along the sidewalk", frozenset(ids("P4"))),
+        (scene, "the white van that is stopped", frozenset(ids("G"))),
+        (scene, "the blue sedan going straight", frozenset()),
+        (scene, "the red sedan reversing", frozenset()),
+        (scene, "the pedestrian crossing from right to left", frozenset()),
+        (scene, "all parked SUVs", frozenset(ids("E", "F"))),
+        (scene, "all pedestrians walking along the sidewalk", frozenset(ids("P3", "P4"))),
+        (scene, "all reversing sedans", frozenset()),
+    ]
+    loose = engine.with_config(QueryConfig(no_match_threshold=0.0, group_threshold=0.0))
+    assert loose.ground(scene, "the red sedan reversing").matches  # without a threshold something is returned
+    config = calibrate_thresholds(loose, examples)
+    assert 0.0 < config.no_match_threshold < 1.0 and 0.0 < config.group_threshold < 1.0
+    calibrated = engine.with_config(config)
+    for sc, text, expected in examples:
+        assert set(calibrated.ground(sc, text).node_ids) == set(expected), text
+    assert dataclasses.replace(config, no_match_threshold=0.0, group_threshold=0.0) == loose.config
+
+
+def test_calibrate_thresholds_needs_examples(engine: QueryEngine) -> None:
+    with pytest.raises(ValueError, match="at least one"):
+        calibrate_thresholds(engine, [])
+
+
+# ---------------------------------------------------------------------------------------------- config, plumbing
+@pytest.mark.parametrize(
+    ("changes", "field"),
+    [
+        (dict(use_appearance=False, use_motion=False, use_location=False), "at least one"),
+        (dict(use_motion="yes"), "use_motion"),
+        (dict(motion_weight=-1.0), "motion_weight"),
+        (dict(appearance_temperature=0.0), "appearance_temperature"),
+        (dict(candidate_ratio=1.5), "candidate_ratio"),
+        (dict(no_match_threshold=-0.1), "no_match_threshold"),
+        (dict(group_threshold=2.0), "group_threshold"),
+        (dict(color_mismatch=1.2), "color_mismatch"),
+        (dict(lexicon_weight=-0.5), "lexicon_weight"),
+        (dict(candidate_top_k=-1), "candidate_top_k"),
+        (dict(candidate_top_k=1.5), "candidate_top_k"),
+        (dict(unknown_floor=3.0), "unknown_floor"),
+    ],
+)
+def test_config_validation_names_the_field(encoder: TextEncoder, changes: dict, field: str) -> None:
+    config = dataclasses.replace(QueryConfig(), **changes)
+    with pytest.raises(ValueError, match=field):
+        config.validate()
+    with pytest.raises(ValueError, match=field):
+        QueryEngine(encoder, config)
+
+
+def test_default_config_is_valid() -> None:
+    assert QueryConfig().validate() == QueryConfig()
+
+
+def test_candidate_top_k_caps_the_candidates(engine: QueryEngine, scene: LanguageScene) -> None:
+    g = engine.with_config(QueryConfig(candidate_top_k=1)).ground(scene, "all red sedans")
+    assert sum(m.candidate for m in g.ranking) == 1 and len(g.matches) == 1
+
+
+def test_scene_in_another_text_space_is_rejected(engine: QueryEngine, scene: LanguageScene) -> None:
+    other = dataclasses.replace(scene, text_encoder="some-other-encoder")
+    with pytest.raises(ValueError, match="some-other-encoder"):
+        engine.ground(other, "the red sedan")
+
+
+def test_masks_of_a_grounding(engine: QueryEngine, scene: LanguageScene) -> None:
+    g = engine.ground(scene, "every parked SUV")
+    masks = g.masks(scene)
+    assert masks.shape == scene.node_id_maps.shape and masks.dtype == bool
+    assert masks.sum() == 2
+    assert set(scene.node_id_maps[masks].tolist()) == set(ids("E", "F"))
+
+
+class CountingEncoder:
+    """Wraps an encoder and counts the query texts it is asked to embed."""
+
+    def __init__(self, inner: TextEncoder) -> None:
+        self.inner = inner
+        self.name = inner.name
+        self.dim = inner.dim
+        self.queries: list[str] = []
+
+    def encode_queries(self, texts):
+        self.queries += list(texts)
+        return self.inner.encode_queries(texts)
+
+    def encode_passages(self, texts):
+        return self.inner.encode_passages(texts)
+
+
+def test_query_embeddings_are_cached(encoder: TextEncoder, codebooks: MotionCodebooks, scene: LanguageScene) -> None:
+    counting = CountingEncoder(encoder)
+    engine = QueryEngine(counting, codebooks=codebooks)
+    first = engine.ground(scene, "the red sedan turning left at the intersection")
+    asked = list(counting.queries)
+    assert set(asked) == {"red sedan", "sedan turning left", "at the intersection"}  # parts, one batch
+    second = engine.ground(scene, "the red sedan turning left at the intersection")
+    assert counting.queries == asked  # nothing re-encoded
+    assert second.node_ids == first.node_ids
+    assert engine.cache_hits == 3 and engine.cache_misses == 3
+
+
+def test_empty_query_is_rejected(engine: QueryEngine, scene: LanguageScene) -> None:
+    with pytest.raises(ValueError, match="empty"):
+        engine.ground(scene, "  ")
+
+
+# ---------------------------------------------------------------------------------------------- a synthetic world
+@pytest.fixture(scope="module")
+def world(encoder: TextEncoder, codebooks: MotionCodebooks):
+    log = generate_log(7, SMALL_WORLD)
+    return log, language_scene_from_log(log, encoder, "ground_truth", codebooks=codebooks)
+
+
+def test_world_look_alikes(engine: QueryEngine, world) -> None:
+    """Seed 7's deliberate look-alikes: two silver SUVs (one parked) and two pedestrians dressed alike
+    (one crossing left to right, one standing)."""
+    log, scene = world
+    node = node_ids_of(log)
+    assert engine.ground(scene, "the silver SUV that is parked").node_ids == (node["veh_01"],)
+    assert engine.ground(scene, "the silver SUV at the intersection").node_ids == (node["veh_00"],)
+    crossing = engine.ground(scene, "the pedestrian in a white top and gray pants crossing from left to right")
+    assert crossing.node_ids == (node["ped_00"],)
+    standing = engine.ground(scene, "the pedestrian in a white shirt and gray pants standing on the sidewalk")
+    assert standing.node_ids == (node["ped_01"],)
+    assert engine.ground(scene, "the pedestrian in a white top and gray pants crossing from right to left").node_ids == ()
+
+
+def test_world_masks_are_the_instance_masks(engine: QueryEngine, world) -> None:
+    log, scene = world
+    g = engine.ground(scene, "the silver SUV that is parked")
+    masks = g.masks(scene)
+    instance = log.object("veh_01").instance_id
+    truth = np.stack(
+        [np.stack([img.instance == instance for img in log.images if img.frame_idx == f]) for f in scene.frame_indices]
+    )
+    assert masks.shape == truth.shape
+    assert np.array_equal(masks, truth) and masks.any()
+
+
+def test_world_scene_from_captioner_and_aligner(encoder: TextEncoder, codebooks: MotionCodebooks) -> None:
+    """The factory's other sources: the built-in captioner on ground-truth crops and a (briefly) trained aligner."""
+    log = generate_log(11, SMALL_WORLD)
+    aligner = MotionAligner.fit([log], MotionAlignerConfig(epochs=2), encoder)
+    scene = language_scene_from_log(log, encoder, "captioner", aligner=aligner)
+    captioned = [n for n in scene.nodes if n.caption is not None]
+    assert captioned and all(n.f_app is not None and n.f_app.shape == (encoder.dim,) for n in captioned)
+    assert all(n.motion is not None for n in scene.nodes if n.kind)
+    assert scene.metadata["motion"] == "aligner"
+    g = QueryEngine(encoder, codebooks=codebooks).ground(scene, captioned[0].caption.text)
+    assert g.ranking and g.ranking[0].appearance == pytest.approx(1.0)
