@@ -92,16 +92,34 @@ def run(
     runner: RunnerOption = RunnerKind.ray,
     workers: WorkersOption = None,
     iterations: IterationsOption = None,
+    align: Annotated[bool, typer.Option(help="Run the language-alignment stage after reconstruction.")] = True,
 ) -> None:
-    """Run the main job on the embedded default data: synthetic sequences, then one scene per sequence."""
+    """Run the main job on the embedded default data: synthetic sequences, one reconstructed scene per
+    sequence, then language alignment (motion aligner + one queryable language scene per sequence)."""
     from flows.pipeline import main_flow, reconstruction_config
 
     result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
-                       config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations))
+                       config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
+                       align=align)
     _print_logs(result.logs)
     _print_scenes(result.scenes)
+    if result.language:
+        _print_language(result.aligner, result.language)
     console.print(f"Artifacts under [bold]{store}[/bold]: logs/<seq_id>/ (Parquet tables, EXR images), "
-                  "scenes/<seq_id>/<scene_hash>/ (Gaussians, nodes, poses, metrics, test renders).")
+                  "scenes/<seq_id>/<scene_hash>/ (Gaussians, nodes, poses, metrics, test renders), "
+                  "alignment/<model_hash>/ (motion aligner, language scenes).")
+
+
+def _print_language(aligner, scenes) -> None:
+    table = Table(title=f"Language scenes (motion aligner {aligner.model_hash[:8]})")
+    for col in ("sequence", "objects", "with appearance", "with motion", "mask IoU vs GT", "seconds", ""):
+        table.add_column(col, no_wrap=True)
+    for s in scenes:
+        m = s.metrics
+        table.add_row(s.seq_id, str(int(m.get("object_nodes", 0))), str(int(m.get("nodes_with_f_app", 0))),
+                      str(int(m.get("nodes_with_motion", 0))), f"{m.get('mask_pooled_iou', float('nan')):.3f}",
+                      f"{s.seconds:.1f}", "skipped" if s.skipped else "")
+    console.print(table)
 
 
 @app.command()

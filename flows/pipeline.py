@@ -105,7 +105,7 @@ def reconstruct_scenes(store_root: str, seq_ids: list[str], config: Reconstructi
 
 
 def _publish_language_table(aligner: StoredAligner, scenes: list[StoredLanguageScene]) -> None:
-    names = ("objects", "objects_with_appearance", "objects_with_motion", "mask_miou", "fit_cosine_after")
+    names = ("object_nodes", "nodes_with_f_app", "nodes_with_motion", "mask_pooled_iou", "fit_object_accuracy_after")
     rows = [
         {"seq_id": s.seq_id, "scene": s.scene_hash[:12], "aligner": aligner.model_hash[:12],
          **{name: _rounded(s.metrics.get(name)) for name in names}, "seconds": s.seconds, "skipped": s.skipped}
@@ -146,10 +146,12 @@ def ingest_flow(store_root: str, source: str, paths: list[str], image_scale: flo
 
 @dataclass(frozen=True)
 class MainResult:
-    """What the main job produced: one stored log and one stored scene per sequence."""
+    """What the main job produced: one stored log, scene and language scene per sequence, and the aligner."""
 
     logs: list[StoredLog]
     scenes: list[StoredScene]
+    aligner: StoredAligner | None = None
+    language: list[StoredLanguageScene] = dataclasses.field(default_factory=list)
 
 
 def _summary_markdown(result: MainResult) -> str:
@@ -170,16 +172,30 @@ def _summary_markdown(result: MainResult) -> str:
 
 @flow(name="simsplat-main")
 def main_flow(
-    store_root: str, seeds: list[int], config: WorldConfig, reconstruction: ReconstructionConfig | None = None
+    store_root: str,
+    seeds: list[int],
+    config: WorldConfig,
+    reconstruction: ReconstructionConfig | None = None,
+    alignment: AlignmentConfig | None = None,
+    align: bool = True,
+    aligner: MotionAlignerConfig | None = None,
 ) -> MainResult:
-    """The main job: synthetic logs in, one reconstructed scene per log, then a summary.
+    """The main job: synthetic logs in, one reconstructed scene per log, language alignment (aligner
+    trained on the run's logs, one language scene per sequence), then a summary.
 
     Args:
         reconstruction: scene reconstruction settings (default ``ReconstructionConfig()``).
+        alignment: language-scene settings (default ``AlignmentConfig()``).
+        align: run the language-alignment stage.
+        aligner: motion/location aligner training settings (default ``MotionAlignerConfig()``).
     """
     logs = generate_logs(store_root, seeds, config)
-    scenes = reconstruct_scenes(store_root, [s.summary.seq_id for s in logs], reconstruction or ReconstructionConfig())
-    result = MainResult(logs, scenes)
+    seq_ids = [s.summary.seq_id for s in logs]
+    scenes = reconstruct_scenes(store_root, seq_ids, reconstruction or ReconstructionConfig())
+    stored_aligner, language = None, []
+    if align:
+        stored_aligner, language = align_scenes(store_root, scenes, seq_ids, alignment or AlignmentConfig(), aligner)
+    result = MainResult(logs, scenes, stored_aligner, language)
     create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
     return result
 

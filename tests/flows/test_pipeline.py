@@ -6,8 +6,11 @@ import pytest
 
 from flows.pipeline import main_flow, reconstruction_config
 from flows.runtime import RunnerKind, make_task_runner
+from simsplat_core.language.motion_training import MotionAlignerConfig
+from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.world import WorldConfig
 from storage import ArtifactStore, list_logs, list_scenes, read_scene, read_scene_log
+from storage.language_scenes import list_language_scenes, read_language_scene
 from tests.flows.test_cli import _tree_digest
 
 pytestmark = pytest.mark.orchestration
@@ -15,12 +18,14 @@ pytestmark = pytest.mark.orchestration
 #: Tiny: 6 frames at 80x56, frames 2 and 5 held out for test; 30 reconstruction iterations.
 WORLD = WorldConfig(num_frames=6, width=80, height=56, test_every=3)
 RECON = reconstruction_config(30)
+ALIGN = dict(alignment=AlignmentConfig(fit_iterations=3, autoencoder_steps=50, eval_views=0, min_area=10, small_area=4),
+             aligner=MotionAlignerConfig(epochs=3))
 
 
 def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_config_change(prefect_api_url, tmp_path):
     flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.ray, 2))
 
-    first = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON)
+    first = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, **ALIGN)
     assert [s.summary.seq_id for s in first.logs] == ["synth-000001", "synth-000002"]
     assert [s.seq_id for s in first.scenes] == ["synth-000001", "synth-000002"]
     assert not any(s.skipped for s in first.logs + first.scenes)
@@ -38,15 +43,26 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
         assert len(loaded.records.gaussians["mean"]) == scene.metrics["num_gaussians"]
         renders = sorted(p for p in store.walk(f"{scene.relpath}/renders"))
         assert renders == sorted(f"{cam}/{f:06d}.exr" for cam in log.cameras for f in (2, 5))
+    # language alignment: one aligner trained on both logs, one language scene per reconstructed scene
+    assert first.aligner is not None and not first.aligner.skipped and first.aligner.seq_ids == ("synth-000001", "synth-000002")
+    for scene, language in zip(first.scenes, first.language):
+        assert (language.seq_id, language.scene_hash, language.model_hash) == (scene.seq_id, scene.scene_hash,
+                                                                               first.aligner.model_hash)
+        lang = read_language_scene(store, scene.seq_id).scene
+        assert lang.scene_hash == scene.scene_hash and lang.node_id_maps.shape[0] == 6
+        assert any(n.motion is not None for n in lang.nodes)
 
     digest = _tree_digest(tmp_path)
-    second = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON)
-    assert all(s.skipped for s in second.logs + second.scenes)
+    second = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, **ALIGN)
+    assert all(s.skipped for s in second.logs + second.scenes + second.language) and second.aligner.skipped
     assert [s.metrics for s in second.scenes] == [s.metrics for s in first.scenes]
     assert _tree_digest(tmp_path) == digest
 
     changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
-    third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20))
+    third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20),
+                 align=False)
+    assert third.aligner is None and third.language == []
+    assert len(list_language_scenes(store, "synth-000001")) == 1  # the earlier one stays
     assert not third.logs[0].skipped and not third.scenes[0].skipped
     assert read_scene_log(store, "synth-000001", load_images=False).num_frames == 7
     assert list_scenes(store, "synth-000001") == [first.scenes[0].scene_hash, third.scenes[0].scene_hash]
