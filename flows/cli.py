@@ -112,7 +112,7 @@ def run(
 
 def _print_language(aligner, scenes) -> None:
     table = Table(title=f"Language scenes (motion aligner {aligner.model_hash[:8]})")
-    for col in ("sequence", "objects", "with appearance", "with motion", "mask IoU vs GT", "seconds", ""):
+    for col in ("sequence", "objects", "app", "motion", "mask IoU", "seconds", ""):
         table.add_column(col, no_wrap=True)
     for s in scenes:
         m = s.metrics

@@ -12,18 +12,21 @@ import numpy as np
 
 from simsplat_core.scene_view import side_by_side
 
-#: Tint of matched pixels (RGB in [0, 1]).
-MATCH_COLOR = (1.0, 0.25, 0.1)
+#: Outline of matched pixels (RGB in [0, 1]): yellow stands out on every car colour of the world.
+OUTLINE_COLOR = (1.0, 1.0, 0.0)
 
 
-def mask_overlay(image: np.ndarray, mask: np.ndarray, color: Sequence[float] = MATCH_COLOR, alpha: float = 0.5
+def mask_overlay(image: np.ndarray, mask: np.ndarray, color: Sequence[float] = OUTLINE_COLOR, dim: float = 0.35
                  ) -> np.ndarray:
-    """``[H, W, 3]`` float image in ``[0, 1]`` with ``mask [H, W]`` bool tinted by ``color`` and outlined."""
+    """``[H, W, 3]`` float image in ``[0, 1]`` with everything outside ``mask [H, W]`` bool darkened to
+    ``dim`` and the mask outlined in ``color`` (a tint would vanish on an object of the tint's colour).
+    An empty mask leaves the image as it is."""
     if image.shape[:2] != mask.shape:
         raise ValueError(f"mask_overlay: mask {mask.shape} does not match image {image.shape[:2]}")
     out = np.clip(np.asarray(image, np.float32), 0.0, 1.0).copy()
-    tint = np.asarray(color, np.float32).reshape(1, 3)
-    out[mask] = (1.0 - alpha) * out[mask] + alpha * tint
+    if not mask.any():
+        return out
+    out[~mask] *= dim
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
     cv2.drawContours(out, contours, -1, tuple(float(c) for c in color), 1)
     return out

@@ -4,13 +4,15 @@ import pytest
 from simsplat_core.viz.grounding_view import grounding_picture, mask_overlay, relevance_image
 
 
-def test_overlay_tints_only_masked_pixels_and_outlines_them():
+def test_overlay_dims_the_rest_and_outlines_the_mask():
     image = np.full((20, 30, 3), 0.5, np.float32)
     mask = np.zeros((20, 30), bool)
     mask[5:15, 10:20] = True
     out = mask_overlay(image, mask)
-    assert np.allclose(out[~mask], 0.5)  # outside untouched (the outline is drawn on the mask's border)
-    assert out[10, 15, 0] > 0.6 and out[10, 15, 2] < 0.4  # reddish inside
+    assert np.allclose(out[~mask], 0.5 * 0.35)  # outside dimmed
+    assert np.allclose(out[10, 15], 0.5)  # inside kept as it is
+    assert np.allclose(out[5, 15], (1.0, 1.0, 0.0))  # the border is outlined in yellow
+    assert np.allclose(mask_overlay(image, np.zeros_like(mask)), image)  # no match: nothing dimmed
     with pytest.raises(ValueError, match="does not match"):
         mask_overlay(image, mask[:10])
 
