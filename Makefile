@@ -26,6 +26,8 @@ demo: $(STAMP)
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --out $(STORE)/render_frame20.png
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --shift-left 1 \
 		--out $(STORE)/novel_view_frame20_left1m.png
+	$(VENV)/bin/simsplat query --store $(STORE) --seq synth-000000 "the red car turning right" \
+		--out $(STORE)/query_red_car_turning_right.png
 
 test: $(STAMP)
 	$(VENV)/bin/pytest -q

@@ -24,6 +24,8 @@ os.environ.setdefault("RAY_AUTH_MODE", "disabled")
 app = typer.Typer(help="SIMSplat scenario-mining pipeline.", no_args_is_help=True, add_completion=False)
 ingest_app = typer.Typer(help="Decode real driving logs into the artifact store.", no_args_is_help=True)
 app.add_typer(ingest_app, name="ingest")
+eval_app = typer.Typer(help="Evaluate stored results and write the run's tables.", no_args_is_help=True)
+app.add_typer(eval_app, name="eval")
 console = Console()
 logger = logging.getLogger("flows.cli")
 
@@ -105,6 +107,8 @@ def run(
     _print_scenes(result.scenes)
     if result.language:
         _print_language(result.aligner, result.language)
+    if result.grounding is not None:
+        _print_grounding(result.grounding)
     console.print(f"Artifacts under [bold]{store}[/bold]: logs/<seq_id>/ (Parquet tables, EXR images), "
                   "scenes/<seq_id>/<scene_hash>/ (Gaussians, nodes, poses, metrics, test renders), "
                   "alignment/<model_hash>/ (motion aligner, language scenes).")
@@ -212,6 +216,44 @@ def query(
     console.print(grounding.message)
     if answer.png_uri:
         console.print(f"frame {answer.frame}: {answer.png_uri}")
+
+
+@eval_app.command("grounding")
+def eval_grounding(
+    store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs and aligned scenes.")],
+    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
+    seq: Annotated[Optional[list[str]], typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+) -> None:
+    """Grounding benchmark (SIMSplat Tables 2 and 3): paraphrased queries from the logs' ground truth,
+    accuracy and vIoU per category for the baselines, this method and its feature ablation."""
+    from storage import ArtifactStore, list_logs
+    from storage.language_scenes import list_language_scenes
+    from tasks.grounding_eval import evaluate_grounding_run
+
+    artifacts = ArtifactStore(store)
+    aligned = [s for s in list_logs(artifacts) if list_language_scenes(artifacts, s)]
+    seq_ids = list(seq) if seq else aligned
+    missing = [s for s in seq_ids if s not in aligned]
+    if missing or not seq_ids:
+        raise typer.BadParameter(f"no language scene for {missing or 'any log'} in {store}; aligned: {aligned} "
+                                 "(run `simsplat run` or the alignment stage first)", param_hint="--seq")
+    try:
+        result = evaluate_grounding_run.fn(store, seq_ids, out)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    _print_grounding(result)
+
+
+def _print_grounding(result) -> None:
+    table = Table(title=f"Grounding on {len(result.seq_ids)} sequences, {result.queries} queries (acc / vIoU)")
+    table.add_column("method")
+    for category in ("vehicle", "pedestrian", "total"):
+        table.add_column(category)
+    for method, per in result.scores.items():
+        table.add_row(method, *(f"{per[c]['acc']:.3f} / {per[c]['viou']:.3f}" for c in ("vehicle", "pedestrian", "total")))
+    console.print(table)
+    for name, uri in result.tables.items():
+        console.print(f"{name}: {uri}")
 
 
 @app.command()

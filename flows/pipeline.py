@@ -18,7 +18,9 @@ from simsplat_core.language.motion_training import MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
+from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
+from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log
 from tasks.reconstruct import StoredScene, reconstruct_scene
 
@@ -114,6 +116,13 @@ def _publish_language_table(aligner: StoredAligner, scenes: list[StoredLanguageS
     create_table_artifact(rows, key="language-alignment", description="Language-aligned scenes per sequence")
 
 
+def _publish_grounding_table(result: GroundingEvaluation) -> None:
+    rows = [{"method": method, **{f"{c}_{m}": _rounded(per[c][m]) for c in ("vehicle", "pedestrian", "total")
+                                  for m in ("acc", "viou")}} for method, per in result.scores.items()]
+    create_table_artifact(rows, key="grounding", description=f"Grounding benchmark: {result.queries} queries on "
+                          f"{len(result.seq_ids)} sequences (accuracy / vIoU)")
+
+
 def align_scenes(store_root: str, scenes: list[StoredScene], training_seq_ids: list[str],
                  config: AlignmentConfig, aligner_config: MotionAlignerConfig | None = None
                  ) -> tuple[StoredAligner, list[StoredLanguageScene]]:
@@ -152,6 +161,8 @@ class MainResult:
     scenes: list[StoredScene]
     aligner: StoredAligner | None = None
     language: list[StoredLanguageScene] = dataclasses.field(default_factory=list)
+    grounding: GroundingEvaluation | None = None
+    run_id: str = ""
 
 
 def _summary_markdown(result: MainResult) -> str:
@@ -179,6 +190,8 @@ def main_flow(
     alignment: AlignmentConfig | None = None,
     align: bool = True,
     aligner: MotionAlignerConfig | None = None,
+    evaluate: bool = True,
+    run_id: str | None = None,
 ) -> MainResult:
     """The main job: synthetic logs in, one reconstructed scene per log, language alignment (aligner
     trained on the run's logs, one language scene per sequence), then a summary.
@@ -188,14 +201,21 @@ def main_flow(
         alignment: language-scene settings (default ``AlignmentConfig()``).
         align: run the language-alignment stage.
         aligner: motion/location aligner training settings (default ``MotionAlignerConfig()``).
+        evaluate: after alignment, run the grounding benchmark on the run's sequences and write its
+            tables under ``runs/<run_id>/tables/``.
+        run_id: names the run directory (default: ``main-<UTC time>``).
     """
     logs = generate_logs(store_root, seeds, config)
     seq_ids = [s.summary.seq_id for s in logs]
     scenes = reconstruct_scenes(store_root, seq_ids, reconstruction or ReconstructionConfig())
-    stored_aligner, language = None, []
+    stored_aligner, language, grounding = None, [], None
+    run_id = run_id or new_run_id("main")
     if align:
         stored_aligner, language = align_scenes(store_root, scenes, seq_ids, alignment or AlignmentConfig(), aligner)
-    result = MainResult(logs, scenes, stored_aligner, language)
+        if evaluate:
+            grounding = evaluate_grounding_run.submit(store_root, seq_ids, store_root, run_dir(run_id)).result()
+            _publish_grounding_table(grounding)
+    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id)
     create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
     return result
 

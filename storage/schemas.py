@@ -465,3 +465,33 @@ def arrow_to_vectors(column: pa.ChunkedArray | pa.Array) -> np.ndarray:
     width = array.type.list_size
     values = array.flatten().to_numpy(zero_copy_only=False)
     return np.asarray(values, dtype=np.float32).reshape(len(array), width)
+
+
+def grounding_table_schema(first_column: str) -> pa.Schema:
+    """Tables 2 / 3 of a run (``tables/grounding*.parquet``): one row per method (``first_column`` =
+    ``"method"``) or feature set (``"features"``); accuracy and vIoU per category, query counts."""
+    categories = ("vehicle", "pedestrian", "total")
+    fields: list[tuple[str, pa.DataType]] = [(first_column, pa.string())]
+    fields += [(f"{c}_{m}", pa.float64()) for c in categories for m in ("acc", "viou")]
+    fields += [(f"{c}_queries", pa.int64()) for c in categories]
+    return _schema(f"grounding_{first_column}", 1, fields)
+
+
+GROUNDING_OUTCOMES_SCHEMA = _schema(
+    "grounding_outcomes",
+    1,
+    [
+        ("method", pa.string()),
+        ("seq_id", pa.string()),
+        ("query_id", pa.string()),
+        ("text", pa.string()),
+        ("style", pa.string()),
+        ("kind", pa.string()),  # "single" | "group" | "none"
+        ("category", pa.string()),  # "vehicle" | "pedestrian"
+        ("targets", pa.list_(pa.string())),
+        ("predicted", pa.list_(pa.string())),
+        ("correct", pa.bool_()),
+        ("viou", pa.float64()),
+        ("seconds", pa.float64()),
+    ],
+)

@@ -432,6 +432,22 @@ class _VisibleAdam:
         self.param.grad = None
 
 
+def _rows_by_node(size: int, values: Mapping[int, np.ndarray], background: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """``([size, D] float32, [size] bool)``: row ``node_id + 1`` holds ``values[node_id]`` (object nodes),
+    rows 0 (no node hit, id -1) and ``BACKGROUND_ID + 1`` hold ``background``; the mask says which rows
+    are set."""
+    bg = np.asarray(background, dtype=np.float32).reshape(-1)
+    rows = np.zeros((size, bg.shape[0]), dtype=np.float32)
+    valid = np.zeros(size, dtype=bool)
+    for node_id, value in values.items():
+        if 0 <= node_id < size - 1 and node_id != BACKGROUND_ID:
+            rows[node_id + 1], valid[node_id + 1] = np.asarray(value, dtype=np.float32).reshape(-1), True
+    for row in (0, BACKGROUND_ID + 1):
+        rows[row], valid[row] = bg, True
+    return rows, valid
+
+
 class _Targets:
     """Per-node target latents and text-space features as lookup tables indexed by ``node_id + 1``
     (row 0 is ``-1``, nothing hit: the background)."""
@@ -440,26 +456,12 @@ class _Targets:
                  node_targets: Mapping[int, np.ndarray] | None, background_target: np.ndarray | None,
                  device: torch.device) -> None:
         size = max(n.node_id for n in graph.nodes) + 2
-        d = int(np.asarray(background).reshape(-1).shape[0])
-        latent = np.zeros((size, d), dtype=np.float32)
-        valid = np.zeros(size, dtype=bool)
-        for node_id, z in node_latents.items():
-            if 0 <= node_id < size - 1 and node_id != BACKGROUND_ID:
-                latent[node_id + 1], valid[node_id + 1] = np.asarray(z, dtype=np.float32).reshape(-1), True
-        for row in (0, BACKGROUND_ID + 1):
-            latent[row], valid[row] = np.asarray(background, dtype=np.float32).reshape(-1), True
+        latent, valid = _rows_by_node(size, node_latents, background)
         self.latent = torch.from_numpy(latent).to(device)
         self.valid = torch.from_numpy(valid).to(device)
         self.text: Tensor | None = None
         if node_targets is not None and background_target is not None:
-            dim = int(np.asarray(background_target).reshape(-1).shape[0])
-            text = np.zeros((size, dim), dtype=np.float32)
-            has = np.zeros(size, dtype=bool)
-            for node_id, f in node_targets.items():
-                if 0 <= node_id < size - 1 and node_id != BACKGROUND_ID:
-                    text[node_id + 1], has[node_id + 1] = np.asarray(f, dtype=np.float32).reshape(-1), True
-            for row in (0, BACKGROUND_ID + 1):
-                text[row], has[row] = np.asarray(background_target, dtype=np.float32).reshape(-1), True
+            text, has = _rows_by_node(size, node_targets, background_target)
             text /= np.maximum(np.linalg.norm(text, axis=1, keepdims=True), 1e-12)
             self.text_valid = torch.from_numpy(has)
             # candidate targets of the nearest-target accuracy; targets within LOOK_ALIKE_COSINE of each

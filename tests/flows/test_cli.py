@@ -22,7 +22,7 @@ def _tree_digest(root: Path) -> dict[str, str]:
 
 
 @pytest.mark.parametrize("command", [[], ["run"], ["world"], ["ingest"], ["ingest", "waymo-frame"], ["ingest", "av2"], ["inspect"],
-                                     ["reconstruct"], ["render"]])
+                                     ["reconstruct"], ["render"], ["query"], ["eval"], ["eval", "grounding"]])
 def test_every_command_has_help(command):
     result = runner.invoke(app, [*command, "--help"])
     assert result.exit_code == 0, result.output
@@ -116,3 +116,21 @@ def test_render_names_an_unknown_sequence_or_missing_scene(tmp_path):
     assert result.exit_code != 0
     assert "no complete reconstructed scene" in result.output
     assert not (tmp_path / "x.png").exists()
+
+
+def test_eval_grounding_names_what_is_missing(tmp_path):
+    result = runner.invoke(app, ["eval", "grounding", "--store", str(tmp_path), "--out", str(tmp_path / "run")])
+    assert result.exit_code != 0
+    text = _flat(result.output)
+    assert "no language scene" in text and "simsplat run" in text
+
+
+def test_query_without_an_aligned_scene_says_so(tmp_path):
+    result = runner.invoke(app, ["query", "--store", str(tmp_path), "--seq", "synth-000000", "the red car"])
+    assert result.exit_code != 0
+    assert "no language scene of 'synth-000000'" in _flat(result.output)
+
+
+def _flat(output: str) -> str:
+    """CLI output without rich's panel borders and line wrapping."""
+    return " ".join(output.replace("│", " ").replace("╭", " ").replace("╰", " ").split())

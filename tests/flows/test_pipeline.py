@@ -51,9 +51,15 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
         lang = read_language_scene(store, scene.seq_id).scene
         assert lang.scene_hash == scene.scene_hash and lang.node_id_maps.shape[0] == 6
         assert any(n.motion is not None for n in lang.nodes)
+    # grounding evaluation: the run's tables
+    assert first.grounding is not None and first.grounding.queries > 0
+    assert set(first.grounding.tables) == {"grounding", "grounding_ablation", "grounding_outcomes"}
+    assert store.exists(f"runs/{first.run_id}/tables/grounding.parquet")
+    assert store.exists(f"runs/{first.run_id}/tables/grounding.md")
+    assert 0.0 <= first.grounding.scores["ours"]["total"]["acc"] <= 1.0
 
     digest = _tree_digest(tmp_path)
-    second = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, **ALIGN)
+    second = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False, **ALIGN)
     assert all(s.skipped for s in second.logs + second.scenes + second.language) and second.aligner.skipped
     assert [s.metrics for s in second.scenes] == [s.metrics for s in first.scenes]
     assert _tree_digest(tmp_path) == digest

@@ -1,0 +1,61 @@
+"""A run's evaluation outputs: ``tables/<name>.parquet`` + ``tables/<name>.md`` and ``manifest.json``.
+
+    runs/<run_id>/manifest.json           what the run evaluated (inputs, counts, timings)
+    runs/<run_id>/tables/<name>.parquet   one table (schema from ``storage.schemas``)
+    runs/<run_id>/tables/<name>.md        the same table as Markdown, for people
+
+``run_dir`` names the place inside a store; ``simsplat eval ... --out DIR`` uses ``DIR`` itself as the
+run directory (relpath ``""``). Every file is written atomically.
+"""
+
+from __future__ import annotations
+
+import datetime
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import pyarrow as pa
+
+from storage.store import ArtifactStore, join_relpath
+
+RUNS_DIR = "runs"
+_RUN_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
+
+
+@dataclass(frozen=True)
+class RunTable:
+    """One evaluation table: ``table`` validated against ``schema``, and its Markdown rendering."""
+
+    table: pa.Table
+    schema: pa.Schema
+    markdown: str
+
+
+def new_run_id(prefix: str = "run") -> str:
+    """``<prefix>-YYYYmmddTHHMMSSffffffZ`` (UTC; sorts by time)."""
+    return f"{prefix}-{datetime.datetime.now(datetime.timezone.utc).strftime('%Y%m%dT%H%M%S%fZ')}"
+
+
+def run_dir(run_id: str) -> str:
+    """``runs/<run_id>`` (raises ``ValueError`` naming an unsafe id)."""
+    if not _RUN_ID.match(run_id):
+        raise ValueError(f"run id {run_id!r} must be 1-128 characters of letters, digits, '.', '_' or '-'")
+    return join_relpath(RUNS_DIR, run_id)
+
+
+def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, RunTable],
+                     manifest: Mapping[str, Any] | None = None) -> dict[str, str]:
+    """Write each table as ``<relpath>/tables/<name>.parquet`` and ``.md``, then ``manifest.json`` (which
+    lists them); returns ``name -> Parquet URI``."""
+    uris = {}
+    for name, item in tables.items():
+        parquet = join_relpath(relpath, "tables", f"{name}.parquet") if relpath else f"tables/{name}.parquet"
+        store.write_table(parquet, item.table, item.schema)
+        store.write_bytes(parquet[: -len(".parquet")] + ".md", (item.markdown.rstrip("\n") + "\n").encode("utf-8"))
+        uris[name] = store.uri(parquet)
+    body = {"written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "tables": sorted(tables), **dict(manifest or {})}
+    store.write_json(join_relpath(relpath, "manifest.json") if relpath else "manifest.json", body)
+    return uris
