@@ -480,6 +480,19 @@ class QueryEngine:
                 self._cache.popitem(last=False)
         return out
 
+    def prepare(self, texts: Sequence[str], batch_size: int = 64) -> int:
+        """Embed, in batches, everything answering ``texts`` will need (the whole texts too, which
+        text-only baselines sharing the encoder embed), so a benchmark pays batched rather than
+        one-by-one encoder calls. Returns how many texts were embedded."""
+        wanted: list[str] = []
+        for text in texts:
+            parsed = parse_query(text)
+            wanted += [text, parsed.appearance, parsed.motion_text, parsed.sector, parsed.context]
+        wanted = list(dict.fromkeys(t for t in wanted if t))
+        for start in range(0, len(wanted), batch_size):
+            self.embed(wanted[start:start + batch_size])
+        return len(wanted)
+
     def _query_vectors(self, parsed: ParsedQuery) -> _QueryVectors:
         cfg = self.config
         app_text = parsed.appearance if (cfg.use_appearance and parsed.appearance_extra) else ""

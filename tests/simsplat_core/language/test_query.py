@@ -365,3 +365,15 @@ def test_world_scene_from_captioner_and_aligner(encoder: TextEncoder, codebooks:
     assert scene.metadata["motion"] == "aligner"
     g = QueryEngine(encoder, codebooks=codebooks).ground(scene, captioned[0].caption.text)
     assert g.ranking and g.ranking[0].appearance == pytest.approx(1.0)
+
+
+def test_prepare_embeds_every_part_once_so_grounding_needs_no_encoder_call():
+    from simsplat_core.language.query import QueryEngine
+    from simsplat_core.language.text import default_text_encoder
+
+    engine = QueryEngine(default_text_encoder())
+    texts = ["the red sedan turning left at the intersection", "all pedestrians crossing on the right"]
+    assert engine.prepare(texts) >= len(texts)
+    misses = engine.cache_misses
+    engine.prepare(texts)
+    assert engine.cache_misses == misses  # second time: all cached
