@@ -15,19 +15,24 @@ Queries, per log:
   with ``min_frame_pixels`` pixels over all cameras), ``paraphrases_per_target`` descriptions, each a
   different combination of constraints (``Description``: noun, colour, clothing, motion, location) in a
   different style (``paraphrases.SINGLE_STYLES``). A description is used only when it is *unique*: no
-  other object of the log (visible or not, any category) satisfies all its constraints. Matching is
-  conservative: a generic noun ("car", "vehicle") fits every vehicle, "crossing the street" both
-  directions, and so on. Combinations are drawn from families (appearance only, appearance + motion,
+  other object of the log (visible or not, any category) satisfies all its constraints under any
+  plausible reading. Matching is conservative: a generic noun ("car", "vehicle") fits every vehicle,
+  "crossing the street" both directions; beyond its auto-labels an object also fits the motions its
+  label implies ("coming to a stop" is also "slowing down" and "going straight") and every sector and
+  map context it occupies near the reference frame (``plausible_readings``: 10 degrees of slack at
+  sector boundaries, +-1 s around the reference frame, all map predicates rather than the labeller's
+  first), so no query hinges on the labeller's tie-breaking. Combinations are drawn from families (appearance only, appearance + motion,
   appearance + location, appearance + motion + location, motion and/or location with a bare noun) with
   ``BenchmarkConfig.family_weights``, without repeating a family while others remain. A target that no
   combination singles out (identical look-alikes doing the same thing in the same place) gets one
   group query over every object matching its full description.
 * **group**: ``group_per_log`` descriptions with one or two constraints ("all parked cars", "every
   pedestrian crossing the street", "the white vans") that match between 2 and ``group_max`` objects,
-  all of them well visible (a description that also fits a barely visible object is skipped: whether
-  that object belongs to the answer would be a coin toss).
-* **none**: ``none_per_log`` descriptions that fit no object: a well-visible object's description with
-  one constraint changed (colour, body style, clothing, motion or location) -- near misses that a
+  all of them well visible (a description that also fits a barely visible object, or that another
+  reading would extend to more objects, is skipped: whether that object belongs to the answer would be
+  a coin toss).
+* **none**: ``none_per_log`` descriptions that fit no object under any plausible reading: a
+  well-visible object's description with one constraint changed (colour, body style, clothing, motion or location) -- near misses that a
   method choosing the best appearance match without checking the rest gets wrong.
 
 Ground truth of a query is its target object set and, per frame, the targets' pixels in the instance
@@ -46,7 +51,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.language.motion_labels import MotionLabel, label_log
+from simsplat_core.geometry import wrap_angle
+from simsplat_core.language.map_context import MapContext
+from simsplat_core.language.motion_labels import (
+    LabelThresholds,
+    MotionLabel,
+    label_log,
+    location_context,
+    vehicle_off_lane,
+)
 from simsplat_core.language.paraphrases import (
     BROADER_TERMS,
     DESCRIBABLE_CONTEXTS,
@@ -58,6 +71,7 @@ from simsplat_core.language.paraphrases import (
     realise,
     realise_group,
 )
+from simsplat_core.language.trajectory import ObjectTrajectory, ego_yaw, log_trajectories, to_ego_frame
 from simsplat_core.language.vocabulary import LOCATION_SECTOR, MOTION_VOCABULARIES
 from simsplat_core.types import SceneLog
 
@@ -82,6 +96,11 @@ class ObjectFacts:
         motion, sector, context: auto-label classes (``None`` for static objects).
         visible_frames: frames with at least ``min_frame_pixels`` pixels (all cameras together).
         pixels: total ground-truth pixels over the log.
+        max_frame_pixels: the most pixels in one frame (all cameras together).
+        motions, sectors, contexts: every class a listener could also read into the object
+            (``plausible_readings``; the auto-labels included). Uniqueness, group membership and
+            no-match checks use these, so a description never counts as unique, complete or empty
+            when another reading of the scene contradicts it.
     """
 
     object_id: str
@@ -96,11 +115,84 @@ class ObjectFacts:
     context: str | None
     visible_frames: int = 0
     pixels: int = 0
+    max_frame_pixels: int = 0
+    motions: frozenset[str] = frozenset()
+    sectors: frozenset[str] = frozenset()
+    contexts: frozenset[str] = frozenset()
+
+
+#: Auto-label classes whose trajectories also fit other classes' words ("a car coming to a stop" is
+#: also "slowing down" and "going straight"); the labeller's priority order keeps only the first.
+IMPLIED_MOTIONS: dict[str, frozenset[str]] = {
+    "stopping": frozenset({"slowing_down", "going_straight"}),
+    "slowing_down": frozenset({"going_straight"}),
+    "speeding_up": frozenset({"going_straight"}),
+}
+#: Location readings: sectors within this many degrees of the object's bearing, and every sector and
+#: map context the object is in within this many seconds of the reference frame, count as plausible.
+SECTOR_MARGIN_DEG = 10.0
+LOCATION_WINDOW_S = 1.0
+
+
+def _sectors_of(angle_deg: float, th: LabelThresholds, margin: float) -> set[str]:
+    a = float(angle_deg)
+    out = set()
+    if abs(a) <= th.front_deg + margin:
+        out.add("in_front_of_ego")
+    if abs(a) >= th.behind_deg - margin:
+        out.add("behind_ego")
+    if th.front_deg - margin < a < th.behind_deg + margin:
+        out.add("left_of_ego")
+    if -th.behind_deg - margin < a < -th.front_deg + margin:
+        out.add("right_of_ego")
+    return out
+
+
+def plausible_readings(
+    traj: ObjectTrajectory, label: MotionLabel, ego_poses: np.ndarray, map_context: MapContext | None,
+    th: LabelThresholds | None = None,
+) -> tuple[frozenset[str], frozenset[str], frozenset[str]]:
+    """``(motions, sectors, contexts)`` a listener could read into one object.
+
+    Motion: the label and ``IMPLIED_MOTIONS``. Location: over the visible rows within
+    ``LOCATION_WINDOW_S`` of the reference row, every sector within ``SECTOR_MARGIN_DEG`` of the
+    object's bearing and every map context whose predicate holds (``motion_labels`` takes the first
+    one in priority order; here a pedestrian on a crosswalk inside the junction is also "at the
+    intersection", an oncoming car inside the junction also "in the oncoming lane").
+    """
+    th = th or LabelThresholds()
+    motions = {label.motion, *IMPLIED_MOTIONS.get(label.motion, ())}
+    ref = traj.reference_row()
+    near = np.abs(traj.t - traj.t[ref]) <= LOCATION_WINDOW_S + 1e-9
+    rows = np.flatnonzero(near & traj.visible) if (near & traj.visible).any() else np.array([ref])
+    sectors, contexts = {label.sector}, {label.context}
+    for row in rows:
+        pose = ego_poses[int(traj.frame_idx[row])]
+        xy = to_ego_frame(traj.xy[row : row + 1], pose)[0]
+        sectors |= _sectors_of(np.rad2deg(np.arctan2(xy[1], xy[0])), th, SECTOR_MARGIN_DEG)
+        contexts.add(location_context(traj, int(row), pose, map_context, th))
+        if traj.facts is None or map_context is None:
+            continue
+        facts = traj.facts.take(slice(int(row), int(row) + 1))
+        if facts.at_intersection[0]:
+            contexts.add("at_the_intersection")
+        if facts.on_sidewalk[0]:
+            contexts.add("on_the_sidewalk")
+        if traj.kind == "pedestrian" and facts.in_crosswalk[0]:
+            contexts.add("on_the_crosswalk")
+        if traj.kind == "vehicle":
+            if vehicle_off_lane(facts, map_context, th)[0]:
+                contexts.add("by_the_curb")
+            if abs(float(np.rad2deg(wrap_angle(traj.heading[row] - ego_yaw(pose))))) >= th.oncoming_deg:
+                contexts.add("in_the_oncoming_lane")
+    return frozenset(motions), frozenset(sectors), frozenset(contexts)
 
 
 def object_facts(log: SceneLog, labels: dict[str, MotionLabel] | None = None, min_frame_pixels: int = 30) -> dict[str, ObjectFacts]:
     """``object_id -> ObjectFacts`` of every object of a log with ground-truth instance masks."""
     labels = label_log(log) if labels is None else labels
+    map_context = MapContext.from_features(log.map_features) if log.map_features else None
+    trajectories = log_trajectories(log, map_context, min_frames=1)
     n_inst = max((o.instance_id for o in log.objects), default=0) + 1
     per_frame = np.zeros((log.num_frames, n_inst), dtype=np.int64)
     for img in log.images:
@@ -111,6 +203,12 @@ def object_facts(log: SceneLog, labels: dict[str, MotionLabel] | None = None, mi
         a = obj.attributes
         lab = labels.get(obj.object_id)
         counts = per_frame[:, obj.instance_id]
+        traj = trajectories.get(obj.object_id)
+        readings = (
+            plausible_readings(traj, lab, log.ego_poses, map_context)
+            if lab is not None and traj is not None
+            else (frozenset(), frozenset(), frozenset())
+        )
         out[obj.object_id] = ObjectFacts(
             object_id=obj.object_id,
             category=obj.category,
@@ -124,6 +222,10 @@ def object_facts(log: SceneLog, labels: dict[str, MotionLabel] | None = None, mi
             context=lab.context if lab else None,
             visible_frames=int(np.count_nonzero(counts >= min_frame_pixels)),
             pixels=int(counts.sum()),
+            max_frame_pixels=int(counts.max(initial=0)),
+            motions=readings[0],
+            sectors=readings[1],
+            contexts=readings[2],
         )
     return out
 
@@ -150,16 +252,26 @@ class Description:
     sector: str | None = None
     context: str | None = None
 
-    def matches(self, f: ObjectFacts) -> bool:
+    def matches(self, f: ObjectFacts, lenient: bool = False) -> bool:
+        """Whether ``f`` satisfies every constraint: by its auto-labels, or (``lenient``) by any of its
+        plausible readings (``ObjectFacts.motions`` / ``sectors`` / ``contexts``)."""
         if f.category != self.category:
             return False
-        for name in ("subtype", "color", "upper", "lower", "sector", "context"):
+        for name in ("subtype", "color", "upper", "lower"):
             want = getattr(self, name)
             if want is not None and getattr(f, name) != want:
                 return False
+        if lenient:
+            if self.motion is not None and not (MOTION_TERMS[self.motion][1] & (f.motions or {f.motion})):
+                return False
+            if self.sector is not None and self.sector not in (f.sectors or {f.sector}):
+                return False
+            if self.context is not None and self.context not in (f.contexts or {f.context}):
+                return False
+            return True
         if self.motion is not None and f.motion not in MOTION_TERMS[self.motion][1]:
             return False
-        return True
+        return (self.sector is None or f.sector == self.sector) and (self.context is None or f.context == self.context)
 
     @property
     def slots(self) -> tuple[str, ...]:
@@ -194,8 +306,17 @@ class Description:
         )
 
 
-def matching(desc: Description, facts: Iterable[ObjectFacts]) -> list[ObjectFacts]:
-    return [f for f in facts if desc.matches(f)]
+def matching(desc: Description, facts: Iterable[ObjectFacts], lenient: bool = False) -> list[ObjectFacts]:
+    return [f for f in facts if desc.matches(f, lenient)]
+
+
+def unambiguous_targets(desc: Description, facts: Sequence[ObjectFacts]) -> list[ObjectFacts] | None:
+    """The objects ``desc`` refers to by their auto-labels, or ``None`` when another reading of the
+    scene would add an object (the answer would depend on how the listener reads it)."""
+    strict = matching(desc, facts)
+    if [f.object_id for f in matching(desc, facts, lenient=True)] != [f.object_id for f in strict]:
+        return None
+    return strict
 
 
 def _motion_terms(f: ObjectFacts) -> list[str]:
@@ -397,12 +518,13 @@ def _single_queries(
     """``(description, kind, style, targets)`` of one target's queries."""
     unique: dict[str, list[Description]] = {}
     for desc in candidate_descriptions(target):
-        if desc.family in FAMILIES and [m.object_id for m in matching(desc, facts)] == [target.object_id]:
+        targets = unambiguous_targets(desc, facts)
+        if desc.family in FAMILIES and targets is not None and [m.object_id for m in targets] == [target.object_id]:
             unique.setdefault(desc.family, []).append(desc)
     if not unique:
         full = max(candidate_descriptions(target), key=lambda d: len(d.slots))
-        group = matching(full, facts)
-        if all(_well_visible(f, config) for f in group):
+        group = unambiguous_targets(full, facts)
+        if group is not None and len(group) >= 2 and all(_well_visible(f, config) for f in group):
             return [(full, "group", str(rng.choice(GROUP_STYLES)), tuple(sorted(f.object_id for f in group)))]
         return []
     weights = dict(zip(FAMILIES, config.family_weights))
@@ -446,8 +568,8 @@ def _group_candidates(facts: list[ObjectFacts], config: BenchmarkConfig) -> list
             if desc in seen:
                 continue
             seen.add(desc)
-            group = matching(desc, facts)
-            if 2 <= len(group) <= config.group_max and all(_well_visible(g, config) for g in group):
+            group = unambiguous_targets(desc, facts)
+            if group is not None and 2 <= len(group) <= config.group_max and all(_well_visible(g, config) for g in group):
                 out.append((desc, group))
     return out
 
@@ -495,7 +617,7 @@ def _none_query(
         desc = dataclasses.replace(base, **{slot: alts[int(rng.integers(len(alts)))]})
         if slot == "lower" and desc.upper is None:
             desc = dataclasses.replace(desc, upper=source.upper)
-        if not matching(desc, facts):
+        if not matching(desc, facts, lenient=True):
             return desc, slot
     return None
 
@@ -587,4 +709,6 @@ __all__ = [
     "generate_queries",
     "matching",
     "object_facts",
+    "plausible_readings",
+    "unambiguous_targets",
 ]

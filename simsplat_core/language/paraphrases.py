@@ -374,7 +374,7 @@ def realise(w: Wording, style: str, rng: np.random.Generator) -> str:
 def realise_group(w: Wording, style: str, rng: np.random.Generator) -> str:
     """One wording of a group description ("all pedestrians crossing the street") in ``style``."""
     np_pl = noun_phrase(w, rng, plural_form=True)
-    mot = motion_phrase(w.motion, rng)
+    mot = motion_phrase(w.motion, rng).replace(" its ", " their ").replace(" its", " their")
     loc = location_phrase(w.sector, w.context, rng)
     mot_loc = _join(mot, loc)
     are = "who are" if w.category == "pedestrian" else "that are"

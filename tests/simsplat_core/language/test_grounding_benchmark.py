@@ -17,6 +17,7 @@ from simsplat_core.language.grounding_benchmark import (
     generate_queries,
     matching,
     object_facts,
+    unambiguous_targets,
 )
 from simsplat_core.language.paraphrases import MOTION_TERMS, SINGLE_STYLES
 from simsplat_core.types import SceneLog
@@ -76,6 +77,7 @@ def test_single_queries_identify_their_target_uniquely(bench, facts) -> None:
         objs = list(facts[q.seq_id].values())
         assert len(q.target_ids) == 1
         assert [m.object_id for m in matching(q.description, objs)] == list(q.target_ids), q.text
+        assert [m.object_id for m in matching(q.description, objs, lenient=True)] == list(q.target_ids), q.text
         target = facts[q.seq_id][q.target_ids[0]]
         assert target.visible_frames >= config.min_visible_frames
         assert q.category == target.category
@@ -85,6 +87,7 @@ def test_group_and_none_queries(bench, facts) -> None:
     for q in bench.queries:
         objs = list(facts[q.seq_id].values())
         matched = sorted(m.object_id for m in matching(q.description, objs))
+        assert matched == sorted(m.object_id for m in matching(q.description, objs, lenient=True)), q.text
         if q.kind == "group":
             assert len(q.target_ids) >= 2 and matched == list(q.target_ids), q.text
             assert all(facts[q.seq_id][t].visible_frames >= bench.config.min_visible_frames for t in q.target_ids)
@@ -135,6 +138,31 @@ def test_candidates_cover_appearance_motion_location() -> None:
     twin = dataclasses.replace(f, object_id="w", motion="going_straight")
     unique = [c for c in cands if [m.object_id for m in matching(c, [f, twin])] == ["v"]]
     assert unique and all(c.motion in ("turning_left", "turning_any") for c in unique)
+
+
+def test_plausible_readings_widen_matching() -> None:
+    stopping = ObjectFacts("s", "vehicle", 1, "sedan", "red", None, None, "stopping", "in_front_of_ego",
+                           "at_the_intersection", motions=frozenset({"stopping", "slowing_down", "going_straight"}),
+                           sectors=frozenset({"in_front_of_ego", "left_of_ego"}),
+                           contexts=frozenset({"at_the_intersection", "in_the_oncoming_lane"}))
+    straight = Description("vehicle", color="red", motion="going_straight")
+    assert not straight.matches(stopping) and straight.matches(stopping, lenient=True)
+    left = Description("vehicle", sector="left_of_ego")
+    assert not left.matches(stopping) and left.matches(stopping, lenient=True)
+    assert not Description("vehicle", context="by_the_curb").matches(stopping, lenient=True)
+    # a description that fits one object by its labels but another one by a plausible reading is not unique
+    other = dataclasses.replace(stopping, object_id="t", motion="going_straight", motions=frozenset({"going_straight"}))
+    assert unambiguous_targets(straight, [stopping, other]) is None
+    assert [f.object_id for f in unambiguous_targets(Description("vehicle", motion="stopping"), [stopping, other])] == ["s"]
+
+
+def test_readings_of_a_real_log_contain_the_labels(logs: list[SceneLog], facts) -> None:
+    for f in facts[logs[0].seq_id].values():
+        if f.motion is None:
+            continue
+        assert f.motion in f.motions and f.sector in f.sectors and f.context in f.contexts
+        if f.motion == "stopping":
+            assert {"slowing_down", "going_straight"} <= f.motions
 
 
 def test_generic_nouns_match_every_vehicle() -> None:

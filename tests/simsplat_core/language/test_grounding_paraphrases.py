@@ -103,3 +103,11 @@ def test_no_dangling_clauses_and_unambiguous_turns() -> None:
             for phrase in ("on my left", "to our left", "on the left-hand side", "to the left of the ego car"):
                 if phrase in text:
                     assert text.index(phrase) < max(text.find("turn"), text.find("making a")), text
+
+
+def test_group_wordings_agree_in_number() -> None:
+    rng = np.random.default_rng(6)
+    stopped = Wording("vehicle", None, ("sedan",), motion="stopped")
+    texts = [realise_group(stopped, style, rng) for style in GROUP_STYLES for _ in range(6)]
+    assert not any(" its " in t or t.endswith(" its") for t in texts)
+    assert any("their lane" in t for t in texts)
