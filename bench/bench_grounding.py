@@ -1,25 +1,27 @@
 """Benchmark: free-form grounding on reconstructed synthetic scenes (SIMSplat Tables 2 and 3), and motion
 grounding on the real Argoverse 2 sample.
 
-    .venv/bin/python bench/bench_grounding.py [--bench-seeds 1000 1001 1002 1003 1004] [--calib-seeds 900 901]
-        [--train-seeds 10] [--iterations 150] [--cache artifacts/bench_grounding] [--out bench/results]
+    .venv/bin/python bench/bench_grounding.py [--bench-seeds 1000 1001 1002 1003 1004] [--calib-seeds]
+        [--train-seeds 10] [--iterations 900] [--cache artifacts/bench_grounding] [--out bench/results]
 
 Pipeline (seeds of the three roles are disjoint):
 
 1. **Motion aligner**: ``MotionAligner.fit`` on ``--train-seeds`` annotation-only synthetic logs (seeds
    ``0..N-1``).
 2. **Scenes**: every calibration and benchmark seed is generated (``WorldConfig()``: 40 frames, three
-   240x160 cameras), reconstructed with a short schedule (``ReconstructionConfig(iterations=...)``) and
-   aligned (``build_language_scene``): node-id maps rendered from the Gaussians give every mask, the
+   240x160 cameras), reconstructed with the pipeline's default ``ReconstructionConfig`` (``--iterations``
+   shortens the schedule) and aligned (``build_language_scene``): node-id maps rendered from the Gaussians give every mask, the
    captioner sees the log's pixels under the *projected* node masks, ``f_app`` is decoded from the
    fitted per-Gaussian features. Reconstructions are cached under ``--cache`` (graph records keyed by
-   seed and schedule), built scenes too (keyed also by a hash of the scene builder's sources);
+   seed and a hash of the reconstruction config), built scenes too (keyed also by a hash of the scene builder's sources);
    ``--reuse-scenes`` takes cached scenes of any builder version, for a quick re-evaluation.
 3. **Benchmark**: ``build_benchmark`` on the benchmark logs (``BenchmarkConfig(seed=0)``); calibration
    queries from the calibration logs (``seed=1``).
 4. **Methods**: LangSplat-like and 4D-LangSplat-like baselines (``grounding_baselines``), the
-   ``QueryEngine`` with all features and the ablations App / App+Mot / App+Loc, each with its own
-   thresholds from ``calibrate_thresholds`` on the calibration queries. Diagnostics: ``oracle-nodes``
+   ``QueryEngine`` with all features and the ablations App / App+Mot / App+Loc, all with the engine's
+   default thresholds (what the pipeline uses); with ``--calib-seeds`` each variant gets its own
+   thresholds from ``calibrate_thresholds`` on queries of those scenes instead (two scenes proved too few:
+   a variant could end up refusing most queries). Diagnostics: ``oracle-nodes``
    (answers with the true targets: the vIoU ceiling the reconstruction's masks allow) and ``ours@gt-scene``
    (the engine on scenes built from ground truth: instance masks, captions of ground-truth crops, the same
    aligner -- what grounding achieves with perfect masks).
@@ -69,6 +71,7 @@ from simsplat_core.language.motion_eval import grounding_accuracy, split_objects
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402
+from simsplat_core.scene.config import ReconstructionConfig  # noqa: E402
 from simsplat_core.types import SceneLog  # noqa: E402
 from simsplat_core.world import WorldConfig, generate_log  # noqa: E402
 
@@ -107,19 +110,34 @@ def _pickle(path: Path, obj) -> None:
     tmp.replace(path)
 
 
+def reconstruction_config(iterations: int) -> ReconstructionConfig:
+    """The pipeline's default reconstruction with ``iterations`` steps (no train-frame scoring)."""
+    return ReconstructionConfig(iterations=iterations, eval_train_frames=0)
+
+
+def _config_key(config) -> str:
+    """Short content key of a reconstruction config (less its run-only fields), as the store keys scenes."""
+    from storage.keys import content_key
+    from tasks.reconstruct import RUN_ONLY_FIELDS
+
+    settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_FIELDS}
+    return content_key("bench-reconstruct", settings)[:10]
+
+
 def reconstruction(log: SceneLog, iterations: int, cache: Path):
-    """``(graph, info)`` of ``reconstruct(log, iterations)``; the graph's records are cached by sequence and schedule."""
-    from simsplat_core.scene.config import ReconstructionConfig
+    """``(graph, info)`` of ``reconstruct(log, reconstruction_config(iterations))``; the graph's records are
+    cached by sequence and config."""
     from simsplat_core.scene.graph import SceneGraph
     from simsplat_core.scene.trainer import reconstruct
 
-    path = cache / f"recon-{log.seq_id}-it{iterations}.pkl"
+    config = reconstruction_config(iterations)
+    path = cache / f"recon-{log.seq_id}-it{iterations}-{_config_key(config)}.pkl"
     if path.exists():
         with path.open("rb") as fh:
             records, info = pickle.load(fh)
         return SceneGraph.from_records(records), {**info, "cached": True}
     t0 = time.perf_counter()
-    result = reconstruct(log, ReconstructionConfig(iterations=iterations, eval_train_frames=0))
+    result = reconstruct(log, config)
     info = {
         "reconstruct_s": round(time.perf_counter() - t0, 1),
         "psnr_test": round(float(result.metrics["psnr_test"]), 3),
@@ -139,7 +157,7 @@ def reconstructed_scene(log: SceneLog, iterations: int, encoder, aligner, cache:
     """
     from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
 
-    stem = f"scene-{log.seq_id}-it{iterations}"
+    stem = f"scene-{log.seq_id}-it{iterations}-{_config_key(reconstruction_config(iterations))}"
     path = cache / f"{stem}-{_builder_version()}{tag}.pkl"
     candidates = [path] if path.exists() else (sorted(cache.glob(f"{stem}-*{tag}.pkl")) if reuse_scenes else [])
     if candidates:
@@ -157,7 +175,8 @@ def reconstructed_scene(log: SceneLog, iterations: int, encoder, aligner, cache:
 
 
 def engine_methods(encoder, calib_examples, codebooks=None) -> tuple[dict, dict]:
-    """The QueryEngine ablations, each calibrated on ``calib_examples``; returns ``(grounders, thresholds)``."""
+    """The QueryEngine ablations, each calibrated on ``calib_examples`` (the engine's default thresholds when
+    there are none); returns ``(grounders, thresholds)``."""
     from simsplat_core.language.query import QueryConfig, QueryEngine, calibrate_thresholds
 
     base = QueryEngine(encoder, QueryConfig(), codebooks)
@@ -327,9 +346,11 @@ def av2_motion(aligner, train_logs, encoder, path: Path) -> dict:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--bench-seeds", type=int, nargs="+", default=[1000, 1001, 1002, 1003, 1004])
-    parser.add_argument("--calib-seeds", type=int, nargs="*", default=[900, 901])
+    parser.add_argument("--calib-seeds", type=int, nargs="*", default=[],
+                        help="calibrate each variant's thresholds on these scenes (default: engine defaults)")
     parser.add_argument("--train-seeds", type=int, default=10)
-    parser.add_argument("--iterations", type=int, default=150)
+    parser.add_argument("--iterations", type=int, default=ReconstructionConfig().iterations,
+                        help="reconstruction steps (default: the pipeline's schedule)")
     parser.add_argument("--cache", type=Path, default=ROOT / "artifacts" / "bench_grounding")
     parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results")
     parser.add_argument("--av2", type=Path, default=DEFAULT_AV2)
@@ -443,7 +464,9 @@ def main() -> None:
         "# Grounding benchmark",
         "",
         f"{len(bench.queries)} queries on {len(bench_logs)} reconstructed synthetic scenes "
-        f"(seeds {args.bench_seeds}, {args.iterations} reconstruction iterations); counts {bench.counts()}.",
+        f"(seeds {args.bench_seeds}, {args.iterations} reconstruction iterations, "
+        f"{'thresholds calibrated on seeds ' + str(args.calib_seeds) if args.calib_seeds else 'default engine thresholds'}"
+        f"); counts {bench.counts()}.",
         "",
         "## Table 2: methods",
         "",
