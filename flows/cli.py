@@ -95,14 +95,25 @@ def run(
     workers: WorkersOption = None,
     iterations: IterationsOption = None,
     align: Annotated[bool, typer.Option(help="Run the language-alignment stage after reconstruction.")] = True,
+    captioner: Annotated[str, typer.Option(
+        help="Object captioner of the alignment: 'builtin' (offline) or 'vlm' (an OpenAI-compatible server "
+             "from SIMSPLAT_VLM_URL / SIMSPLAT_VLM_MODEL; key in SIMSPLAT_VLM_API_KEY).")] = "builtin",
 ) -> None:
     """Run the main job on the embedded default data: synthetic sequences, one reconstructed scene per
     sequence, then language alignment (motion aligner + one queryable language scene per sequence)."""
     from flows.pipeline import main_flow, reconstruction_config
+    from simsplat_core.language.scene_builder import AlignmentConfig, AlignmentConfigError
+    from simsplat_core.vlm import OpenAIChatConfig, VLMError
 
+    try:
+        alignment = AlignmentConfig(captioner=captioner).validate()
+        if captioner == "vlm":
+            OpenAIChatConfig.from_env()  # fail now, not after the reconstructions
+    except (AlignmentConfigError, VLMError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--captioner") from exc
     result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                        config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
-                       align=align)
+                       alignment=alignment, align=align)
     _print_logs(result.logs)
     _print_scenes(result.scenes)
     if result.language:

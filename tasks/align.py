@@ -16,6 +16,7 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.compute_threads import set_compute_threads
+from simsplat_core.language.appearance.embedders import appearance_embedder
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.text import default_text_encoder
@@ -130,10 +131,12 @@ class StoredLanguageScene:
 RUN_ONLY_ALIGNMENT_FIELDS = ("eval_views", "measure_masks")
 
 
-def language_hash(model_hash: str, scene_hash: str, config: AlignmentConfig, encoder_name: str) -> str:
-    """Content key of one aligned scene."""
+def language_hash(model_hash: str, scene_hash: str, config: AlignmentConfig, encoder_name: str,
+                  embedder_name: str = "") -> str:
+    """Content key of one aligned scene (the embedder's name carries e.g. the VLM model captioning it)."""
     settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_ALIGNMENT_FIELDS}
-    return content_key("align-scene", LANGUAGE_VERSION, model_hash, scene_hash, settings, encoder_name)
+    return content_key("align-scene", LANGUAGE_VERSION, model_hash, scene_hash, settings, encoder_name,
+                       embedder_name)
 
 
 @task(name="align-scene", retries=0, cache_policy=NO_CACHE)
@@ -150,7 +153,8 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str, model_hash: str, 
     config = (config or AlignmentConfig()).validate()
     store = ArtifactStore(store_root)
     encoder = default_text_encoder()
-    key = language_hash(model_hash, scene_hash, config, encoder.name)
+    embedder = appearance_embedder(config.captioner, encoder)
+    key = language_hash(model_hash, scene_hash, config, encoder.name, embedder.name)
     relpath = language_dir(model_hash, seq_id, key)
     existing = read_language_manifest(store, model_hash, seq_id, key)
     if existing is not None:
@@ -164,10 +168,10 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str, model_hash: str, 
     loaded = read_scene(store, seq_id, scene_hash)
     graph = SceneGraph.from_records(loaded.records)
     log = read_scene_log(store, seq_id)
-    built = build_language_scene(graph, log, text_encoder=encoder, aligner=aligner, config=config,
+    built = build_language_scene(graph, log, text_encoder=encoder, aligner=aligner, embedder=embedder, config=config,
                                  scene_hash=loaded.scene_hash)
     provenance = {"scene_hash": loaded.scene_hash, "model_hash": model_hash, "version": LANGUAGE_VERSION,
-                  "config": canonical(dataclasses.asdict(config)), "text_encoder": encoder.name}
+                  "config": canonical(dataclasses.asdict(config)), "text_encoder": encoder.name, "embedder": embedder.name}
     write_language_scene(store, model_hash, key, built.scene, graph.to_records(loaded.records.scene_id),
                          autoencoder_state=None if built.autoencoder is None else built.autoencoder.state(),
                          metrics=built.metrics, provenance=provenance)

@@ -44,7 +44,12 @@ import numpy as np
 from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
 from simsplat_core.language.appearance.captioner import AppearanceCaption, Captioner, appearance_vocabulary
 from simsplat_core.language.appearance.crops import ObjectCrop
-from simsplat_core.language.appearance.embedders import AppearanceEmbedder, CaptionEmbedder, aggregate_views
+from simsplat_core.language.appearance.embedders import (
+    CAPTIONERS,
+    AppearanceEmbedder,
+    aggregate_views,
+    appearance_embedder,
+)
 from simsplat_core.language.feature_field import (
     FeatureFitConfig,
     feature_views,
@@ -94,6 +99,8 @@ class AlignmentConfig:
             often never 100 px large; the built-in captioner keeps 95-99 % of its per-view colour
             accuracy at 30 px (``bench/results/appearance.json``) and the vote over views helps.
         crop_margin: pixels of context around each crop's mask.
+        captioner: ``"builtin"`` (rule-based, offline) or ``"vlm"`` (a VLM over the OpenAI-compatible API,
+            endpoint from ``SIMSPLAT_VLM_URL`` / ``SIMSPLAT_VLM_MODEL``); see ``appearance_embedder``.
         autoencoder_steps: Adam steps of the scene autoencoder (when none is passed in).
         use_vocabulary: train the autoencoder on the caption vocabulary too (~240 phrases: latents
             between and around the scene's looks decode to sensible text). Off by default: what is decoded
@@ -117,6 +124,7 @@ class AlignmentConfig:
     min_area: int = 100
     small_area: int = 30
     crop_margin: int = 2
+    captioner: str = "builtin"
     autoencoder_steps: int = 500
     use_vocabulary: bool = False
     background_passage: str | None = BACKGROUND_PASSAGE
@@ -135,6 +143,7 @@ class AlignmentConfig:
             value = getattr(self, name)
             return isinstance(value, int) and not isinstance(value, bool)
 
+        need(self.captioner in CAPTIONERS, "captioner", f"must be one of {', '.join(CAPTIONERS)}")
         for name in ("feature_dim", "fit_frame_stride", "crop_frame_stride", "autoencoder_steps"):
             need(is_int(name) and getattr(self, name) >= 1, name, "must be an int >= 1")
         for name in ("fit_iterations", "min_area", "small_area", "crop_margin", "eval_views", "seed"):
@@ -244,7 +253,7 @@ def build_language_scene(
         log: the sequence the graph was reconstructed from.
         text_encoder: the text space (captions and the background passage are embedded as passages).
         aligner: the trained trajectory aligner, or ``None`` (no motion features).
-        embedder: crops -> text-space features; ``CaptionEmbedder(text_encoder)`` by default.
+        embedder: crops -> text-space features; by default the one ``config.captioner`` names.
         autoencoder: a trained autoencoder to use instead of fitting one (its latent width must be
             ``config.feature_dim``).
         config: see ``AlignmentConfig``.
@@ -259,7 +268,7 @@ def build_language_scene(
     times: dict[str, float] = {}
     metrics: dict[str, float] = {}
     objects = _object_nodes(graph, log)
-    embedder = embedder or CaptionEmbedder(text_encoder)
+    embedder = embedder or appearance_embedder(config.captioner, text_encoder)
     if autoencoder is not None:
         if autoencoder.latent_dim != config.feature_dim:
             raise ValueError(f"autoencoder latent width {autoencoder.latent_dim} != AlignmentConfig.feature_dim "

@@ -134,3 +134,19 @@ def test_query_without_an_aligned_scene_says_so(tmp_path):
 def _flat(output: str) -> str:
     """CLI output without rich's panel borders and line wrapping."""
     return " ".join(output.replace("│", " ").replace("╭", " ").replace("╰", " ").split())
+
+
+def test_run_with_vlm_captioner_needs_an_endpoint_and_fails_before_any_work(tmp_path, monkeypatch):
+    monkeypatch.delenv("SIMSPLAT_VLM_URL", raising=False)
+    monkeypatch.delenv("SIMSPLAT_VLM_MODEL", raising=False)
+    result = runner.invoke(app, ["run", "--store", str(tmp_path / "store"), "--captioner", "vlm"])
+    assert result.exit_code != 0
+    assert "SIMSPLAT_VLM_URL" in result.output and "--captioner" in result.output
+    assert not (tmp_path / "store").exists()
+
+
+def test_run_rejects_an_unknown_captioner(tmp_path):
+    result = runner.invoke(app, ["run", "--store", str(tmp_path / "store"), "--captioner", "gpt"])
+    assert result.exit_code != 0
+    assert "captioner" in result.output and "builtin" in result.output
+    assert not (tmp_path / "store").exists()

@@ -122,3 +122,29 @@ def test_answer_query_grounds_and_draws(aligned, tmp_path):
         answer_query(store.root, "s1", "a car", out=str(out), frame=999)
     with pytest.raises(FileNotFoundError, match="no language scene of 's2'"):
         answer_query(store.root, "s2", "a car", out=str(out))
+
+
+def test_align_scene_with_a_vlm_captioner_over_http(aligned, monkeypatch):
+    """captioner="vlm": one request per captioned object to the OpenAI-compatible server, its captions stored,
+    another language hash than the built-in captioner's (the model name is part of it)."""
+    import dataclasses
+
+    from storage.language_scenes import read_language_scene
+    from tasks.align import align_scene
+    from tests.simsplat_core.vlm.chat_server import ChatServer, text_reply
+
+    store, model, scene, config, stored = aligned
+    server = ChatServer(reply=text_reply("A purple hatchback.")).start()
+    try:
+        monkeypatch.setenv("SIMSPLAT_VLM_URL", server.base_url)
+        monkeypatch.setenv("SIMSPLAT_VLM_MODEL", "stand-in-vlm")
+        vlm = align_scene.fn(store.root, "s1", scene.scene_hash, model.model_hash,
+                             dataclasses.replace(config, captioner="vlm"))
+    finally:
+        server.stop()
+    assert not vlm.skipped and vlm.language_hash != stored.language_hash
+    lang = read_language_scene(store, "s1", model.model_hash, vlm.language_hash).scene
+    captioned = [n for n in lang.nodes if n.caption is not None]
+    assert captioned and all(n.caption.text == "a purple hatchback" for n in captioned)
+    assert len(server.requests) == len(captioned)
+    assert {r["body"]["model"] for r in server.requests} == {"stand-in-vlm"}

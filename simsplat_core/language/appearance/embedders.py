@@ -8,6 +8,10 @@ Two families plug into the same protocol:
   appearance in the same space as motion and location features.
 * ``clip_backend.OpenClipEmbedder``: an image-text model's image tower on user-supplied weights.
 
+``appearance_embedder(captioner, text_encoder)`` builds the caption embedder a pipeline config names:
+``"builtin"`` (the rule-based captioner) or ``"vlm"`` (``vlm_captioner.VlmCaptioner`` on the
+OpenAI-compatible endpoint of ``SIMSPLAT_VLM_URL`` / ``SIMSPLAT_VLM_MODEL``, one request per object).
+
 ``object_features`` averages a crop-level embedder's rows per object (renormalised), keeping the
 per-view rows too.
 """
@@ -93,16 +97,24 @@ class CaptionEmbedder:
     Args:
         text_encoder: any ``TextEncoder`` (E5 by default elsewhere in the pipeline).
         captioner: any ``AppearanceCaptioner``; the built-in rule-based ``Captioner()`` by default.
+        per_view: caption every crop on its own (default); ``False`` captions each object once from all
+            its crops (``describe_track``) and gives every crop of it that caption -- one request per
+            object instead of one per view for captioners that cost a model call (a VLM).
     """
 
-    def __init__(self, text_encoder: TextEncoder, captioner: AppearanceCaptioner | None = None) -> None:
+    def __init__(self, text_encoder: TextEncoder, captioner: AppearanceCaptioner | None = None,
+                 per_view: bool = True) -> None:
         self.text_encoder = text_encoder
         self.captioner = captioner or Captioner()
+        self.per_view = per_view
         self.dim = int(text_encoder.dim)
-        self.name = f"caption[{self.captioner.name}]>{text_encoder.name}"
+        self.name = f"caption[{self.captioner.name}{'' if per_view else ',per-object'}]>{text_encoder.name}"
 
     def captions(self, crops: Sequence[ObjectCrop]) -> list[AppearanceCaption]:
-        """One caption per crop."""
+        """One caption per crop (the object's track caption for every crop when not ``per_view``)."""
+        if not self.per_view:
+            tracks = self.track_captions(crops)
+            return [tracks[c.object_id] for c in crops]
         return [self.captioner.describe(c) for c in crops]
 
     def embed(self, crops: Sequence[ObjectCrop]) -> np.ndarray:
@@ -117,3 +129,25 @@ class CaptionEmbedder:
         for crop in crops:
             by_object.setdefault(crop.object_id, []).append(crop)
         return {oid: self.captioner.describe_track(views) for oid, views in by_object.items()}
+
+
+#: Captioners a pipeline config can name (``appearance_embedder``).
+CAPTIONERS: tuple[str, ...] = ("builtin", "vlm")
+
+
+def appearance_embedder(captioner: str, text_encoder: TextEncoder) -> CaptionEmbedder:
+    """The caption embedder named by a config (module docstring).
+
+    Raises:
+        ValueError: an unknown captioner name.
+        VLMError: ``"vlm"`` without ``SIMSPLAT_VLM_URL`` / ``SIMSPLAT_VLM_MODEL`` in the environment.
+    """
+    if captioner == "builtin":
+        return CaptionEmbedder(text_encoder)
+    if captioner == "vlm":
+        from simsplat_core.language.appearance.vlm_captioner import VlmCaptioner
+        from simsplat_core.vlm import OpenAIChatClient, OpenAIChatConfig
+
+        return CaptionEmbedder(text_encoder, VlmCaptioner(OpenAIChatClient(OpenAIChatConfig.from_env())),
+                               per_view=False)
+    raise ValueError(f"unknown captioner {captioner!r}: expected one of {', '.join(CAPTIONERS)}")
