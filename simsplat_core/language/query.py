@@ -381,7 +381,8 @@ def subtype_fit(query: str | None, node: str | None, config: QueryConfig) -> flo
 
 
 def attribute_fit(parsed: ParsedQuery, node: NodeLanguage, config: QueryConfig) -> float:
-    """Product of the colour and subtype factors of ``parsed`` against ``node.caption``."""
+    """Product of the colour and subtype factors of ``parsed`` against ``node.caption`` (an excluded colour
+    that the caption names as the body colour, or as either garment colour of a person, contradicts)."""
     cap = node.caption
     named = parsed.named_colors
     if cap is None:
@@ -397,11 +398,16 @@ def attribute_fit(parsed: ParsedQuery, node: NodeLanguage, config: QueryConfig) 
             factor *= color_fit(parsed.lower_color, lower, config)
         for colour in parsed.colors:
             factor *= max(color_fit(colour, upper, config), color_fit(colour, lower, config))
+        shown = (upper, lower)
     else:
         body = cap.colors or (UNKNOWN,)
         for colour in named:
             # the main colour fits fully, a second colour (barriers: "orange and white") nearly
             factor *= max([color_fit(colour, body[0], config)] + [0.8 * color_fit(colour, c, config) for c in body[1:]])
+        shown = body[:1]
+    for colour in parsed.excluded_colors:  # "not red": a red caption is contradicted
+        if colour in shown:
+            factor *= config.color_mismatch
     return factor * subtype_fit(parsed.subtype, cap.subtype, config)
 
 
@@ -715,7 +721,8 @@ class QueryEngine:
             if runner and best.score - runner[0].score <= cfg.ambiguity_margin:
                 text += f" (ambiguous: {runner[0].object_id} scores {runner[0].score:.3f} vs {best.score:.3f})"
             return text
-        subject = parsed.subject() if parsed.noun or parsed.named_colors else (parsed.appearance or "object")
+        subject = (parsed.subject() if parsed.noun or parsed.named_colors or parsed.excluded_colors
+                   else (parsed.appearance or "object"))
         if not ranking:
             return f"no {subject} in this scene"
         candidates = [m for m in ranking if m.candidate]

@@ -30,7 +30,11 @@ The parser is rule-based and works on lower-cased text:
    navy, maroon, tan map onto them). A colour followed by a garment word is an upper ("shirt",
    "jacket", "top", ...) or lower ("pants", "jeans", "skirt", ...) garment colour; other colours are
    kept unordered (a vehicle's body colour, or "dressed in red").
-4. What remains, less filler words ("find me", "which", "is", ...), is the appearance text.
+4. **Negated colours** ("the car that is not red", "a non-white van", "a pedestrian not wearing
+   red", "any SUV other than the black one") become ``excluded_colors`` and leave the text: a node whose
+   caption has such a colour is contradicted, and "not red" is not embedded (E5 puts "a car that is not
+   red" next to "a red car").
+5. What remains, less filler words ("find me", "which", "is", ...), is the appearance text.
 """
 
 from __future__ import annotations
@@ -278,6 +282,7 @@ class ParsedQuery:
         context: map-context location phrase ("at the intersection"), or ``""``.
         group: the query asks for every matching object ("all crossing pedestrians", plurals).
         spans: the motion / direction / sector / context spans found.
+        excluded_colors: colours the query rules out ("not red"), captioner names.
     """
 
     text: str
@@ -296,6 +301,7 @@ class ParsedQuery:
     context: str
     group: bool
     spans: tuple[Span, ...] = ()
+    excluded_colors: tuple[str, ...] = ()
 
     @property
     def location(self) -> str:
@@ -316,7 +322,7 @@ class ParsedQuery:
 
     @property
     def has_appearance(self) -> bool:
-        return bool(self.appearance or self.categories or self.named_colors)
+        return bool(self.appearance or self.categories or self.named_colors or self.excluded_colors)
 
     def subject(self) -> str:
         """A singular noun phrase for messages ("black car", "pedestrian in a red top")."""
@@ -332,6 +338,8 @@ class ParsedQuery:
             garments.append(f"{self.lower_color} trousers")
         if garments:
             phrase += " in " + " and ".join(garments)
+        if self.excluded_colors:
+            phrase += " that is not " + " or ".join(self.excluded_colors)
         return phrase
 
 
@@ -383,10 +391,31 @@ def _residual(normalised: str, spans: tuple[Span, ...]) -> str:
 
 
 _NOUN_RX = re.compile(r"(?<![\w-])(" + "|".join(sorted(map(re.escape, NOUNS), key=len, reverse=True)) + r")(?![\w-])")
-_COLOR_RX = re.compile(r"(?<![\w-])(" + "|".join(sorted(map(re.escape, COLOR_SYNONYMS), key=len, reverse=True)) + r")(?![\w-])")
+_COLOR_ALTERNATIVES = "|".join(sorted(map(re.escape, COLOR_SYNONYMS), key=len, reverse=True))
+_COLOR_RX = re.compile(r"(?<![\w-])(" + _COLOR_ALTERNATIVES + r")(?![\w-])")
 _GARMENT_RX = re.compile(
     r"(?<![\w-])(" + "|".join(sorted(map(re.escape, UPPER_GARMENTS + LOWER_GARMENTS), key=len, reverse=True)) + r")(?![\w-])"
 )
+
+
+_NEGATION = r"(?:not|isn't|isnt|aren't|arent|never|neither|non|other than|anything but|but not|except(?: for)?)"
+_COLOR_WORD = f"(?:{_COLOR_ALTERNATIVES})"
+_NEGATED_COLOR_RX = re.compile(
+    r"(?<![\w-])" + _NEGATION + r"(?:[- ](?:a|an|the|in|wearing|dressed in|painted|coloured|colored))*[- ]"
+    + _COLOR_WORD + r"(?: (?:or|nor) " + _COLOR_WORD + r")*(?![\w-])(?: ones?(?![\w-]))?"
+)
+
+_COLOR_IN_NEGATION_RX = re.compile(r"(?<![a-z])(" + _COLOR_ALTERNATIVES + r")(?![a-z])")  # "non-white" too
+
+
+def _negated_colours(residual: str) -> tuple[str, tuple[str, ...]]:
+    """``(residual without the negated colour phrases, the colours they rule out)`` ("not red or white")."""
+    excluded: list[str] = []
+    for m in _NEGATED_COLOR_RX.finditer(residual):
+        for word in _COLOR_IN_NEGATION_RX.findall(m.group(0)):
+            if COLOR_SYNONYMS[word] not in excluded:
+                excluded.append(COLOR_SYNONYMS[word])
+    return _NEGATED_COLOR_RX.sub(" | ", residual), tuple(excluded)
 
 
 def _colours(residual: str) -> tuple[tuple[str, ...], str | None, str | None]:
@@ -426,7 +455,7 @@ def parse_query(text: str) -> ParsedQuery:
         raise ValueError("empty grounding query")
     norm = normalise(text)
     spans = find_spans(norm)
-    residual = _residual(norm, spans)
+    residual, excluded = _negated_colours(_residual(norm, spans))
 
     nouns = [(m.start(), m.group(1)) for m in _NOUN_RX.finditer(residual)]
     noun: Noun | None = None
@@ -480,4 +509,5 @@ def parse_query(text: str) -> ParsedQuery:
         context=context,
         group=group,
         spans=spans,
+        excluded_colors=excluded,
     )

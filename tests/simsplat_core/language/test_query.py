@@ -377,3 +377,23 @@ def test_prepare_embeds_every_part_once_so_grounding_needs_no_encoder_call():
     misses = engine.cache_misses
     engine.prepare(texts)
     assert engine.cache_misses == misses  # second time: all cached
+
+
+@pytest.mark.parametrize(
+    ("text", "expected", "group"),
+    [
+        ("the sedan that is not red", {"D"}, False),
+        ("the SUV that isn't white", set(), False),
+        ("all cars that are not white", {"A", "B", "C", "D"}, True),
+        ("every vehicle other than the white ones", {"A", "B", "C", "D"}, True),
+        ("the pedestrian not wearing red who is crossing the street", {"P1"}, False),
+        ("all pedestrians not dressed in gray", {"P3", "P4"}, True),
+    ],
+)
+def test_negated_colours_rule_nodes_out(engine: QueryEngine, scene: LanguageScene, text: str, expected: set[str],
+                                        group: bool) -> None:
+    g = engine.ground(scene, text)
+    assert g.group == group
+    assert set(g.node_ids) == set(ids(*expected)), (g.message, g.ranking[:5])
+    if not expected:
+        assert "that is not white" in g.message

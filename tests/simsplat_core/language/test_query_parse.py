@@ -166,3 +166,27 @@ def test_normalise() -> None:
 def test_empty_query_is_rejected(text: str) -> None:
     with pytest.raises(ValueError, match="empty"):
         parse_query(text)
+
+
+@pytest.mark.parametrize(
+    ("text", "excluded", "colors", "appearance"),
+    [
+        ("the car that is not red", ("red",), (), "car"),
+        ("a non-white van", ("white",), (), "van"),
+        ("any SUV other than the black one", ("black",), (), "SUV"),
+        ("the car that isn't grey turning left", ("gray",), (), "car"),
+        ("the car that is neither red nor white", ("red", "white"), (), "car"),
+        ("the red car", (), ("red",), "red car"),
+    ],
+)
+def test_negated_colours_are_excluded_and_leave_the_text(text, excluded, colors, appearance):
+    q = parse_query(text)
+    assert q.excluded_colors == excluded
+    assert q.colors == colors
+    assert q.appearance == appearance
+    assert "not" not in q.appearance.split()
+
+
+def test_negated_colours_name_the_subject():
+    assert parse_query("the sedan that is not red or white").excluded_colors == ("red", "white")
+    assert parse_query("the sedan that is not red").subject() == "sedan that is not red"
