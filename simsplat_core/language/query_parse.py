@@ -181,6 +181,9 @@ FILLERS = frozenset(
 )
 
 #: Words that link appearance words without describing anything.
+#: Pointing phrases that say nothing about the object ("right there" must not read as "right").
+_DEICTIC_RX = re.compile(r"(?<![\w-])(?:right|over|just|out|up|down) (?:there|here)(?![\w-])")
+
 CONNECTIVES = frozenset("and in with wearing dressed a an the or on at to by".split())
 
 # ---------------------------------------------------------------------------------------------- patterns
@@ -210,8 +213,8 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("motion", 0, _SIDE + r"(?:-turning| turning(?= (?:car|cars|vehicle|vehicles|truck|trucks|bus|buses|van|vans|suv|suvs|sedan|sedans|hatchback|hatchbacks|pickup|pickups)\b))"),
     ("motion", 0, r"(?:in the middle of |doing |making |taking )?(?:a |an )?" + _SIDE + r"[- ]hand turn"),
     ("motion", 0, r"(?:a |the )?" + _SIDE + r" turn"),
-    ("motion", 0, r"(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts|moving|moves|pulling|pulls|shifting|shifts|hopping|hops)(?: over)?(?: lanes?)?(?: (?:to|into|towards|toward|over to|in to)(?: the)?)? " + _SIDE + r"(?:(?: into)?(?: the)? (?:next |adjacent )?lane)?"),
-    ("motion", 0, r"(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts|moving|moves|hopping|hops)(?: over)? (?:into|to|over to)(?: the)? (?:next |adjacent |other )?lane(?: (?:to|on) (?:the|its) " + _SIDE + r")?"),
+    ("motion", 0, r"(?<!not )(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts|moving|moves|pulling|pulls|shifting|shifts|hopping|hops)(?: over)?(?: lanes?)?(?: (?:to|into|towards|toward|over to|in to)(?: the)?)? " + _SIDE + r"(?:(?: into)?(?: the)? (?:next |adjacent )?lane)?"),
+    ("motion", 0, r"(?<!not )(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts|moving|moves|hopping|hops)(?: over)? (?:into|to|over to)(?: the)? (?:next |adjacent |other )?lane(?: (?:to|on) (?:the|its) " + _SIDE + r")?"),
     ("motion", 0, r"(?:a |doing a |making a )?lane[- ]change(?:s)?(?: (?:to|towards) the " + _SIDE + r")?"),
     ("motion", 0, r"lane[- ]changing(?: (?:to|towards) the " + _SIDE + r")?"),
     # places (before undirected motion: "on the pedestrian crossing" is a place)
@@ -453,7 +456,7 @@ def parse_query(text: str) -> ParsedQuery:
     """
     if not text or not text.strip():
         raise ValueError("empty grounding query")
-    norm = normalise(text)
+    norm = normalise(_DEICTIC_RX.sub(" ", text.lower()))
     spans = find_spans(norm)
     residual, excluded = _negated_colours(_residual(norm, spans))
 

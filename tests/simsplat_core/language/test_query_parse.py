@@ -190,3 +190,17 @@ def test_negated_colours_are_excluded_and_leave_the_text(text, excluded, colors,
 def test_negated_colours_name_the_subject():
     assert parse_query("the sedan that is not red or white").excluded_colors == ("red", "white")
     assert parse_query("the sedan that is not red").subject() == "sedan that is not red"
+
+
+@pytest.mark.parametrize(
+    ("text", "motion", "sector"),
+    [
+        ("where's that grey SUV not moving right there?", "not moving", ""),
+        ("the SUV switching to the lane on its right right there", "switching to the lane on its right", ""),
+        ("the walker on the right strolling along the sidewalk over here", "strolling along the sidewalk", "on the right"),
+        ("the car moving right", "moving right", ""),
+    ],
+)
+def test_pointing_phrases_are_not_directions(text, motion, sector):
+    q = parse_query(text)
+    assert (q.motion, q.sector) == (motion, sector)
