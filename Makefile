@@ -5,7 +5,7 @@ PY := $(VENV)/bin/python
 STAMP := $(VENV)/.installed-stamp
 STORE ?= artifacts/demo
 # Reconstruction iterations per sequence for `make demo` (empty: the ReconstructionConfig default, 900;
-# about 8 minutes for the two demo sequences on 2 cores). `make demo ITERATIONS=200` is a quick look.
+# about 10 minutes for the two demo sequences on 2 cores). `make demo ITERATIONS=200` is a quick look.
 ITERATIONS ?=
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export RAY_AUTH_MODE := disabled
