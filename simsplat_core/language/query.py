@@ -199,6 +199,14 @@ class QueryConfig:
         no_match_threshold: a single-object query returns the best candidate only at or above this score.
         group_threshold: a group query returns every candidate at or above this score.
         ambiguity_margin: the message flags a runner-up within this score of the chosen node.
+        label_weight: share of the node's auto-labels (the labeller's classes from its trajectory, which
+            the aligner was trained to reproduce) in the motion and location weights the node is scored
+            with; the rest is the aligner's convex weights (``0`` = aligner only). The equal blend (0.5)
+            catches what the learned features miss, mostly rare classes: the aligner calls gentle lane
+            changes "going straight" (changing_lane_right 0.04-0.39 where the labeller says
+            changing_lane_right) and is weak on real logs zero-shot. Measured (demo scenes, 103 queries /
+            5 unseen seeds, 230 queries; acc / vIoU): 0 -> 0.961 / 0.864 and 0.943 / 0.829; 0.25 ->
+            0.971 / 0.880 and 0.961 / 0.845; 0.5 -> 0.971 / 0.880 and 0.978 / 0.861.
     """
 
     use_appearance: bool = True
@@ -223,6 +231,7 @@ class QueryConfig:
     no_match_threshold: float = 0.3
     group_threshold: float = 0.4
     ambiguity_margin: float = 0.02
+    label_weight: float = 0.5
 
     def validate(self) -> "QueryConfig":
         """Check every field; returns ``self``.
@@ -255,6 +264,7 @@ class QueryConfig:
             "no_match_threshold",
             "group_threshold",
             "ambiguity_margin",
+            "label_weight",
         ):
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and 0.0 <= value <= 1.0):
@@ -571,7 +581,8 @@ class QueryEngine:
                 return float(sum(dist.get(c, 0.0) for c in STATIONARY_CLASSES))
             return self.config.missing_motion
         score = 0.0
-        for name, weight in feats.motion_probs.items():
+        label = feats.labels.motion if feats.labels is not None else None
+        for name, weight in _with_label(feats.motion_probs, label, 1.0, self.config.label_weight).items():
             score += dist.get("crossing" if name in CROSSING_CLASSES else name, 0.0) * weight
         if parsed.crossing_direction and feats.kind == "pedestrian":
             if feats.labels.motion != f"crossing_{parsed.crossing_direction}":
@@ -584,15 +595,20 @@ class QueryEngine:
         feats = node.motion
         if feats is None:
             return self.config.missing_motion
+        probs = feats.location_probs
+        if feats.labels is not None:  # sectors and contexts each hold half of the weights
+            books = self.codebooks
+            probs = _with_label(probs, feats.labels.sector, 0.5, self.config.label_weight, books.sector.classes)
+            probs = _with_label(probs, feats.labels.context, 0.5, self.config.label_weight, books.context.classes)
         score = 1.0
         for dist in (sector, context):
             if dist is None:
                 continue
-            mass = sum(feats.location_probs.get(c, 0.0) for c in dist)
+            mass = sum(probs.get(c, 0.0) for c in dist)
             if mass <= 0:
                 score *= self.config.missing_motion
                 continue
-            score *= sum(p * feats.location_probs.get(c, 0.0) / mass for c, p in dist.items())
+            score *= sum(p * probs.get(c, 0.0) / mass for c, p in dist.items())
         return float(np.clip(score, 0.0, 1.0))
 
     # ------------------------------------------------------------------ grounding
@@ -749,6 +765,21 @@ class QueryEngine:
             return f"no {subject} in this scene"
         verb = "is" if not clauses[0].startswith("that ") else ""
         return " ".join(w for w in ("no", subject, "in this scene", verb, " ".join(clauses)) if w)
+
+
+def _with_label(probs: dict[str, float], label: str | None, mass: float, weight: float,
+                group: Sequence[str] | None = None) -> dict[str, float]:
+    """``(1 - weight) * probs + weight * mass * onehot(label)`` over ``label``'s group of classes.
+
+    ``group`` limits the blend to one group of a shared distribution (the sectors or the contexts of
+    the location weights, each holding ``mass`` 0.5); ``None``: all of ``probs`` (``mass`` 1).
+    """
+    if weight <= 0 or label is None or label not in probs:
+        return probs
+    members = set(probs) if group is None else set(group)
+    out = {c: (p * (1.0 - weight) if c in members else p) for c, p in probs.items()}
+    out[label] += weight * mass
+    return out
 
 
 def _predicate(motion: str) -> str:

@@ -254,6 +254,7 @@ def test_calibrate_thresholds_needs_examples(engine: QueryEngine) -> None:
         (dict(candidate_top_k=-1), "candidate_top_k"),
         (dict(candidate_top_k=1.5), "candidate_top_k"),
         (dict(unknown_floor=3.0), "unknown_floor"),
+        (dict(label_weight=1.5), "label_weight"),
     ],
 )
 def test_config_validation_names_the_field(encoder: TextEncoder, changes: dict, field: str) -> None:
@@ -397,3 +398,25 @@ def test_negated_colours_rule_nodes_out(engine: QueryEngine, scene: LanguageScen
     assert set(g.node_ids) == set(ids(*expected)), (g.message, g.ranking[:5])
     if not expected:
         assert "that is not white" in g.message
+
+
+def test_auto_labels_correct_an_unsure_aligner(encoder: TextEncoder, codebooks: MotionCodebooks) -> None:
+    """The aligner's weights say "going straight", the node's auto-label says "changing lanes to the right":
+    with the default blend the lane change is found, with the aligner alone it is not."""
+    specs = [
+        ObjectSpec("X", "vehicle", vehicle_caption("red", "sedan"), motion_label("X", "going_straight", "in_front_of_ego", "on_the_road")),
+        ObjectSpec("Y", "vehicle", vehicle_caption("blue", "SUV"), motion_label("Y", "going_straight", "in_front_of_ego", "on_the_road")),
+    ]
+    scene = hand_built_scene(specs, encoder, codebooks)
+    x = scene.nodes[0]
+    relabelled = dataclasses.replace(x.motion, labels=motion_label("X", "changing_lane_right", "in_front_of_ego", "on_the_road"))
+    scene = dataclasses.replace(scene, nodes=(dataclasses.replace(x, motion=relabelled), *scene.nodes[1:]))
+    text = "the car changing lanes to the right"
+    blended = QueryEngine(encoder, QueryConfig(), codebooks=codebooks)
+    assert blended.config.label_weight == 0.5
+    assert blended.ground(scene, text).node_ids == (1,)
+    learned_only = QueryEngine(encoder, QueryConfig(label_weight=0.0), codebooks=codebooks)
+    assert learned_only.ground(scene, text).node_ids == ()
+    # location: the labelled sector moves weight the same way, and a full-label engine follows the labels only
+    labels_only = QueryEngine(encoder, QueryConfig(label_weight=1.0), codebooks=codebooks)
+    assert labels_only.ground(scene, "the car going straight").node_ids == (2,)
