@@ -102,9 +102,10 @@ def motion_from_json(text: str, f_mot: np.ndarray, f_loc: np.ndarray):
 
 # ----------------------------------------------------------------------------- write
 def _feature_matrix(nodes, attribute: str, dim: int) -> np.ndarray:
+    """``[len(nodes), dim]`` float32 rows of each node's ``attribute`` (zeros for ``None`` nodes or values)."""
     out = np.zeros((len(nodes), dim), np.float32)
     for i, node in enumerate(nodes):
-        value = getattr(node, attribute)
+        value = None if node is None else getattr(node, attribute)
         if value is not None:
             out[i] = np.asarray(value, np.float32).reshape(dim)
     return out
@@ -115,14 +116,7 @@ def _language_tables(scene_id: str, scene, scene_nodes: list[Mapping[str, Any]],
     """``nodes`` (every node of the scene, object rows with features) and ``node_language`` (object nodes)."""
     by_id = {n.node_id: n for n in scene.nodes}
     rows = [by_id.get(int(nd["node_id"])) for nd in scene_nodes]
-    features = {}
-    for name in ("f_app", "f_mot", "f_loc"):
-        matrix = np.zeros((len(rows), dim), np.float32)
-        for i, node in enumerate(rows):
-            value = None if node is None else getattr(node, name)
-            if value is not None:
-                matrix[i] = np.asarray(value, np.float32).reshape(dim)
-        features[name] = matrix
+    features = {name: _feature_matrix(rows, name, dim) for name in ("f_app", "f_mot", "f_loc")}
     language = pa.table({
         "scene_id": pa.array([scene_id] * len(scene.nodes), pa.string()),
         "node_id": pa.array([n.node_id for n in scene.nodes], pa.int32()),
@@ -242,8 +236,11 @@ def list_language_scenes(store: ArtifactStore, seq_id: str) -> list[tuple[str, s
 
 
 def read_language_scene(store: ArtifactStore, seq_id: str, model_hash: str | None = None,
-                        language_hash: str | None = None) -> LoadedLanguageScene:
+                        language_hash: str | None = None, *, with_records: bool = True) -> LoadedLanguageScene:
     """Read a language scene (the newest of ``seq_id`` unless hashes are given).
+
+    ``with_records=False`` reads the ``LanguageScene`` only (``records`` and ``autoencoder`` are ``None``):
+    grounding needs nodes and node-id maps, not the Gaussians or the decoder.
 
     Raises:
         FileNotFoundError: none is stored (naming the place looked in).
@@ -291,11 +288,11 @@ def read_language_scene(store: ArtifactStore, seq_id: str, model_hash: str | Non
                           frame_indices=frames, cameras=cameras, node_id_maps=maps,
                           text_encoder=manifest.get("text_encoder", ""), metadata=dict(manifest.get("metadata", {})))
     records = None
-    if manifest.get("scene_hash"):
+    if with_records and manifest.get("scene_hash"):
         records = read_scene(store, seq_id, manifest["scene_hash"]).records
         records.gaussians = gaussian_columns(store.read_table(join_relpath(rel, "gaussians.parquet"), "gaussians"))
     autoencoder = None
-    if manifest.get("has_autoencoder"):
+    if with_records and manifest.get("has_autoencoder"):
         with np.load(io.BytesIO(store.read_bytes(join_relpath(rel, AUTOENCODER_FILE))), allow_pickle=False) as data:
             autoencoder = FeatureAutoencoder(AutoencoderState.from_arrays({k: data[k] for k in data.files}))
     return LoadedLanguageScene(scene, records, autoencoder, model_hash, language_hash, rel, manifest)

@@ -51,11 +51,12 @@ def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, Ru
     lists them); returns ``name -> Parquet URI``."""
     uris = {}
     for name, item in tables.items():
-        parquet = join_relpath(relpath, "tables", f"{name}.parquet") if relpath else f"tables/{name}.parquet"
+        parquet = join_relpath(relpath, "tables", f"{name}.parquet")
         store.write_table(parquet, item.table, item.schema)
-        store.write_bytes(parquet[: -len(".parquet")] + ".md", (item.markdown.rstrip("\n") + "\n").encode("utf-8"))
+        store.write_bytes(join_relpath(relpath, "tables", f"{name}.md"),
+                          (item.markdown.rstrip("\n") + "\n").encode("utf-8"))
         uris[name] = store.uri(parquet)
     body = {"written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
             "tables": sorted(tables), **dict(manifest or {})}
-    store.write_json(join_relpath(relpath, "manifest.json") if relpath else "manifest.json", body)
+    store.write_json(join_relpath(relpath, "manifest.json"), body)
     return uris

@@ -82,7 +82,7 @@ def evaluate_grounding_run(store_root: str, seq_ids: list[str], out_root: str, o
     if len(without_truth) == len(logs):
         raise ValueError(f"no ground-truth instance masks in {sorted(logs)}: grounding needs synthetic logs")
     logs = {s: log for s, log in logs.items() if s not in without_truth}
-    scenes = [read_language_scene(store, seq_id).scene for seq_id in logs]
+    scenes = [read_language_scene(store, seq_id, with_records=False).scene for seq_id in logs]
     bench = build_benchmark(list(logs.values()), benchmark or BenchmarkConfig())
     encoder = default_text_encoder()
     engine = QueryEngine(encoder)

@@ -52,6 +52,7 @@ from torch import Tensor
 
 from simsplat_core.language.appearance.autoencoder import FeatureAutoencoder
 from simsplat_core.language.node_masks import NO_NODE, NodeIdMaps
+from simsplat_core.language.text import l2_normalise
 from simsplat_core.render import rasterization, select_backend
 from simsplat_core.render.cpu_backend import project_and_bin, rasterize_to_pixels
 from simsplat_core.render.types import BACKENDS
@@ -351,7 +352,7 @@ def similarity_map(
     queries = queries.reshape(1, -1) if single else queries
     if queries.ndim != 2 or queries.shape[1] != autoencoder.input_dim:
         raise ValueError(f"query has {queries.shape[-1]} dims, the autoencoder decodes to {autoencoder.input_dim}")
-    queries = queries / np.maximum(np.linalg.norm(queries, axis=1, keepdims=True), 1e-12)
+    queries = l2_normalise(queries)
     rendered = render_features(graph, t, cam_to_world, Ks, width, height, background=background, backend=backend)
     c, h, w, d = rendered.shape
     decoded = _decode_pixels(autoencoder, rendered.reshape(-1, d))  # [P, D]
@@ -462,7 +463,7 @@ class _Targets:
         self.text: Tensor | None = None
         if node_targets is not None and background_target is not None:
             text, has = _rows_by_node(size, node_targets, background_target)
-            text /= np.maximum(np.linalg.norm(text, axis=1, keepdims=True), 1e-12)
+            text = l2_normalise(text)
             self.text_valid = torch.from_numpy(has)
             # candidate targets of the nearest-target accuracy; targets within LOOK_ALIKE_COSINE of each
             # other are look-alikes (two red sedans) and count as the same answer

@@ -56,7 +56,7 @@ from simsplat_core.language.map_context import MapContext
 from simsplat_core.language.motion_labels import (
     LabelThresholds,
     MotionLabel,
-    label_log,
+    label_trajectories,
     location_context,
     vehicle_off_lane,
 )
@@ -190,9 +190,9 @@ def plausible_readings(
 
 def object_facts(log: SceneLog, labels: dict[str, MotionLabel] | None = None, min_frame_pixels: int = 30) -> dict[str, ObjectFacts]:
     """``object_id -> ObjectFacts`` of every object of a log with ground-truth instance masks."""
-    labels = label_log(log) if labels is None else labels
     map_context = MapContext.from_features(log.map_features) if log.map_features else None
     trajectories = log_trajectories(log, map_context, min_frames=1)
+    labels = label_trajectories(trajectories, log.ego_poses, map_context) if labels is None else labels
     n_inst = max((o.instance_id for o in log.objects), default=0) + 1
     per_frame = np.zeros((log.num_frames, n_inst), dtype=np.int64)
     for img in log.images:
@@ -293,17 +293,9 @@ class Description:
         return "+".join(parts) if parts else "category"
 
     def wording(self, matched: Sequence[ObjectFacts] = ()) -> Wording:
-        return Wording(
-            self.category,
-            self.subtype,
-            tuple(sorted({f.subtype for f in matched if f.subtype})),
-            self.color,
-            self.upper,
-            self.lower,
-            self.motion,
-            self.sector,
-            self.context,
-        )
+        """What the paraphraser needs: these constraints and the body styles of the objects a generic noun
+        has to fit."""
+        return Wording(**dataclasses.asdict(self), generic_subtypes=tuple(sorted({f.subtype for f in matched if f.subtype})))
 
 
 def matching(desc: Description, facts: Iterable[ObjectFacts], lenient: bool = False) -> list[ObjectFacts]:

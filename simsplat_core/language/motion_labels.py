@@ -44,6 +44,7 @@ Location at the reference frame (median visible frame) has two parts:
 from __future__ import annotations
 
 import logging
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -294,10 +295,16 @@ def label_trajectory(
     return MotionLabel(traj.object_id, traj.kind, motion, sector, context, ref_frame, dh, lat, v0, v1)
 
 
+def label_trajectories(trajectories: Mapping[str, ObjectTrajectory], ego_poses: np.ndarray,
+                       map_context: MapContext | None, thresholds: LabelThresholds | None = None
+                       ) -> dict[str, MotionLabel]:
+    """``object_id -> MotionLabel`` of already built trajectories (``ego_poses`` ``[F, 4, 4]``)."""
+    return {oid: label_trajectory(traj, ego_poses, map_context, thresholds) for oid, traj in trajectories.items()}
+
+
 def label_log(log: SceneLog, thresholds: LabelThresholds | None = None) -> dict[str, MotionLabel]:
     """Auto-labels of every movable object of ``log`` (static objects and signs are skipped)."""
     map_context = MapContext.from_features(log.map_features) if log.map_features else None
-    trajectories = log_trajectories(log, map_context, min_frames=1)
-    labels = {oid: label_trajectory(traj, log.ego_poses, map_context, thresholds) for oid, traj in trajectories.items()}
+    labels = label_trajectories(log_trajectories(log, map_context, min_frames=1), log.ego_poses, map_context, thresholds)
     logger.debug("%s: labelled %d objects", log.seq_id, len(labels))
     return labels

@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.language.appearance.captioner import article
+
 #: Motion terms: term -> (agent kind, auto-label classes it denotes).
 MOTION_TERMS: dict[str, tuple[str, frozenset[str]]] = {
     "turning_left": ("vehicle", frozenset({"turning_left"})),
@@ -217,13 +219,6 @@ def _pick(rng: np.random.Generator, options: tuple[str, ...] | list[str]) -> str
     return options[int(rng.integers(len(options)))]
 
 
-def _article(phrase: str) -> str:
-    word = phrase.split(" ", 1)[0]
-    if word.isupper() and len(word) > 1:
-        return "an" if word[0] in "AEFHILMNORSX" else "a"
-    return "an" if word[:1].lower() in "aeiou" else "a"
-
-
 def plural(noun: str) -> str:
     """Plural of a noun of the tables (last word inflected)."""
     if noun in _PLURAL:
@@ -254,7 +249,7 @@ def garments(w: Wording, rng: np.random.Generator, plural_form: bool = False) ->
     if w.upper is not None:
         top = _pick(rng, _UPPER)
         c = color_word(w.upper, rng)
-        parts.append(f"{c} {plural(top)}" if plural_form else f"{_article(c)} {c} {top}")
+        parts.append(f"{c} {plural(top)}" if plural_form else f"{article(c)} {c} {top}")
     if w.lower is not None:
         parts.append(f"{color_word(w.lower, rng)} {_pick(rng, _LOWER)}")
     verb = _pick(rng, ("in", "wearing", "with") if w.upper is not None else ("in", "wearing"))
@@ -301,7 +296,7 @@ def _definite(np_: str) -> str:
 
 
 def _indefinite(np_: str) -> str:
-    return np_ if np_.startswith("someone") else f"{_article(np_)} {np_}"
+    return np_ if np_.startswith("someone") else f"{article(np_)} {np_}"
 
 
 def _rel(w: Wording, rng: np.random.Generator) -> str:
