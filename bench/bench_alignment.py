@@ -81,9 +81,8 @@ def relevance(built, graph, log, encoder, max_objects: int = 8) -> dict:
     gt = {o.object_id: o.attributes.get("caption_appearance", "") for o in log.objects}
     rows = []
     for node in [n for n in scene.nodes if n.f_app is not None][:max_objects]:
-        masks = scene.masks([node.node_id])  # [F, C, H, W]
-        frame_row = int(masks.reshape(masks.shape[0], -1).sum(1).argmax())
-        frame = int(scene.frame_indices[frame_row])
+        frame = scene.busiest_frame(scene.masks([node.node_id]))
+        frame_row = int(np.flatnonzero(scene.frame_indices == frame)[0])
         images = sorted(log.images_at(frame), key=lambda img: scene.cameras.index(img.camera))
         q = encoder.encode_queries([gt[node.object_id]])[0]
         sim = similarity_map(graph, frame, np.stack([i.cam_to_world for i in images]), np.stack([i.K for i in images]),
@@ -106,9 +105,9 @@ def background_choice(built, log, encoder) -> dict:
     z_bg = ae.encode(encoder.encode_passages([AlignmentConfig().background_passage]))
     passage = ae.decode(z_bg)[0]
     zero = ae.decode(np.zeros((1, ae.latent_dim), np.float32))[0]
-    own = np.array([float(n.f_app @ encoder.encode_queries([o.attributes["caption_appearance"]])[0])
-                    for n in built.scene.nodes if n.f_app is not None
-                    for o in log.objects if o.object_id == n.object_id])
+    row_of = {o.object_id: i for i, o in enumerate(log.objects)}
+    own = np.array([float(n.f_app @ queries[row_of[n.object_id]])
+                    for n in built.scene.nodes if n.f_app is not None and n.object_id in row_of])
     return {"query_cos_with_decoded_passage_latent": r4((queries @ passage).mean()),
             "query_cos_with_decoded_zero_latent": r4((queries @ zero).mean()),
             "query_cos_with_own_f_app": r4(own.mean()) if own.size else None}
@@ -130,8 +129,7 @@ def main() -> None:
     log, graph, scene_times = load_scene(args.seed, args.iterations, args.cache)
     encoder = default_text_encoder()
     t0 = time.perf_counter()
-    aligner = MotionAligner.fit([generate_log(args.seed, WorldConfig(render_images=False))],
-                                MotionAlignerConfig(epochs=args.aligner_epochs), encoder)
+    aligner = MotionAligner.fit([log], MotionAlignerConfig(epochs=args.aligner_epochs), encoder)
     aligner_s = time.perf_counter() - t0
 
     config = AlignmentConfig()

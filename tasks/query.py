@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.language.feature_field import background_latent, similarity_map
+from simsplat_core.language.feature_field import similarity_map
 from simsplat_core.language.query import Grounding, QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import default_text_encoder
@@ -48,15 +48,6 @@ def default_png_path(store: ArtifactStore, seq_id: str, text: str) -> str:
     return store.uri(f"queries/{seq_id}/{slug}.png")
 
 
-def best_frame(scene: LanguageScene, node_ids: tuple[int, ...]) -> int:
-    """The frame where ``node_ids`` cover the most pixels (the middle frame when they cover none)."""
-    if node_ids:
-        counts = scene.masks(node_ids).sum(axis=(1, 2, 3))
-        if counts.max() > 0:
-            return int(scene.frame_indices[int(np.argmax(counts))])
-    return int(scene.frame_indices[len(scene.frame_indices) // 2])
-
-
 def answer_query(store_root: str, seq_id: str, text: str, *, out: str | None = None, frame: int | None = None,
                  engine: QueryEngine | None = None) -> QueryAnswer:
     """Ground ``text`` in the newest language scene of ``seq_id`` and draw the answer.
@@ -73,13 +64,14 @@ def answer_query(store_root: str, seq_id: str, text: str, *, out: str | None = N
     logger.info("%s: %r -> %s", seq_id, text, grounding.node_ids or "no match")
     if scene.node_id_maps is None:
         return QueryAnswer(scene, grounding, None, "")
+    all_masks = scene.masks(grounding.node_ids)  # [F, C, H, W]
     if frame is None:
-        frame = best_frame(scene, grounding.node_ids)
+        frame = scene.busiest_frame(all_masks)
     where = np.flatnonzero(scene.frame_indices == frame)
     if where.size == 0:
         raise ValueError(f"{seq_id}: frame {frame} is not in the scene (frames {int(scene.frame_indices[0])}.."
                          f"{int(scene.frame_indices[-1])})")
-    masks = scene.masks(grounding.node_ids)[int(where[0])]  # [C, H, W]
+    masks = all_masks[int(where[0])]  # [C, H, W]
     log = read_scene_log(store, seq_id, load_images=False)
     views = [img for img in log.images if img.frame_idx == frame]
     views = sorted(views, key=lambda img: scene.cameras.index(img.camera))
@@ -92,6 +84,6 @@ def answer_query(store_root: str, seq_id: str, text: str, *, out: str | None = N
         query = engine.embed([phrase])[phrase]
         relevance = similarity_map(graph, float(frame), np.stack([v.cam_to_world for v in views]),
                                    np.stack([v.K for v in views]), views[0].width, views[0].height,
-                                   loaded.autoencoder, query, background=background_latent(graph))
+                                   loaded.autoencoder, query)
     uri = write_png(out or default_png_path(store, seq_id, text), grounding_picture(images, masks, relevance))
     return QueryAnswer(scene, grounding, frame, uri)

@@ -42,11 +42,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
-from simsplat_core.language.appearance.captioner import AppearanceCaption, Captioner, appearance_vocabulary
+from simsplat_core.language.appearance.captioner import AppearanceCaption, appearance_vocabulary
 from simsplat_core.language.appearance.crops import ObjectCrop
 from simsplat_core.language.appearance.embedders import (
     CAPTIONERS,
     AppearanceEmbedder,
+    CaptionEmbedder,
     aggregate_views,
     appearance_embedder,
 )
@@ -60,6 +61,7 @@ from simsplat_core.language.feature_field import (
 from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
 from simsplat_core.language.node_masks import (
     NodeIdMaps,
+    NodeObject,
     crops_from_node_maps,
     mask_agreement,
     node_objects,
@@ -196,27 +198,15 @@ class BuiltLanguageScene:
     metrics: dict[str, float] = field(default_factory=dict)
 
 
-@dataclass(frozen=True)
-class _ObjectNode:
-    node_id: int
-    object_id: str
-    category: str
-
-
-def _object_nodes(graph: SceneGraph | None, log: SceneLog) -> list[_ObjectNode]:
+def _object_nodes(graph: SceneGraph | None, log: SceneLog) -> list[NodeObject]:
     if graph is not None:
-        return [_ObjectNode(n.node_id, n.object_id, n.category) for n in node_objects(graph).values()]
+        return list(node_objects(graph).values())
     objects = sorted(log.objects, key=lambda o: o.object_id)
-    return [_ObjectNode(i, o.object_id, o.category) for i, o in enumerate(objects, start=1)]
+    return [NodeObject(i, o.object_id, o.category) for i, o in enumerate(objects, start=1)]
 
 
 def _has_pixels(log: SceneLog) -> bool:
     return any(img.image is not None for img in log.images)
-
-
-def _captioner_of(embedder: AppearanceEmbedder):
-    captioner = getattr(embedder, "captioner", None)
-    return captioner if captioner is not None and hasattr(captioner, "describe_track") else Captioner()
 
 
 def _select_crops(crops: Sequence[ObjectCrop], config: AlignmentConfig) -> list[ObjectCrop]:
@@ -224,13 +214,6 @@ def _select_crops(crops: Sequence[ObjectCrop], config: AlignmentConfig) -> list[
     at least ``small_area``)."""
     large = {c.object_id for c in crops if c.area >= config.min_area}
     return [c for c in crops if c.area >= config.min_area or c.object_id not in large]
-
-
-def _group(crops: Sequence[ObjectCrop]) -> dict[str, list[ObjectCrop]]:
-    out: dict[str, list[ObjectCrop]] = {}
-    for crop in crops:
-        out.setdefault(crop.object_id, []).append(crop)
-    return out
 
 
 def build_language_scene(
@@ -305,12 +288,13 @@ def build_language_scene(
 
         # 3. captions and text-space appearance features per object
         t = time.perf_counter()
-        captioner = _captioner_of(embedder)
-        by_object = _group(crops)
-        captions = {oid: captioner.describe_track(views) for oid, views in by_object.items()}
+        # one caption per object (an image-feature embedder still gets the built-in captioner's captions)
+        caption_embedder = embedder if isinstance(embedder, CaptionEmbedder) else CaptionEmbedder(text_encoder)
+        captions = caption_embedder.track_captions(crops)
         object_feats: dict[str, np.ndarray] = {}
         if crops:
-            agg = aggregate_views([c.object_id for c in crops], embedder.embed(crops))
+            rows = embedder.embed(crops, captions) if embedder is caption_embedder else embedder.embed(crops)
+            agg = aggregate_views([c.object_id for c in crops], rows)
             object_feats = {oid: agg.features[i] for i, oid in enumerate(agg.object_ids)}
         bg_text = (text_encoder.encode_passages([config.background_passage])[0]
                    if config.background_passage is not None else None)

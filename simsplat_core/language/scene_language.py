@@ -93,3 +93,10 @@ class LanguageScene:
         if self.node_id_maps is None:
             raise ValueError(f"{self.seq_id}: the scene has no rendered node-id maps (no cameras)")
         return np.isin(self.node_id_maps, np.asarray(list(node_ids), dtype=np.int32))
+
+    def busiest_frame(self, masks: np.ndarray) -> int:
+        """The frame where ``masks`` (``[F, C, H, W]`` bool, e.g. from ``masks``) cover the most pixels; the
+        middle frame when they cover none."""
+        counts = np.asarray(masks).reshape(len(self.frame_indices), -1).sum(axis=1)
+        row = int(np.argmax(counts)) if counts.size and counts.max() > 0 else len(self.frame_indices) // 2
+        return int(self.frame_indices[row])

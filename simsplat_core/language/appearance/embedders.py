@@ -19,7 +19,7 @@ per-view rows too.
 from __future__ import annotations
 
 import logging
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
@@ -110,18 +110,21 @@ class CaptionEmbedder:
         self.dim = int(text_encoder.dim)
         self.name = f"caption[{self.captioner.name}{'' if per_view else ',per-object'}]>{text_encoder.name}"
 
-    def captions(self, crops: Sequence[ObjectCrop]) -> list[AppearanceCaption]:
-        """One caption per crop (the object's track caption for every crop when not ``per_view``)."""
+    def captions(self, crops: Sequence[ObjectCrop],
+                 track_captions: Mapping[str, AppearanceCaption] | None = None) -> list[AppearanceCaption]:
+        """One caption per crop (the object's track caption for every crop when not ``per_view``; pass
+        ``track_captions`` when they were already made)."""
         if not self.per_view:
-            tracks = self.track_captions(crops)
+            tracks = self.track_captions(crops) if track_captions is None else track_captions
             return [tracks[c.object_id] for c in crops]
         return [self.captioner.describe(c) for c in crops]
 
-    def embed(self, crops: Sequence[ObjectCrop]) -> np.ndarray:
-        """``[N, D]`` passage embeddings of the crops' captions."""
+    def embed(self, crops: Sequence[ObjectCrop],
+              track_captions: Mapping[str, AppearanceCaption] | None = None) -> np.ndarray:
+        """``[N, D]`` passage embeddings of the crops' captions (``track_captions`` as in ``captions``)."""
         if not crops:
             return np.zeros((0, self.dim), dtype=np.float32)
-        return self.text_encoder.encode_passages([c.text for c in self.captions(crops)])
+        return self.text_encoder.encode_passages([c.text for c in self.captions(crops, track_captions)])
 
     def track_captions(self, crops: Sequence[ObjectCrop]) -> dict[str, AppearanceCaption]:
         """``object_id -> caption`` voted over each object's crops (``describe_track``)."""
