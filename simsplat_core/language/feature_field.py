@@ -54,7 +54,7 @@ from simsplat_core.language.appearance.autoencoder import FeatureAutoencoder
 from simsplat_core.language.node_masks import NO_NODE, NodeIdMaps
 from simsplat_core.language.text import l2_normalise
 from simsplat_core.render import rasterization, select_backend
-from simsplat_core.render.cpu_backend import project_and_bin, rasterize_to_pixels
+from simsplat_core.render.cpu_backend import rasterize_to_pixels
 from simsplat_core.render.types import BACKENDS
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.nodes import BACKGROUND_ID
@@ -68,8 +68,6 @@ BACKGROUND_LATENT_KEY = "language_background_latent"
 #: Targets at least this similar are look-alikes for the fit's nearest-target accuracy (the convention of
 #: ``bench/bench_appearance.py``).
 LOOK_ALIKE_COSINE = 0.99
-#: Rasterizer settings shared by every render here (the rasterizer's defaults).
-_TILE, _NEAR, _FAR = 16, 0.01, 1e10
 
 
 class FeatureFieldError(ValueError):
@@ -257,22 +255,18 @@ class _ViewRenderer:
             self.viewmats = world_to_camera(c2w)
             self.n_cams = int(c2w.shape[0])
             self.backend = select_backend(backend, device)
-            if self.backend == "cpu":
-                proj, isects = project_and_bin(composed.means, composed.quats, composed.scales, self.viewmats,
-                                               self.Ks, self.width, self.height, near_plane=_NEAR, far_plane=_FAR,
-                                               eps2d=self.eps2d, radius_clip=0.0, tile_size=_TILE)
-                self.means2d, self.conics = proj.means2d.detach(), proj.conics.detach()
-                self.opacities = composed.opacities[None].expand(self.n_cams, -1)
-                self.isect_offsets, self.flatten_ids = isects.isect_offsets, isects.flatten_ids
+            ones = composed.opacities.new_ones((len(composed), 1))
+            _, _, meta = rasterization(composed.means, composed.quats, composed.scales, composed.opacities, ones,
+                                       self.viewmats, self.Ks, self.width, self.height, render_mode="RGB",
+                                       backend=self.backend, eps2d=self.eps2d)
+            radii = meta.radii
+            if self.backend == "cpu":  # keep the projection and tile binning; each render only composites
+                self.means2d, self.conics = meta.means2d.detach(), meta.conics.detach()
+                self.opacities = meta.opacities.detach()
+                self.tile_size, self.isect_offsets, self.flatten_ids = meta.tile_size, meta.isect_offsets, meta.flatten_ids
                 self.composed = None
-                radii = proj.radii
             else:
                 self.composed = composed
-                ones = composed.opacities.new_ones((len(composed), 1))
-                _, _, meta = rasterization(composed.means, composed.quats, composed.scales, composed.opacities, ones,
-                                           self.viewmats, self.Ks, self.width, self.height, render_mode="RGB",
-                                           backend=self.backend, eps2d=self.eps2d)
-                radii = meta.radii
             #: ``[N_graph]`` bool, canonical rows of the Gaussians visible in some camera of the view
             self.visible = torch.zeros(graph.num_gaussians, dtype=torch.bool, device=device)
             self.visible[self.gaussian_ids[(radii.reshape(self.n_cams, len(composed), -1) > 0).any(-1).any(0)]] = True
@@ -284,7 +278,7 @@ class _ViewRenderer:
         if self.composed is None:
             colors = colors[None].expand(self.n_cams, -1, -1)
             out, _ = rasterize_to_pixels(self.means2d, self.conics, colors, self.opacities, self.width, self.height,
-                                         _TILE, self.isect_offsets, self.flatten_ids, bgs)
+                                         self.tile_size, self.isect_offsets, self.flatten_ids, bgs)
             return out
         c = self.composed
         out, _, _ = rasterization(c.means, c.quats, c.scales, c.opacities, colors, self.viewmats, self.Ks, self.width,
@@ -312,8 +306,15 @@ def render_features(
     bg = torch.zeros(feats.shape[1]) if background is None else torch.as_tensor(background, dtype=torch.float32)
     if bg.shape != (feats.shape[1],):
         raise FeatureFieldError(f"background latent has shape {list(bg.shape)}, features are {feats.shape[1]}-d")
+    device = graph.device
     with torch.no_grad():
-        return _ViewRenderer(graph, t, cam_to_world, Ks, width, height, backend).render(feats, bg.to(feats.device))
+        c = graph.at(t).detach()
+        c2w = torch.as_tensor(cam_to_world, dtype=torch.float32, device=device)
+        out, _, _ = rasterization(c.means, c.quats, c.scales, c.opacities, feats[c.gaussian_ids], world_to_camera(c2w),
+                                  torch.as_tensor(Ks, dtype=torch.float32, device=device), width, height,
+                                  render_mode="RGB", backgrounds=bg.to(feats.device).reshape(1, -1).expand(c2w.shape[0], -1),
+                                  backend=backend, eps2d=graph.eps2d)
+    return out
 
 
 def _decode_pixels(autoencoder: FeatureAutoencoder, latents: Tensor, chunk: int = 65536) -> Tensor:
