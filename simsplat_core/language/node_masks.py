@@ -25,9 +25,8 @@ import numpy as np
 import torch
 
 from simsplat_core.language.appearance.crops import ObjectCrop, crop_object
-from simsplat_core.render import rasterization
 from simsplat_core.scene.graph import SceneGraph
-from simsplat_core.scene.render import NODE_ID_MIN_ALPHA, world_to_camera
+from simsplat_core.scene.render import NODE_ID_MIN_ALPHA, node_weight_argmax, world_to_camera
 from simsplat_core.types import CameraImage, SceneLog, Track
 
 logger = logging.getLogger(__name__)
@@ -134,32 +133,11 @@ def render_node_ids(
     composed = graph.at(t)
     cam_to_world = torch.as_tensor(cam_to_world, dtype=torch.float32, device=device)
     Ks = torch.as_tensor(Ks, dtype=torch.float32, device=device)
-    n_cams = cam_to_world.shape[0]
-    best_w = torch.zeros((n_cams, height, width), device=device)
-    best_id = torch.full((n_cams, height, width), NO_NODE, dtype=torch.int32, device=device)
     if len(composed) == 0:
-        return best_id
+        return torch.full((cam_to_world.shape[0], height, width), NO_NODE, dtype=torch.int32, device=device)
     viewmats = world_to_camera(cam_to_world)
-    node_ids = composed.node_ids.long()
     nodes = torch.as_tensor(sorted(composed.included_nodes), dtype=torch.long, device=device)
-    column = torch.full((int(nodes.max()) + 1,), -1, dtype=torch.long, device=device)
-    alpha = None
-    for start in range(0, int(nodes.shape[0]), id_chunk):
-        chunk = nodes[start:start + id_chunk]
-        column.fill_(-1)
-        column[chunk] = torch.arange(chunk.shape[0], device=device)
-        col = column[node_ids]  # [N] column of each Gaussian's node in this chunk, -1 outside it
-        rows = torch.nonzero(col >= 0)[:, 0]
-        onehot = torch.zeros((len(composed), chunk.shape[0]), device=device)
-        onehot[rows, col[rows]] = 1.0
-        weights, chunk_alpha, _ = rasterization(composed.means, composed.quats, composed.scales, composed.opacities,
-                                                onehot, viewmats, Ks, width, height, render_mode="RGB",
-                                                backend=backend, eps2d=graph.eps2d)
-        alpha = chunk_alpha if alpha is None else alpha
-        w_max, arg = weights.max(dim=-1)
-        better = w_max > best_w
-        best_w = torch.where(better, w_max, best_w)
-        best_id = torch.where(better, chunk[arg].to(torch.int32), best_id)
+    best_id, alpha = node_weight_argmax(composed, nodes, viewmats, Ks, width, height, backend, id_chunk, graph.eps2d)
     return torch.where(alpha[..., 0] >= NODE_ID_MIN_ALPHA, best_id, torch.full_like(best_id, NO_NODE))
 
 

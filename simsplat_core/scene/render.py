@@ -105,6 +105,51 @@ def render_composed(
 
 
 @torch.no_grad()
+def node_weight_argmax(
+    gs: ComposedGaussians,
+    nodes: Tensor,  # [K] node ids to consider
+    viewmats: Tensor,  # [C, 4, 4]
+    Ks: Tensor,  # [C, 3, 3]
+    width: int,
+    height: int,
+    backend: str = "auto",
+    id_chunk: int = 32,
+    eps2d: float = DEFAULT_EPS2D,
+) -> tuple[Tensor, Tensor | None]:
+    """``([C, H, W] int32 node of largest compositing weight among nodes, [C, H, W, 1] alpha)``.
+
+    Renders one-hot node indicators ``id_chunk`` nodes at a time; ``-1`` where none of ``nodes`` has
+    weight. The alpha (of all of ``gs``; colours do not change it) comes from the first pass, ``None``
+    when ``nodes`` is empty.
+    """
+    n_cams = viewmats.shape[0]
+    device, dtype = gs.means.device, gs.means.dtype
+    best_w = torch.zeros((n_cams, height, width), dtype=dtype, device=device)
+    best_id = torch.full((n_cams, height, width), -1, dtype=torch.int32, device=device)
+    node_ids = gs.node_ids.long()
+    nodes = nodes.long()
+    column = torch.full((int(max(node_ids.max(), nodes.max())) + 1 if len(nodes) else 1,), -1, dtype=torch.long,
+                        device=device)
+    alpha = None
+    for start in range(0, int(nodes.shape[0]), id_chunk):
+        chunk = nodes[start:start + id_chunk]
+        column.fill_(-1)
+        column[chunk] = torch.arange(chunk.shape[0], device=device)
+        col = column[node_ids]  # [N] column of each Gaussian's node in this chunk, -1 outside it
+        rows = torch.nonzero(col >= 0)[:, 0]
+        onehot = torch.zeros((len(gs), chunk.shape[0]), dtype=dtype, device=device)
+        onehot[rows, col[rows]] = 1.0
+        weights, chunk_alpha, _ = rasterization(gs.means, gs.quats, gs.scales, gs.opacities, onehot, viewmats, Ks,
+                                                width, height, render_mode="RGB", backend=backend, eps2d=eps2d)
+        alpha = chunk_alpha if alpha is None else alpha
+        w_max, arg = weights.max(dim=-1)  # [C, H, W]
+        better = w_max > best_w
+        best_w = torch.where(better, w_max, best_w)
+        best_id = torch.where(better, chunk[arg].to(torch.int32), best_id)
+    return best_id, alpha
+
+
+@torch.no_grad()
 def render_node_ids(
     gs: ComposedGaussians,
     viewmats: Tensor,  # [C, 4, 4]
@@ -118,26 +163,7 @@ def render_node_ids(
     eps2d: float = DEFAULT_EPS2D,
 ) -> Tensor:
     """``[C, H, W]`` int32 node of largest compositing weight per pixel (see the module docstring)."""
-    n_cams = viewmats.shape[0]
-    device, dtype = gs.means.device, gs.means.dtype
-    best_w = torch.zeros((n_cams, height, width), dtype=dtype, device=device)
-    best_id = torch.full((n_cams, height, width), -1, dtype=torch.int32, device=device)
     visible = (radii > 0).any(dim=0)  # [N]
     nodes = torch.unique(gs.node_ids[visible]) if len(gs) else gs.node_ids[:0]
-    node_ids_long = gs.node_ids.long()
-    max_id = int(node_ids_long.max()) + 1 if len(gs) else 1
-    for start in range(0, int(nodes.shape[0]), id_chunk):
-        chunk = nodes[start:start + id_chunk].long()
-        column = torch.full((max_id,), -1, dtype=torch.long, device=device)
-        column[chunk] = torch.arange(chunk.shape[0], device=device)
-        col = column[node_ids_long]  # [N]
-        onehot = torch.zeros((len(gs), chunk.shape[0] + 1), dtype=dtype, device=device)
-        onehot[torch.arange(len(gs), device=device), torch.where(col >= 0, col, chunk.shape[0])] = 1.0
-        weights, _, _ = rasterization(gs.means, gs.quats, gs.scales, gs.opacities, onehot[:, :-1].contiguous(),
-                                      viewmats, Ks, width, height, render_mode="RGB", backend=backend,
-                                      eps2d=eps2d)
-        w_max, arg = weights.max(dim=-1)  # [C, H, W]
-        better = w_max > best_w
-        best_w = torch.where(better, w_max, best_w)
-        best_id = torch.where(better, chunk[arg].to(torch.int32), best_id)
+    best_id, _ = node_weight_argmax(gs, nodes, viewmats, Ks, width, height, backend, id_chunk, eps2d)
     return torch.where(alpha[..., 0] >= NODE_ID_MIN_ALPHA, best_id, torch.full_like(best_id, -1))
