@@ -50,7 +50,7 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))  # for tests.simsplat_core.language.language_scene_factory (GT-built scenes)
+sys.path.insert(0, str(ROOT))  # the project's packages (storage, tasks) when run as a script
 
 from simsplat_core.eval.grounding import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
 from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table  # noqa: E402
@@ -67,6 +67,7 @@ from simsplat_core.language.grounding_benchmark import (  # noqa: E402
     generate_queries,
     object_facts,
 )
+from simsplat_core.language.gt_scene import language_scene_from_log  # noqa: E402
 from simsplat_core.language.motion_eval import grounding_accuracy, split_objects  # noqa: E402
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
@@ -411,8 +412,6 @@ def main() -> None:
     summary = results.summary()
 
     if not args.no_gt_scenes:
-        from tests.simsplat_core.language.language_scene_factory import language_scene_from_log
-
         gt_scenes = [language_scene_from_log(log, encoder, "captioner", aligner=aligner) for log in bench_logs]
         gt_results = evaluate_grounding(gt_scenes, bench, {"ours@gt-scene": engines["All"]})
         summary.update(gt_results.summary())

@@ -21,7 +21,8 @@ from simsplat_core.language.text import TextEncoder
 from simsplat_core.language.trajectory import log_trajectories
 from tests.simsplat_core.language import scenes
 from simsplat_core.world import generate_log
-from tests.simsplat_core.language.language_scene_factory import SMALL_WORLD, ground_truth_caption, node_ids_of
+from simsplat_core.language.gt_scene import ground_truth_caption, node_ids_of
+from tests.simsplat_core.language.language_scene_factory import SMALL_WORLD
 
 
 def _hand_log():

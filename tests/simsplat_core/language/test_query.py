@@ -14,13 +14,12 @@ from simsplat_core.language.query import QueryConfig, QueryEngine, calibrate_thr
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.world import generate_log
+from simsplat_core.language.gt_scene import language_scene_from_log, node_ids_of
 from tests.simsplat_core.language.language_scene_factory import (
     SMALL_WORLD,
     ObjectSpec,
     hand_built_scene,
-    language_scene_from_log,
     motion_label,
-    node_ids_of,
     pedestrian_caption,
     vehicle_caption,
 )
