@@ -67,6 +67,7 @@ from simsplat_core.language.grounding_benchmark import (  # noqa: E402
     generate_queries,
     object_facts,
 )
+from simsplat_core.language.grounding_methods import ABLATION_ROW_METHODS, engine_variants  # noqa: E402
 from simsplat_core.language.gt_scene import language_scene_from_log  # noqa: E402
 from simsplat_core.language.motion_eval import grounding_accuracy, split_objects  # noqa: E402
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
@@ -78,7 +79,8 @@ from simsplat_core.world import WorldConfig, generate_log  # noqa: E402
 
 logger = logging.getLogger("bench.grounding")
 DEFAULT_AV2 = ROOT.parent / "shared" / "data" / "av2" / "sensor-log-7fab2350"
-ABLATIONS = {"App": (False, False), "App+Mot": (True, False), "App+Loc": (False, True), "All": (True, True)}
+#: Table 3 rows (display name -> engine variant key of ``grounding_methods``).
+ABLATIONS = ABLATION_ROW_METHODS
 
 
 class OracleNodes:
@@ -118,11 +120,10 @@ def reconstruction_config(iterations: int) -> ReconstructionConfig:
 
 def _config_key(config) -> str:
     """Short content key of a reconstruction config (less its run-only fields), as the store keys scenes."""
-    from storage.keys import content_key
+    from storage.keys import config_settings, content_key
     from tasks.reconstruct import RUN_ONLY_FIELDS
 
-    settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_FIELDS}
-    return content_key("bench-reconstruct", settings)[:10]
+    return content_key("bench-reconstruct", config_settings(config, RUN_ONLY_FIELDS))[:10]
 
 
 def reconstruction(log: SceneLog, iterations: int, cache: Path):
@@ -180,10 +181,10 @@ def engine_methods(encoder, calib_examples, codebooks=None) -> tuple[dict, dict]
     there are none); returns ``(grounders, thresholds)``."""
     from simsplat_core.language.query import QueryConfig, QueryEngine, calibrate_thresholds
 
-    base = QueryEngine(encoder, QueryConfig(), codebooks)
+    variants = engine_variants(QueryEngine(encoder, QueryConfig(), codebooks))
     grounders, thresholds = {}, {}
-    for name, (mot, loc) in ABLATIONS.items():
-        engine = base.with_config(dataclasses.replace(base.config, use_motion=mot, use_location=loc))
+    for name, key in ABLATIONS.items():
+        engine = variants[key]
         t0 = time.perf_counter()
         config = calibrate_thresholds(engine, calib_examples) if calib_examples else engine.config
         engine = engine.with_config(config)

@@ -256,12 +256,14 @@ def eval_grounding(
 
 
 def _print_grounding(result) -> None:
+    from simsplat_core.eval.grounding import CATEGORIES
+
     table = Table(title=f"Grounding on {len(result.seq_ids)} sequences, {result.queries} queries (acc / vIoU)")
     table.add_column("method")
-    for category in ("vehicle", "pedestrian", "total"):
+    for category in CATEGORIES:
         table.add_column(category)
     for method, per in result.scores.items():
-        table.add_row(method, *(f"{per[c]['acc']:.3f} / {per[c]['viou']:.3f}" for c in ("vehicle", "pedestrian", "total")))
+        table.add_row(method, *(f"{per[c]['acc']:.3f} / {per[c]['viou']:.3f}" for c in CATEGORIES))
     console.print(table)
     for name, uri in result.tables.items():
         console.print(f"{name}: {uri}")

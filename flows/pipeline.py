@@ -14,6 +14,7 @@ from prefect.futures import as_completed
 
 from flows.cpu_shares import reserving_cpus, task_cpu_share
 from flows.progress import FlowProgress
+from simsplat_core.eval.grounding import CATEGORIES
 from simsplat_core.language.motion_training import MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
@@ -117,8 +118,8 @@ def _publish_language_table(aligner: StoredAligner, scenes: list[StoredLanguageS
 
 
 def _publish_grounding_table(result: GroundingEvaluation) -> None:
-    rows = [{"method": method, **{f"{c}_{m}": _rounded(per[c][m]) for c in ("vehicle", "pedestrian", "total")
-                                  for m in ("acc", "viou")}} for method, per in result.scores.items()]
+    rows = [{"method": method, **{f"{c}_{m}": _rounded(per[c][m]) for c in CATEGORIES for m in ("acc", "viou")}}
+            for method, per in result.scores.items()]
     create_table_artifact(rows, key="grounding", description=f"Grounding benchmark: {result.queries} queries on "
                           f"{len(result.seq_ids)} sequences (accuracy / vIoU)")
 

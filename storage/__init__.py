@@ -15,7 +15,7 @@ from storage.exr import (
     render_channels,
     write_exr,
 )
-from storage.keys import canonical, content_key
+from storage.keys import canonical, config_settings, content_key
 from storage.logs import (
     WrittenLog,
     image_uri,
@@ -90,6 +90,7 @@ __all__ = [
     "arrow_to_vectors",
     "canonical",
     "canonical_order",
+    "config_settings",
     "content_key",
     "feature_channel",
     "gaussians_schema",

@@ -71,3 +71,9 @@ def content_key(*parts: Any) -> str:
     """64-hex-digit SHA-256 of the canonical encoding of ``parts``."""
     payload = _encode([KEY_VERSION, [canonical(p) for p in parts]])
     return _digest(payload.encode("utf-8"))
+
+
+def config_settings(config: Any, exclude: tuple[str, ...] = ()) -> dict[str, Any]:
+    """A dataclass config as the dict a content key hashes, less fields that never change the output
+    (``exclude``: core counts, progress intervals, ...)."""
+    return {k: v for k, v in dataclasses.asdict(config).items() if k not in exclude}

@@ -21,7 +21,7 @@ from simsplat_core.language.motion_training import MotionAligner, MotionAlignerC
 from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import SceneGraph
-from storage import ArtifactStore, canonical, content_key, read_log_manifest, read_scene, read_scene_log
+from storage import ArtifactStore, canonical, config_settings, content_key, read_log_manifest, read_scene, read_scene_log
 from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
 from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
 
@@ -134,9 +134,8 @@ RUN_ONLY_ALIGNMENT_FIELDS = ("eval_views", "measure_masks")
 def language_hash(model_hash: str, scene_hash: str, config: AlignmentConfig, encoder_name: str,
                   embedder_name: str = "") -> str:
     """Content key of one aligned scene (the embedder's name carries e.g. the VLM model captioning it)."""
-    settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_ALIGNMENT_FIELDS}
-    return content_key("align-scene", LANGUAGE_VERSION, model_hash, scene_hash, settings, encoder_name,
-                       embedder_name)
+    return content_key("align-scene", LANGUAGE_VERSION, model_hash, scene_hash,
+                       config_settings(config, RUN_ONLY_ALIGNMENT_FIELDS), encoder_name, embedder_name)
 
 
 @task(name="align-scene", retries=0, cache_policy=NO_CACHE)

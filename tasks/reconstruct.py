@@ -17,7 +17,7 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.scene import ReconstructionConfig, reconstruct
-from storage import ArtifactStore, canonical, content_key, read_log_manifest, read_scene_log
+from storage import ArtifactStore, canonical, config_settings, content_key, read_log_manifest, read_scene_log
 from storage.scenes import (
     SCENE_FORMAT_VERSION,
     metrics_from_json,
@@ -62,8 +62,7 @@ RUN_ONLY_FIELDS = ("progress_every", "eval_every", "num_threads")
 def scene_hash(log_key: str, config: ReconstructionConfig) -> str:
     """Content key of a reconstruction: the stored log's content key, the config (less its run-only
     fields, so the same scene is found whatever the core count) and the versions."""
-    settings = {k: v for k, v in dataclasses.asdict(config).items() if k not in RUN_ONLY_FIELDS}
-    return content_key("reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, settings)
+    return content_key("reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, config_settings(config, RUN_ONLY_FIELDS))
 
 
 @task(name="reconstruct-scene", retries=0, cache_policy=NO_CACHE)
