@@ -78,7 +78,17 @@ def image_uri(image: CameraImage) -> str:
     """Relative EXR path of a camera image inside its log directory, ``""`` when it has no pixels."""
     if image.image is None and image.depth is None and image.instance is None:
         return ""
-    return f"{IMAGES_DIR}/{_check_name('camera', image.camera)}/{image.frame_idx:06d}.exr"
+    return _image_relpath(image.camera, image.frame_idx)
+
+
+def _image_relpath(camera: str, frame_idx: int) -> str:
+    """``images/<camera>/<frame>.exr`` inside a log directory."""
+    return f"{IMAGES_DIR}/{_check_name('camera', camera)}/{int(frame_idx):06d}.exr"
+
+
+def _rgb(channels: dict[str, np.ndarray]) -> np.ndarray | None:
+    """``[H, W, 3]`` from an EXR's R, G, B channels (``None`` without them)."""
+    return np.stack([channels[c] for c in "RGB"], axis=-1) if all(c in channels for c in "RGB") else None
 
 
 def scene_log_key(log: SceneLog) -> str:
@@ -322,11 +332,8 @@ def read_scene_log(store: ArtifactStore, seq_id: str, load_images: bool = True) 
 def read_image_rgb(store: ArtifactStore, seq_id: str, camera: str, frame_idx: int) -> np.ndarray | None:
     """``[H, W, 3]`` float32 pixels of one stored camera image (``None`` when the log has no pixels
     there), for callers that read a log with ``load_images=False`` and need a few frames only."""
-    rel = join_relpath(log_dir(seq_id), IMAGES_DIR, _check_name("camera", camera), f"{int(frame_idx):06d}.exr")
-    if not store.exists(rel):
-        return None
-    channels = read_exr(store, rel)
-    return np.stack([channels[c] for c in "RGB"], axis=-1) if all(c in channels for c in "RGB") else None
+    rel = join_relpath(log_dir(seq_id), _image_relpath(camera, frame_idx))
+    return _rgb(read_exr(store, rel)) if store.exists(rel) else None
 
 
 def _read_images(store: ArtifactStore, rel: str, frames: pa.Table, load_images: bool) -> tuple[CameraImage, ...]:
@@ -338,7 +345,7 @@ def _read_images(store: ArtifactStore, rel: str, frames: pa.Table, load_images: 
     for i in range(frames.num_rows):
         uri = cols["image_uri"][i]
         channels = read_exr(store, join_relpath(rel, uri)) if load_images and uri else {}
-        rgb = np.stack([channels[c] for c in "RGB"], axis=-1) if all(c in channels for c in "RGB") else None
+        rgb = _rgb(channels)
         instance = channels["id"].astype(np.int32) if "id" in channels else None
         images.append(
             CameraImage(
