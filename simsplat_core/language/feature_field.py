@@ -141,12 +141,9 @@ class FeatureView:
 def feature_views(log: SceneLog, maps: NodeIdMaps, frames: Iterable[int] | None = None) -> list[FeatureView]:
     """One ``FeatureView`` per (frame, image size) of ``log``'s images at ``frames`` (default: all of
     ``maps``), with the rendered node-id maps as targets."""
-    rendered = {int(f) for f in maps.frame_indices}
-    wanted = rendered if frames is None else rendered & {int(f) for f in frames}
     groups: dict[tuple[int, int, int], list[CameraImage]] = {}
-    for img in log.images:
-        if int(img.frame_idx) in wanted and img.camera in maps.cameras:
-            groups.setdefault((int(img.frame_idx), img.width, img.height), []).append(img)
+    for img in maps.images_of(log.images, frames):
+        groups.setdefault((int(img.frame_idx), img.width, img.height), []).append(img)
     out = []
     for (frame, width, height), images in sorted(groups.items()):
         out.append(FeatureView(
@@ -188,7 +185,7 @@ def gaussian_features(graph: SceneGraph) -> Tensor:
         parts.append(feats.detach())
     if len(widths) > 1:
         raise FeatureFieldError(f"nodes have features of different widths {sorted(widths)}")
-    return torch.cat(parts).clone()
+    return torch.cat(parts)  # a new tensor
 
 
 def store_background_latent(graph: SceneGraph, latent: np.ndarray) -> None:

@@ -94,6 +94,13 @@ class NodeIdMaps:
             raise KeyError(f"frame {frame_idx} has no node-id map")
         return pos
 
+    def images_of(self, images: Iterable[CameraImage], frames: Iterable[int] | None = None) -> list[CameraImage]:
+        """The ``images`` that have a map here (frame rendered, camera known), limited to ``frames`` when given."""
+        wanted = {int(f) for f in self.frame_indices}
+        if frames is not None:
+            wanted &= {int(f) for f in frames}
+        return [img for img in images if int(img.frame_idx) in wanted and img.camera in self.cameras]
+
     def image(self, frame_idx: int, camera: str) -> np.ndarray:
         """``[h, w]`` int32 map of one camera image at its own size."""
         c = self.cameras.index(camera)
@@ -249,11 +256,9 @@ def crops_from_node_maps(
     """
     objects = node_objects(graph)
     tracks = {t.object_id: t for t in log.tracks}
-    rendered = set(int(f) for f in maps.frame_indices)
-    frame_set = rendered if frames is None else rendered & {int(f) for f in frames}
     out: list[ObjectCrop] = []
-    for img in log.images:
-        if img.image is None or int(img.frame_idx) not in frame_set or img.camera not in maps.cameras:
+    for img in maps.images_of(log.images, frames):
+        if img.image is None:
             continue
         out += crops_from_node_map(img.image, maps.image(img.frame_idx, img.camera), frame_idx=img.frame_idx,
                                    camera=img.camera, objects=objects, tracks=tracks, min_area=min_area,
@@ -324,11 +329,9 @@ def mask_agreement(
     gt_px = np.zeros(n_obj, dtype=np.int64)
     pred_px = np.zeros(n_obj, dtype=np.int64)
     either = agree = 0
-    rendered = set(int(f) for f in maps.frame_indices)
-    frame_set = rendered if frames is None else rendered & {int(f) for f in frames}
     images = 0
-    for img in log.images:
-        if img.instance is None or int(img.frame_idx) not in frame_set or img.camera not in maps.cameras:
+    for img in maps.images_of(log.images, frames):
+        if img.instance is None:
             continue
         images += 1
         node_map = maps.image(img.frame_idx, img.camera).astype(np.int64)

@@ -23,7 +23,7 @@ def mask_overlay(image: np.ndarray, mask: np.ndarray, color: Sequence[float] = O
     An empty mask leaves the image as it is."""
     if image.shape[:2] != mask.shape:
         raise ValueError(f"mask_overlay: mask {mask.shape} does not match image {image.shape[:2]}")
-    out = np.clip(np.asarray(image, np.float32), 0.0, 1.0).copy()
+    out = np.clip(np.asarray(image, np.float32), 0.0, 1.0)  # a new array
     if not mask.any():
         return out
     out[~mask] *= dim
@@ -32,12 +32,18 @@ def mask_overlay(image: np.ndarray, mask: np.ndarray, color: Sequence[float] = O
     return out
 
 
+def relevance_range(relevance: np.ndarray) -> tuple[float, float]:
+    """``(low, high)`` colour scale of similarity maps (any shape): their 2nd and 99.5th percentiles."""
+    return float(np.percentile(relevance, 2)), float(np.percentile(relevance, 99.5))
+
+
 def relevance_image(relevance: np.ndarray, low: float | None = None, high: float | None = None) -> np.ndarray:
     """``[H, W]`` similarity -> ``[H, W, 3]`` float heat map in ``[0, 1]`` (blue low, red high), scaled
-    between ``low`` and ``high`` (default: the map's own 2nd and 99.5th percentiles)."""
+    between ``low`` and ``high`` (default: the map's own ``relevance_range``)."""
     values = np.asarray(relevance, np.float32)
-    lo = float(np.percentile(values, 2)) if low is None else low
-    hi = float(np.percentile(values, 99.5)) if high is None else high
+    own_lo, own_hi = relevance_range(values) if low is None or high is None else (low, high)
+    lo = own_lo if low is None else low
+    hi = own_hi if high is None else high
     scaled = np.clip((values - lo) / max(hi - lo, 1e-6), 0.0, 1.0)
     heat = cv2.applyColorMap((scaled * 255).astype(np.uint8), cv2.COLORMAP_JET)  # BGR
     return heat[..., ::-1].astype(np.float32) / 255.0
@@ -60,7 +66,7 @@ def grounding_picture(images: Sequence[np.ndarray], masks: np.ndarray, relevance
     top = side_by_side([mask_overlay(img, m) for img, m in zip(images, masks)])
     if relevance is None:
         return top
-    lo, hi = float(np.percentile(relevance, 2)), float(np.percentile(relevance, 99.5))
+    lo, hi = relevance_range(relevance)  # one scale for all cameras
     bottom = side_by_side([relevance_image(r, lo, hi) for r in relevance])
     gap = np.zeros((4, top.shape[1], 3), np.uint8)
     return np.concatenate([top, gap, bottom], axis=0)
