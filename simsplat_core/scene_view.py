@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from simsplat_core.types import SceneLog
+from simsplat_core.viz.images import to_uint8
 
 logger = logging.getLogger(__name__)
 
@@ -116,6 +117,6 @@ def side_by_side(images: Sequence[np.ndarray], gap: int = 4) -> np.ndarray:
     x = 0
     for img in images:
         h, w = img.shape[:2]
-        canvas[:h, x : x + w] = np.clip(np.asarray(img) * 255.0 + 0.5, 0, 255).astype(np.uint8)
+        canvas[:h, x : x + w] = to_uint8(img)
         x += w + gap
     return canvas

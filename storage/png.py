@@ -5,9 +5,9 @@ from __future__ import annotations
 import logging
 import os
 
-import cv2
 import numpy as np
 
+from simsplat_core.viz.images import encode_png
 from storage.store import ArtifactStore
 
 logger = logging.getLogger(__name__)
@@ -28,13 +28,14 @@ def write_png(target: str | os.PathLike[str], rgb: np.ndarray) -> str:
         raise ValueError(f"{target}: expected an [H, W, 3] uint8 image, got {rgb.shape} {rgb.dtype}")
     if not target.lower().endswith(".png"):
         raise ValueError(f"{target}: a PNG file name must end in .png")
-    ok, encoded = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-    if not ok:
-        raise OSError(f"{target}: OpenCV could not encode the PNG")
+    try:
+        encoded = encode_png(rgb)
+    except OSError as exc:
+        raise OSError(f"{target}: {exc}") from exc
     parent, _, name = target.rstrip("/").rpartition("/")
     if "://" not in target:
         parent, name = os.path.split(os.path.abspath(target))
     store = ArtifactStore(parent or ".")
-    store.write_bytes(name, encoded.tobytes())
+    store.write_bytes(name, encoded)
     logger.info("wrote %s (%d x %d)", store.uri(name), rgb.shape[1], rgb.shape[0])
     return store.uri(name)

@@ -327,7 +327,7 @@ def build_language_scene(
                                 background_target=f_bg)
         metrics.update(fit.summary())
         # the field as rendered on each node's own pixels; the Gaussians' mean for nodes the fit views miss
-        means = {**node_mean_features(graph, node_latents), **fit.node_features}
+        means = {**node_mean_features(graph, set(node_latents) - set(fit.node_features)), **fit.node_features}
         if means:
             ids = sorted(means)
             decoded = autoencoder.decode(np.stack([means[i] for i in ids]))

@@ -14,6 +14,7 @@ import numpy as np
 
 from simsplat_core.geometry import BOX_EDGES, box_corners, invert_transform, transform_points
 from simsplat_core.types import CameraImage, SceneLog
+from simsplat_core.viz.images import to_uint8
 
 logger = logging.getLogger(__name__)
 
@@ -43,7 +44,7 @@ def _to_uint8(image: np.ndarray | None, width: int, height: int) -> np.ndarray:
         cv2.putText(canvas, "no pixels in this log", (10, height // 2), cv2.FONT_HERSHEY_SIMPLEX, max(width / 1200, 0.4),
                     (160, 160, 160), 1, cv2.LINE_AA)
         return canvas
-    return np.clip(np.asarray(image) * 255.0 + 0.5, 0, 255).astype(np.uint8)
+    return to_uint8(image)
 
 
 def _project_edge(a_cam: np.ndarray, b_cam: np.ndarray, K: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:

@@ -25,9 +25,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import cv2
 import httpx
 import numpy as np
+
+from simsplat_core.viz.images import encode_png, to_uint8
 
 logger = logging.getLogger(__name__)
 
@@ -98,12 +99,7 @@ def png_data_uri(rgb: np.ndarray) -> str:
     rgb = np.asarray(rgb)
     if rgb.ndim != 3 or rgb.shape[2] != 3:
         raise ValueError(f"expected an [H, W, 3] image, got shape {rgb.shape}")
-    if rgb.dtype != np.uint8:
-        rgb = (np.clip(rgb, 0.0, 1.0) * 255.0 + 0.5).astype(np.uint8)
-    ok, encoded = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-    if not ok:
-        raise ValueError("OpenCV could not encode the image as PNG")
-    return "data:image/png;base64," + base64.b64encode(encoded.tobytes()).decode("ascii")
+    return "data:image/png;base64," + base64.b64encode(encode_png(to_uint8(rgb))).decode("ascii")
 
 
 def user_message(text: str, images: Sequence[np.ndarray] = ()) -> dict[str, Any]:
