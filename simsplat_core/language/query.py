@@ -76,7 +76,6 @@ import dataclasses
 import logging
 import math
 import re
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -86,7 +85,7 @@ from simsplat_core.language.appearance.colors import UNKNOWN
 from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.query_parse import ParsedQuery, parse_query
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
-from simsplat_core.language.text import TextEncoder, l2_normalise
+from simsplat_core.language.text import QUERY, EmbeddingCache, TextEncoder, l2_normalise
 from simsplat_core.language.trajectory import agent_kind
 
 logger = logging.getLogger(__name__)
@@ -455,17 +454,22 @@ class QueryEngine:
                 f"codebooks are in the space of {codebooks.encoder_name!r}, the text encoder is {text_encoder.name!r}"
             )
         self._codebooks = codebooks
-        self._cache: collections.OrderedDict[str, np.ndarray] = collections.OrderedDict()
-        self._cache_size = cache_size
-        self._lock = threading.Lock()
-        self.cache_hits = 0
-        self.cache_misses = 0
+        self._cache = EmbeddingCache(cache_size)
+
+    @property
+    def cache_hits(self) -> int:
+        """Texts ``embed`` found in the (shared) embedding cache."""
+        return self._cache.hits
+
+    @property
+    def cache_misses(self) -> int:
+        """Texts ``embed`` had to encode."""
+        return self._cache.misses
 
     def with_config(self, config: QueryConfig) -> "QueryEngine":
         """A new engine with ``config`` sharing this one's encoder, codebooks and embedding cache."""
-        other = QueryEngine(self.text_encoder, config, self._codebooks, self._cache_size)
+        other = QueryEngine(self.text_encoder, config, self._codebooks, self._cache.max_entries)
         other._cache = self._cache
-        other._lock = self._lock
         return other
 
     # ------------------------------------------------------------------ text side
@@ -478,23 +482,10 @@ class QueryEngine:
     def embed(self, texts: Sequence[str]) -> dict[str, np.ndarray]:
         """``text -> [D]`` query embeddings, uncached texts encoded in one batch."""
         wanted = list(dict.fromkeys(t for t in texts if t))
-        with self._lock:
-            missing = [t for t in wanted if t not in self._cache]
-            self.cache_misses += len(missing)
-            self.cache_hits += len(wanted) - len(missing)
-        out = dict(zip(missing, l2_normalise(self.text_encoder.encode_queries(missing)))) if missing else {}
-        with self._lock:
-            for text in wanted:
-                if text not in out:
-                    row = self._cache.get(text)
-                    if row is None:  # evicted by another thread meanwhile
-                        row = l2_normalise(self.text_encoder.encode_queries([text]))[0]
-                    out[text] = row
-                self._cache[text] = out[text]
-                self._cache.move_to_end(text)
-            while len(self._cache) > self._cache_size:
-                self._cache.popitem(last=False)
-        return out
+        if not wanted:
+            return {}
+        rows = self._cache.lookup(QUERY, wanted, lambda batch: l2_normalise(self.text_encoder.encode_queries(batch)))
+        return dict(zip(wanted, rows))
 
     def prepare(self, texts: Sequence[str], batch_size: int = 64) -> int:
         """Embed, in batches, everything answering ``texts`` will need (the whole texts too, which

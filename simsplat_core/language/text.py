@@ -87,22 +87,17 @@ class EmbeddingCache:
         texts = list(texts)
         if not texts:
             raise ValueError("no texts to look up")
-        with self._lock:
-            missing = list(dict.fromkeys(t for t in texts if (role, t) not in self._entries))
+        with self._lock:  # rows of cached texts are taken now: another thread may evict them meanwhile
+            found = {t: self._entries[(role, t)] for t in dict.fromkeys(texts) if (role, t) in self._entries}
+            missing = [t for t in dict.fromkeys(texts) if t not in found]
             self.misses += len(missing)
             self.hits += len(texts) - len(missing)
-        fresh = compute(missing) if missing else None
+        if missing:
+            found.update(zip(missing, compute(missing)))
         with self._lock:
-            found: dict[str, np.ndarray] = {}
-            if fresh is not None:
-                for text, row in zip(missing, fresh):
-                    found[text] = row
-                    self._entries[(role, text)] = row
-                    self._entries.move_to_end((role, text))
-            for text in texts:
-                if text not in found:
-                    found[text] = self._entries[(role, text)]
-                    self._entries.move_to_end((role, text))
+            for text in found:
+                self._entries[(role, text)] = found[text]
+                self._entries.move_to_end((role, text))
             while len(self._entries) > self.max_entries:
                 self._entries.popitem(last=False)
         return np.stack([found[t] for t in texts]).astype(np.float32, copy=False)
