@@ -213,11 +213,9 @@ class GroundingResults:
 
     Attributes:
         outcomes: one ``QueryOutcome`` per (method, query), methods in the order given.
-        methods: method names in order.
     """
 
     outcomes: list[QueryOutcome] = field(default_factory=list)
-    methods: tuple[str, ...] = ()
 
     def summary(self) -> dict[str, dict[str, CategoryScore]]:
         return summarise(self.outcomes)
@@ -264,8 +262,7 @@ def evaluate_grounding(
     missing = sorted({q.seq_id for q in benchmark.queries} - set(by_seq))
     if missing:
         logger.warning("no scene for %d sequences of the benchmark (%s); their queries are skipped", len(missing), missing)
-    overlaps: dict[str, OverlapCounts] = {}
-    results = GroundingResults(methods=tuple(methods))
+    results = GroundingResults()
     for seq_id, scene in by_seq.items():
         queries = [q for q in benchmark.queries if q.seq_id == seq_id]
         if not queries:
@@ -273,7 +270,7 @@ def evaluate_grounding(
         if scene.node_id_maps is None:
             raise ValueError(f"{seq_id}: the scene has no rendered node-id maps to cut masks from")
         truth = benchmark.ground_truth[seq_id].aligned_to(scene.frame_indices, scene.cameras)
-        overlaps[seq_id] = OverlapCounts.build(scene.node_id_maps, truth)
+        overlap = OverlapCounts.build(scene.node_id_maps, truth)
         object_of = {n.node_id: n.object_id for n in scene.nodes}
         for name, method in methods.items():
             for q in queries:
@@ -290,7 +287,7 @@ def evaluate_grounding(
                         q,
                         predicted,
                         query_correct(predicted, q.target_ids),
-                        overlaps[seq_id].viou(nodes, q.target_ids),
+                        overlap.viou(nodes, q.target_ids),
                         seconds,
                     )
                 )

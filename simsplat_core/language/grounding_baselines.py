@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from simsplat_core.language.map_context import MapContext
+from simsplat_core.language.codebooks import cosine_scores
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.language.trajectory import ObjectTrajectory, log_trajectories
@@ -57,13 +57,16 @@ class AppearanceOnlyGrounder:
         if not nodes:
             return {}
         q = self.text_encoder.encode_queries([text])[0]
-        feats = np.stack([n.f_app for n in nodes]).astype(np.float32)
-        sims = feats @ q / np.maximum(np.linalg.norm(feats, axis=1), 1e-12)
+        sims = cosine_scores(np.stack([n.f_app for n in nodes]), q)
         return {n.node_id: float(s) for n, s in zip(nodes, sims)}
 
     def ground(self, scene: LanguageScene, text: str) -> tuple[int, ...]:
-        scores = self.scores(scene, text)
-        return (max(scores, key=scores.__getitem__),) if scores else ()
+        return _best_node(self.scores(scene, text))
+
+
+def _best_node(scores: Mapping[int, float]) -> tuple[int, ...]:
+    """The node of the highest score, as a one-node answer (no answer without scores)."""
+    return (max(scores, key=scores.__getitem__),) if scores else ()
 
 
 def _check_space(scene: LanguageScene, encoder: TextEncoder) -> None:
@@ -120,8 +123,7 @@ def frame_captions(scene: LanguageScene, log: SceneLog) -> dict[int, list[str]]:
     """
     if log.seq_id != scene.seq_id:
         raise ValueError(f"log {log.seq_id!r} does not belong to scene {scene.seq_id!r}")
-    map_context = MapContext.from_features(log.map_features) if log.map_features else None
-    trajs = log_trajectories(log, map_context, min_frames=1)
+    trajs = log_trajectories(log, min_frames=1)  # builds the log's map context itself
     out: dict[int, list[str]] = {}
     for node in scene.nodes:
         if node.caption is None:
@@ -179,8 +181,7 @@ class FrameCaptionGrounder:
         return {nid: float(s) for nid, s in zip(ids, best)}
 
     def ground(self, scene: LanguageScene, text: str) -> tuple[int, ...]:
-        scores = self.scores(scene, text)
-        return (max(scores, key=scores.__getitem__),) if scores else ()
+        return _best_node(self.scores(scene, text))
 
 
 class EngineGrounder:

@@ -61,12 +61,9 @@ App / App+Mot / App+Loc / all rows); ``use_appearance = False`` drops the appear
 category filter and the colour factors (the subject noun still tells the motion part whether "waiting"
 is a stopped car or a standing pedestrian).
 
-**Measured** (scenes built from the ground truth of 6 synthetic logs, no reconstruction; 307 queries of
-the grounding benchmark's generator; default thresholds), accuracy App / App+Mot / App+Loc / all:
-0.61 / 0.84 / 0.79 / 0.997 with label-built motion features and the world's captions, 0.58 / 0.77 /
-0.73 / 0.88 with a trained aligner's features and the built-in captioner on 30-pixel crops (the
-remaining errors are the aligner's and the captioner's). Balanced calibration on those logs with 60
-no-match queries picked a no-match threshold of 0.30, the default.
+**Measured**: ``simsplat eval grounding`` on a store (the run's ``tables/grounding*.md``) and
+``bench/bench_grounding.py`` (``bench/results/grounding.{json,md}``: 5 unseen reconstructed scenes, the
+ablation, and the engine on ground-truth-built scenes).
 """
 
 from __future__ import annotations
@@ -572,7 +569,7 @@ class QueryEngine:
                 return float(sum(dist.get(c, 0.0) for c in STATIONARY_CLASSES))
             return self.config.missing_motion
         score = 0.0
-        label = feats.labels.motion if feats.labels is not None else None
+        label = feats.labels.motion
         for name, weight in _with_label(feats.motion_probs, label, 1.0, self.config.label_weight).items():
             score += dist.get("crossing" if name in CROSSING_CLASSES else name, 0.0) * weight
         if parsed.crossing_direction and feats.kind == "pedestrian":
@@ -587,10 +584,9 @@ class QueryEngine:
         if feats is None:
             return self.config.missing_motion
         probs = feats.location_probs
-        if feats.labels is not None:  # sectors and contexts each hold half of the weights
-            books = self.codebooks
-            probs = _with_label(probs, feats.labels.sector, 0.5, self.config.label_weight, books.sector.classes)
-            probs = _with_label(probs, feats.labels.context, 0.5, self.config.label_weight, books.context.classes)
+        books = self.codebooks  # sectors and contexts each hold half of the location weights
+        probs = _with_label(probs, feats.labels.sector, 0.5, self.config.label_weight, books.sector.classes)
+        probs = _with_label(probs, feats.labels.context, 0.5, self.config.label_weight, books.context.classes)
         score = 1.0
         for dist in (sector, context):
             if dist is None:

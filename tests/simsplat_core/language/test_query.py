@@ -367,16 +367,19 @@ def test_world_scene_from_captioner_and_aligner(encoder: TextEncoder, codebooks:
     assert g.ranking and g.ranking[0].appearance == pytest.approx(1.0)
 
 
-def test_prepare_embeds_every_part_once_so_grounding_needs_no_encoder_call():
-    from simsplat_core.language.query import QueryEngine
-    from simsplat_core.language.text import default_text_encoder
-
-    engine = QueryEngine(default_text_encoder())
+def test_prepare_embeds_every_part_once_so_grounding_needs_no_encoder_call(
+    encoder: TextEncoder, codebooks: MotionCodebooks, scene: LanguageScene
+) -> None:
+    counting = CountingEncoder(encoder)
+    engine = QueryEngine(counting, codebooks=codebooks)
     texts = ["the red sedan turning left at the intersection", "all pedestrians crossing on the right"]
     assert engine.prepare(texts) >= len(texts)
-    misses = engine.cache_misses
+    misses, encoded = engine.cache_misses, len(counting.queries)
     engine.prepare(texts)
     assert engine.cache_misses == misses  # second time: all cached
+    for text in texts:
+        engine.ground(scene, text)
+    assert len(counting.queries) == encoded  # grounding found every part it needed in the cache
 
 
 @pytest.mark.parametrize(
