@@ -7,6 +7,9 @@ STORE ?= artifacts/demo
 # Reconstruction iterations per sequence for `make demo` (empty: the ReconstructionConfig default, 900;
 # about 10 minutes for the two demo sequences on 2 cores). `make demo ITERATIONS=200` is a quick look.
 ITERATIONS ?=
+# torch is pinned to 2.13.0. PyPI's Linux wheel of it bundles CUDA (several GB); on a machine without a GPU
+# pass PyTorch's CPU wheel index to get the CPU build: make test TORCH_INDEX=https://download.pytorch.org/whl/cpu
+TORCH_INDEX ?=
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export RAY_AUTH_MODE := disabled
 
@@ -15,7 +18,7 @@ export RAY_AUTH_MODE := disabled
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[dev]'
+	$(PY) -m pip install --quiet $(if $(TORCH_INDEX),--extra-index-url $(TORCH_INDEX)) -e '.[dev]'
 	touch $(STAMP)
 
 install: $(STAMP)
