@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from simsplat_core.language.appearance.accuracy import CaptionAccuracy, evaluate_crops
+from simsplat_core.eval.captions import CaptionAccuracy, evaluate_crops
 from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder, reconstruction_cosine
 from simsplat_core.language.appearance.captioner import Captioner, appearance_vocabulary
 from simsplat_core.language.appearance.crops import ObjectCrop, crops_from_log

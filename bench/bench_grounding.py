@@ -17,7 +17,7 @@ Pipeline (seeds of the three roles are disjoint):
    ``--reuse-scenes`` takes cached scenes of any builder version, for a quick re-evaluation.
 3. **Benchmark**: ``build_benchmark`` on the benchmark logs (``BenchmarkConfig(seed=0)``); calibration
    queries from the calibration logs (``seed=1``).
-4. **Methods**: LangSplat-like and 4D-LangSplat-like baselines (``grounding_baselines``), the
+4. **Methods**: LangSplat-like and 4D-LangSplat-like baselines (``eval.grounding.baselines``), the
    ``QueryEngine`` with all features and the ablations App / App+Mot / App+Loc, all with the engine's
    default thresholds (what the pipeline uses); with ``--calib-seeds`` each variant gets its own
    thresholds from ``calibrate_thresholds`` on queries of those scenes instead (two scenes proved too few:
@@ -29,7 +29,7 @@ Pipeline (seeds of the three roles are disjoint):
    failure list and failure classes of the engine, reconstruction and alignment metrics, AV2 motion
    grounding) and ``<out>/grounding.md`` (Table 2 and Table 3 as Markdown).
 
-AV2: ``motion_eval.grounding_accuracy`` of the aligner on the real sample (zero-shot, trained on synthetic
+AV2: ``eval.motion.grounding_accuracy`` of the aligner on the real sample (zero-shot, trained on synthetic
 logs only) and on a held-out half of its objects after training with the other half
 (``split_objects``); skipped when ``--av2`` does not exist.
 """
@@ -52,14 +52,12 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # the project's packages (storage, tasks) when run as a script
 
-from simsplat_core.eval.grounding import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
-from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table  # noqa: E402
-from simsplat_core.language.grounding_baselines import (  # noqa: E402
+from simsplat_core.eval.grounding.baselines import (  # noqa: E402
     AppearanceOnlyGrounder,
     EngineGrounder,
     FrameCaptionGrounder,
 )
-from simsplat_core.language.grounding_benchmark import (  # noqa: E402
+from simsplat_core.eval.grounding.benchmark import (  # noqa: E402
     BenchmarkConfig,
     GroundingBenchmark,
     ObjectFacts,
@@ -67,9 +65,11 @@ from simsplat_core.language.grounding_benchmark import (  # noqa: E402
     generate_queries,
     object_facts,
 )
-from simsplat_core.language.grounding_methods import ABLATION_ROW_METHODS, engine_variants  # noqa: E402
-from simsplat_core.language.gt_scene import language_scene_from_log  # noqa: E402
-from simsplat_core.language.motion_eval import grounding_accuracy, split_objects  # noqa: E402
+from simsplat_core.eval.grounding.gt_scene import language_scene_from_log  # noqa: E402
+from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, engine_variants  # noqa: E402
+from simsplat_core.eval.grounding.metrics import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
+from simsplat_core.eval.motion import grounding_accuracy, split_objects  # noqa: E402
+from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table  # noqa: E402
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402
@@ -179,7 +179,9 @@ def reconstructed_scene(log: SceneLog, iterations: int, encoder, aligner, cache:
 def engine_methods(encoder, calib_examples, codebooks=None) -> tuple[dict, dict]:
     """The QueryEngine ablations, each calibrated on ``calib_examples`` (the engine's default thresholds when
     there are none); returns ``(grounders, thresholds)``."""
-    from simsplat_core.language.query import QueryConfig, QueryEngine, calibrate_thresholds
+    from simsplat_core.eval.grounding.calibration import calibrate_thresholds
+    from simsplat_core.language.query import QueryEngine
+    from simsplat_core.language.query_config import QueryConfig
 
     variants = engine_variants(QueryEngine(encoder, QueryConfig(), codebooks))
     grounders, thresholds = {}, {}

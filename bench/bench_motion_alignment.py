@@ -27,7 +27,7 @@ import statistics
 import time
 from pathlib import Path
 
-from simsplat_core.language.motion_eval import grounding_accuracy, labeller_agreement, split_objects
+from simsplat_core.eval.motion import grounding_accuracy, labeller_agreement, split_objects
 from simsplat_core.language.motion_labels import label_log
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
 from simsplat_core.language.text import E5TextEncoder, default_text_encoder

@@ -256,7 +256,7 @@ def eval_grounding(
 
 
 def _print_grounding(result) -> None:
-    from simsplat_core.eval.grounding import CATEGORIES
+    from simsplat_core.eval.grounding.metrics import CATEGORIES
 
     table = Table(title=f"Grounding on {len(result.seq_ids)} sequences, {result.queries} queries (acc / vIoU)")
     table.add_column("method")

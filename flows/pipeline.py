@@ -14,7 +14,7 @@ from prefect.futures import as_completed
 
 from flows.cpu_shares import reserving_cpus, task_cpu_share
 from flows.progress import FlowProgress
-from simsplat_core.eval.grounding import CATEGORIES
+from simsplat_core.eval.grounding.metrics import CATEGORIES
 from simsplat_core.language.motion_training import MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig

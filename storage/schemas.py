@@ -470,7 +470,7 @@ def arrow_to_vectors(column: pa.ChunkedArray | pa.Array) -> np.ndarray:
 def grounding_table_schema(first_column: str) -> pa.Schema:
     """Tables 2 / 3 of a run (``tables/grounding*.parquet``): one row per method (``first_column`` =
     ``"method"``) or feature set (``"features"``); accuracy and vIoU per category, query counts."""
-    from simsplat_core.eval.grounding import CATEGORIES  # imported here: storage loads without the core
+    from simsplat_core.eval.grounding.metrics import CATEGORIES  # imported here: storage loads without the core
 
     fields: list[tuple[str, pa.DataType]] = [(first_column, pa.string())]
     fields += [(f"{c}_{m}", pa.float64()) for c in CATEGORIES for m in ("acc", "viou")]

@@ -18,10 +18,10 @@ import pyarrow.compute as pc
 from prefect import task
 from prefect.cache_policies import NO_CACHE
 
-from simsplat_core.eval.grounding import GroundingResults, evaluate_grounding
+from simsplat_core.eval.grounding.benchmark import BenchmarkConfig, build_benchmark
+from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, COMPARISON_ROWS, grounding_methods
+from simsplat_core.eval.grounding.metrics import GroundingResults, evaluate_grounding
 from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table, markdown
-from simsplat_core.language.grounding_benchmark import BenchmarkConfig, build_benchmark
-from simsplat_core.language.grounding_methods import ABLATION_ROW_METHODS, COMPARISON_ROWS, grounding_methods
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from storage import ArtifactStore, read_scene_log

@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.language.feature_field import similarity_map
-from simsplat_core.language.query import Grounding, QueryEngine
+from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.query_result import Grounding
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import SceneGraph

@@ -2,7 +2,7 @@
 
 Grounding (SIMSplat Table 2 / Table 3 layout): one row per method (or per feature ablation), columns
 ``vehicle_acc, vehicle_viou, pedestrian_acc, pedestrian_viou, total_acc, total_viou`` and the query
-counts. ``grounding_table`` takes the summary of ``eval.grounding.summarise`` and the row order with
+counts. ``grounding_table`` takes the summary of ``eval.grounding.metrics.summarise`` and the row order with
 display names; ``ablation_table`` is the same with the first column named ``features`` (rows App /
 App+Mot / App+Loc / All). ``markdown`` renders any flat table.
 
@@ -17,7 +17,7 @@ from collections.abc import Mapping
 
 import pyarrow as pa
 
-from simsplat_core.eval.grounding import CATEGORIES, CategoryScore
+from simsplat_core.eval.grounding.metrics import CATEGORIES, CategoryScore
 
 #: The metric columns of a grounding table, in order.
 GROUNDING_COLUMNS: tuple[str, ...] = tuple(f"{c}_{m}" for c in CATEGORIES for m in ("acc", "viou"))

@@ -11,8 +11,8 @@ features are fitted by rendering.
     ae, _ = FeatureAutoencoder.fit(features.features, vocabulary)         # 384 -> 8 -> 384
 
 Modules: ``colors`` (colour naming), ``subtypes`` (size rules), ``captioner``, ``crops``,
-``embedders``, ``clip_backend`` (image-text model on local weights), ``autoencoder``, ``accuracy``
-(captioner vs. ground-truth attributes).
+``embedders``, ``clip_backend`` (image-text model on local weights), ``autoencoder``, ``vlm_captioner``.
+Captioner accuracy against ground-truth attributes is ``simsplat_core.eval.captions``.
 """
 
 from simsplat_core.language.appearance.autoencoder import (

@@ -7,7 +7,7 @@ import math
 import pyarrow as pa
 import pytest
 
-from simsplat_core.eval.grounding import CategoryScore
+from simsplat_core.eval.grounding.metrics import CategoryScore
 from simsplat_core.eval.tables import (
     GROUNDING_COLUMNS,
     ablation_table,

@@ -1,5 +1,5 @@
 """Language scenes for tests: ground-truth scenes of small worlds (built by
-``simsplat_core.language.gt_scene.language_scene_from_log``) and hand-built scenes.
+``simsplat_core.eval.grounding.gt_scene.language_scene_from_log``) and hand-built scenes.
 
     log, scene = world_language_scene(7, encoder)
     scene.node(3).caption.text      # "a silver van"
@@ -17,9 +17,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.eval.grounding.gt_scene import AppearanceSource, label_motion_features, language_scene_from_log
 from simsplat_core.language.appearance.captioner import AppearanceCaption, caption_text
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.gt_scene import AppearanceSource, label_motion_features, language_scene_from_log
 from simsplat_core.language.motion_labels import MotionLabel
 from simsplat_core.language.motion_training import MotionAligner
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.language.motion_eval import labeller_agreement
+from simsplat_core.eval.motion import labeller_agreement
 from simsplat_core.language.motion_labels import label_log
 from simsplat_core.types import MapFeature
 

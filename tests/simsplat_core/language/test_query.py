@@ -8,42 +8,22 @@ import math
 import numpy as np
 import pytest
 
+from simsplat_core.eval.grounding.gt_scene import language_scene_from_log, node_ids_of
 from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
-from simsplat_core.language.query import QueryConfig, QueryEngine, calibrate_thresholds
+from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.query_config import QueryConfig
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.world import generate_log
-from simsplat_core.language.gt_scene import language_scene_from_log, node_ids_of
 from tests.simsplat_core.language.language_scene_factory import (
     SMALL_WORLD,
     ObjectSpec,
     hand_built_scene,
     motion_label,
-    pedestrian_caption,
     vehicle_caption,
 )
-
-# node ids follow the spec order (1-based)
-SPECS = [
-    # three red sedans: A and B differ in motion only, A and C in location only; D is A in blue
-    ObjectSpec("A", "vehicle", vehicle_caption("red", "sedan"), motion_label("A", "turning_left", "in_front_of_ego", "at_the_intersection")),
-    ObjectSpec("B", "vehicle", vehicle_caption("red", "sedan"), motion_label("B", "going_straight", "in_front_of_ego", "at_the_intersection")),
-    ObjectSpec("C", "vehicle", vehicle_caption("red", "sedan"), motion_label("C", "turning_left", "left_of_ego", "on_the_road")),
-    ObjectSpec("D", "vehicle", vehicle_caption("blue", "sedan"), motion_label("D", "turning_left", "in_front_of_ego", "at_the_intersection")),
-    # two parked white SUVs and a stopped white van
-    ObjectSpec("E", "vehicle", vehicle_caption("white", "SUV"), motion_label("E", "parked", "right_of_ego", "by_the_curb")),
-    ObjectSpec("F", "vehicle", vehicle_caption("white", "SUV"), motion_label("F", "parked", "behind_ego", "by_the_curb")),
-    ObjectSpec("G", "vehicle", vehicle_caption("white", "van"), motion_label("G", "stopped", "in_front_of_ego", "on_the_road")),
-    # pedestrians: P1/P2 dress alike (crossing vs standing); P3/P4 swap top and trousers colours
-    ObjectSpec("P1", "pedestrian", pedestrian_caption("white", "gray"), motion_label("P1", "crossing_left_to_right", "in_front_of_ego", "on_the_crosswalk")),
-    ObjectSpec("P2", "pedestrian", pedestrian_caption("white", "gray"), motion_label("P2", "standing", "in_front_of_ego", "on_the_sidewalk")),
-    ObjectSpec("P3", "pedestrian", pedestrian_caption("blue", "red"), motion_label("P3", "walking_along", "left_of_ego", "on_the_sidewalk")),
-    ObjectSpec("P4", "pedestrian", pedestrian_caption("red", "blue"), motion_label("P4", "walking_along", "right_of_ego", "on_the_sidewalk")),
-    # street furniture: no motion features
-    ObjectSpec("cone", "static", vehicle_caption("orange", "traffic cone", "static")),
-]
-ID = {spec.object_id: k + 1 for k, spec in enumerate(SPECS)}
+from tests.simsplat_core.language.look_alikes import ID, SPECS, ids
 
 
 @pytest.fixture(scope="module")
@@ -59,10 +39,6 @@ def scene(encoder: TextEncoder, codebooks: MotionCodebooks) -> LanguageScene:
 @pytest.fixture(scope="module")
 def engine(encoder: TextEncoder, codebooks: MotionCodebooks) -> QueryEngine:
     return QueryEngine(encoder, QueryConfig(), codebooks=codebooks)
-
-
-def ids(*names: str) -> tuple[int, ...]:
-    return tuple(ID[n] for n in names)
 
 
 @pytest.mark.parametrize(
@@ -206,35 +182,6 @@ def test_a_query_with_no_usable_part(engine: QueryEngine, scene: LanguageScene) 
     g = engine.with_config(QueryConfig(use_motion=False, use_location=False)).ground(scene, "something reversing")
     assert g.matches == ()
     assert g.message.startswith("nothing to compare")
-
-
-# ---------------------------------------------------------------------------------------------- calibration
-def test_calibrate_thresholds_separates_matches_from_near_misses(engine: QueryEngine, scene: LanguageScene) -> None:
-    examples = [
-        (scene, "the red sedan turning left at the intersection", frozenset(ids("A"))),
-        (scene, "the blue sedan turning left", frozenset(ids("D"))),
-        (scene, "the person in a red shirt and blue pants walking along the sidewalk", frozenset(ids("P4"))),
-        (scene, "the white van that is stopped", frozenset(ids("G"))),
-        (scene, "the blue sedan going straight", frozenset()),
-        (scene, "the red sedan reversing", frozenset()),
-        (scene, "the pedestrian crossing from right to left", frozenset()),
-        (scene, "all parked SUVs", frozenset(ids("E", "F"))),
-        (scene, "all pedestrians walking along the sidewalk", frozenset(ids("P3", "P4"))),
-        (scene, "all reversing sedans", frozenset()),
-    ]
-    loose = engine.with_config(QueryConfig(no_match_threshold=0.0, group_threshold=0.0))
-    assert loose.ground(scene, "the red sedan reversing").matches  # without a threshold something is returned
-    config = calibrate_thresholds(loose, examples)
-    assert 0.0 < config.no_match_threshold < 1.0 and 0.0 < config.group_threshold < 1.0
-    calibrated = engine.with_config(config)
-    for sc, text, expected in examples:
-        assert set(calibrated.ground(sc, text).node_ids) == set(expected), text
-    assert dataclasses.replace(config, no_match_threshold=0.0, group_threshold=0.0) == loose.config
-
-
-def test_calibrate_thresholds_needs_examples(engine: QueryEngine) -> None:
-    with pytest.raises(ValueError, match="at least one"):
-        calibrate_thresholds(engine, [])
 
 
 # ---------------------------------------------------------------------------------------------- config, plumbing

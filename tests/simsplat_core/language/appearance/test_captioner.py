@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.language.appearance.accuracy import evaluate_crops
+from simsplat_core.eval.captions import evaluate_crops
 from simsplat_core.language.appearance.captioner import (
     AppearanceCaptioner,
     Captioner,

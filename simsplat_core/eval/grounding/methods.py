@@ -15,8 +15,9 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping
 
-from simsplat_core.language.grounding_baselines import AppearanceOnlyGrounder, EngineGrounder, FrameCaptionGrounder
-from simsplat_core.language.query import QueryConfig, QueryEngine
+from simsplat_core.eval.grounding.baselines import AppearanceOnlyGrounder, EngineGrounder, FrameCaptionGrounder
+from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.query_config import QueryConfig
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.types import SceneLog
 

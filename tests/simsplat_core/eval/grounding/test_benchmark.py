@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from simsplat_core.language.grounding_benchmark import (
+from simsplat_core.eval.grounding.benchmark import (
     BenchmarkConfig,
     Description,
     ObjectFacts,
@@ -19,7 +19,7 @@ from simsplat_core.language.grounding_benchmark import (
     object_facts,
     unambiguous_targets,
 )
-from simsplat_core.language.paraphrases import MOTION_TERMS, SINGLE_STYLES
+from simsplat_core.eval.grounding.paraphrases import MOTION_TERMS, SINGLE_STYLES
 from simsplat_core.types import SceneLog
 from simsplat_core.world import generate_log
 from tests.simsplat_core.language.language_scene_factory import SMALL_WORLD

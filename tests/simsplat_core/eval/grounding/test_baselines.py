@@ -7,21 +7,21 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from simsplat_core.language.appearance.captioner import AppearanceCaption
-from simsplat_core.language.grounding_baselines import (
+from simsplat_core.eval.grounding.baselines import (
     AppearanceOnlyGrounder,
     EngineGrounder,
     FrameCaptionGrounder,
     frame_captions,
     instantaneous_states,
 )
+from simsplat_core.eval.grounding.gt_scene import ground_truth_caption, node_ids_of
+from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.language.map_context import MapContext
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.language.trajectory import log_trajectories
-from tests.simsplat_core.language import scenes
 from simsplat_core.world import generate_log
-from simsplat_core.language.gt_scene import ground_truth_caption, node_ids_of
+from tests.simsplat_core.language import scenes
 from tests.simsplat_core.language.language_scene_factory import SMALL_WORLD
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.language.paraphrases import (
+from simsplat_core.eval.grounding.paraphrases import (
     GROUP_STYLES,
     MOTION_TERMS,
     SINGLE_STYLES,

@@ -1,6 +1,6 @@
 """Free-form wordings of object descriptions for the grounding benchmark.
 
-A ``Description`` (``grounding_benchmark.py``) is a set of constraints -- category, body style, colours,
+A ``Description`` (``benchmark.py``) is a set of constraints -- category, body style, colours,
 motion, location. This module turns one into text in one of several *styles*, drawing words from
 synonym tables with a seeded ``numpy.random.Generator``:
 

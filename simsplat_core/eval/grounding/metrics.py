@@ -38,7 +38,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from simsplat_core.language.grounding_benchmark import GroundingBenchmark, GroundingQuery, SceneGroundTruth
+from simsplat_core.eval.grounding.benchmark import GroundingBenchmark, GroundingQuery, SceneGroundTruth
 from simsplat_core.language.scene_language import LanguageScene
 
 logger = logging.getLogger(__name__)

@@ -60,7 +60,7 @@ from simsplat_core.language.motion_labels import (
     location_context,
     vehicle_off_lane,
 )
-from simsplat_core.language.paraphrases import (
+from simsplat_core.eval.grounding.paraphrases import (
     BROADER_TERMS,
     DESCRIBABLE_CONTEXTS,
     EXACT_TERM,

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.eval.grounding import (
+from simsplat_core.eval.grounding.benchmark import GroundingBenchmark, GroundingQuery, SceneGroundTruth
+from simsplat_core.eval.grounding.metrics import (
     OverlapCounts,
     QueryOutcome,
     evaluate_grounding,
@@ -14,7 +15,6 @@ from simsplat_core.eval.grounding import (
     summarise,
     viou,
 )
-from simsplat_core.language.grounding_benchmark import GroundingBenchmark, GroundingQuery, SceneGroundTruth
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 
 

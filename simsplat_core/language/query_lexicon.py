@@ -1,0 +1,98 @@
+"""The query lexicon of the ``QueryEngine``: which words name which motion, location, colour and subtype.
+
+* motion: ``MOTION_KEYWORDS`` (phrase regex -> the motion classes it names), the crossing classes that
+  scoring merges (``CROSSING_CLASSES``), the classes of objects that do not move
+  (``STATIONARY_CLASSES``) and the merged pedestrian classes (``PEDESTRIAN_MERGED``);
+* location: ``SECTOR_KEYWORDS`` and ``CONTEXT_KEYWORDS`` (class -> phrase regex);
+* appearance: colour names people use interchangeably (``SIMILAR_COLORS``) and the caption subtypes a
+  named subtype also fits (``SUBTYPE_FIT``).
+
+Class names are ``vocabulary.py``'s; ``query_scoring`` turns these tables into keyword priors and
+attribute factors.
+"""
+
+from __future__ import annotations
+
+#: Pedestrian motion classes merged into one "crossing" for scoring (the direction is checked on its own).
+CROSSING_CLASSES = ("crossing", "crossing_left_to_right", "crossing_right_to_left")
+#: Motion classes of an object that does not move (the motion score of static objects and signs).
+STATIONARY_CLASSES = ("parked", "stopped", "standing")
+
+#: Keyword priors: motion phrase regex -> the classes it names (``vocabulary.py`` names, "crossing" =
+#: any crossing); each query's prior is uniform over the named classes of the kinds it can refer to.
+MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    (r"\bleft\b.*\bturn|\bturn\w*\b.*\bleft\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?left", ("turning_left",)),
+    (r"\bright\b.*\bturn|\bturn\w*\b.*\bright\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?right", ("turning_right",)),
+    (r"^(?!.*\b(?:left|right)\b).*(?:\bturn|corner)", ("turning_left", "turning_right")),
+    (r"straight|cruising|\bcontinu", ("going_straight",)),
+    (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bleft\b|\bleft\b.*\blane", ("changing_lane_left",)),
+    (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bright\b|\bright\b.*\blane", ("changing_lane_right",)),
+    (r"\bslow|decelerat|\bbrak(?!\w* (?:to|until))|losing speed|reducing|easing off", ("slowing_down",)),
+    (r"speed\w* up|accelerat|picking up speed|gaining speed|pull\w* away|starting to move|moving off|on the gas", ("speeding_up",)),
+    (r"(?:coming|comes|pull\w*|brak\w*) (?:up )?to a (?:stop|halt|standstill)|\bstopping\b|\bstops\b|pull\w* up|until it stands", ("stopping",)),
+    (r"stationary|not moving|not going anywhere|sitting still|motionless|standstill|standing still(?! in traffic)", ("stopped", "parked", "standing")),
+    (r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b|sitting in (?:the|its) lane|in (?:its|the) lane", ("stopped", "standing")),
+    (r"\bparked\b|parking (?:spot|space|bay)", ("parked",)),
+    (r"revers|\bback(?:ing|s)? (?:up|out)|backwards?", ("reversing",)),
+    (r"cross|across|\bleft\b.*\bright\b|\bright\b.*\bleft\b|(?:to|towards) the (?:left|right)", ("crossing",)),
+    (r"walk|stroll|\bjog|running|\bruns\b|wander|pacing", ("walking_along",)),
+    (r"\bstand|waiting|loiter|linger|\bstill\b", ("standing",)),
+)
+#: Merged motion classes by agent kind (what ``MOTION_KEYWORDS`` may name for each kind).
+PEDESTRIAN_MERGED = ("crossing", "walking_along", "standing")
+SECTOR_KEYWORDS: tuple[tuple[str, str], ...] = (
+    ("in_front_of_ego", r"front|ahead"),
+    ("behind_ego", r"behind|\bback\b|\brear\b|following"),
+    ("left_of_ego", r"\bleft\b"),
+    ("right_of_ego", r"\bright\b(?! (?:ahead|in front|behind))"),
+)
+CONTEXT_KEYWORDS: tuple[tuple[str, str], ...] = (
+    ("at_the_intersection", r"intersection|junction|crossroad"),
+    ("on_the_crosswalk", r"crosswalk|zebra|pedestrian crossing"),
+    ("on_the_sidewalk", r"sidewalk|pavement|footpath|walkway|footway"),
+    ("by_the_curb", r"\bcurb|\bkerb|roadside|side of the road|edge of the road|shoulder|parking"),
+    ("in_the_oncoming_lane", r"oncoming|opposite|opposing|towards? (?:us|me|ego|our car)"),
+    ("on_the_road", r"\broad\b|\bstreet\b|\blane\b|roadway|carriageway"),
+)
+
+#: Colour names the captioner confuses or people use interchangeably (symmetric).
+SIMILAR_COLORS: frozenset[frozenset[str]] = frozenset(
+    frozenset(p)
+    for p in (
+        ("white", "silver"),
+        ("silver", "gray"),
+        ("gray", "black"),
+        ("beige", "white"),
+        ("beige", "brown"),
+        ("orange", "red"),
+        ("orange", "yellow"),
+        ("orange", "brown"),
+        ("pink", "red"),
+        ("pink", "purple"),
+        ("purple", "blue"),
+        ("yellow", "beige"),
+    )
+)
+
+#: Query subtype -> caption subtypes it also fits, with a factor (1 = same thing). Others get
+#: ``subtype_mismatch``. "car" is a generic passenger car.
+SUBTYPE_FIT: dict[str, dict[str, float]] = {
+    "car": {"sedan": 1.0, "hatchback": 1.0, "SUV": 1.0, "van": 0.3, "pickup truck": 0.3},
+    "sedan": {"sedan": 1.0, "hatchback": 0.3},
+    "hatchback": {"hatchback": 1.0, "sedan": 0.3},
+    "SUV": {"SUV": 1.0, "van": 0.3, "pickup truck": 0.3},
+    "van": {"van": 1.0, "SUV": 0.3},
+    "pickup truck": {"pickup truck": 1.0, "truck": 0.5, "SUV": 0.3},
+    "truck": {"truck": 1.0, "pickup truck": 0.5},
+    "bus": {"bus": 1.0},
+    "motorcycle": {"motorcycle": 1.0},
+    "bicycle": {"bicycle": 1.0},
+    "adult": {"adult": 1.0},
+    "child": {"child": 1.0},
+    "traffic cone": {"traffic cone": 1.0},
+    "barrier": {"barrier": 1.0},
+    "pole": {"pole": 1.0},
+    "stop sign": {"stop sign": 1.0, "sign": 0.6},
+    "speed limit sign": {"speed limit sign": 1.0, "sign": 0.6},
+    "parking sign": {"parking sign": 1.0, "sign": 0.6},
+}
