@@ -155,11 +155,11 @@ def decode_message(
     path = schema.name if path is None else path
     out: dict[str, Any] = {}
     repeated_parts: dict[str, list[Any]] = {}
-    for fld in schema.fields:
-        if fld.repeated:
-            repeated_parts[fld.name] = []
+    for field_def in schema.fields:
+        if field_def.repeated:
+            repeated_parts[field_def.name] = []
         else:
-            out[fld.name] = None
+            out[field_def.name] = None
     pos = start
     while pos < end:
         tag_pos = pos

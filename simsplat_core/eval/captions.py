@@ -119,16 +119,16 @@ def evaluate_crops(
     log: SceneLog, crops: Sequence[ObjectCrop], captioner: AppearanceCaptioner | None = None
 ) -> CaptionAccuracy:
     """Judge ``captioner`` (default ``Captioner()``) on ``crops`` of ``log`` against its attributes."""
-    captioner = captioner or Captioner()
+    judged: AppearanceCaptioner = captioner or Captioner()
     result = CaptionAccuracy()
     by_object: dict[str, list[ObjectCrop]] = defaultdict(list)
     for crop in crops:
         truth = log.object(crop.object_id)
-        result.views[truth.category].add(truth, captioner.describe(crop))
+        result.views[truth.category].add(truth, judged.describe(crop))
         by_object[crop.object_id].append(crop)
     for object_id, views in by_object.items():
         truth = log.object(object_id)
-        result.objects[truth.category].add(truth, captioner.describe_track(views))
+        result.objects[truth.category].add(truth, judged.describe_track(views))
     return result
 
 

@@ -125,7 +125,7 @@ class AgreementReport:
 
 def labeller_agreement(logs: Sequence[SceneLog], thresholds: LabelThresholds | None = None) -> AgreementReport:
     """Compare ``label_log`` with the world's ``caption_motion`` / ``caption_location`` / ``behavior`` attributes."""
-    hits = collections.Counter()
+    hits: collections.Counter[str] = collections.Counter()
     report = AgreementReport()
     for log in logs:
         labels = label_log(log, thresholds)

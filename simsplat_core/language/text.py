@@ -185,7 +185,7 @@ class E5TextEncoder(_CachedEncoder):
 
     def _embed(self, texts: list[str], role: str) -> np.ndarray:
         with self._lock:
-            if self._openmp is not None:
+            if self._openmp is not None and self.num_threads is not None:
                 self._openmp.omp_set_num_threads(int(self.num_threads))  # ICV of the calling thread
             out = self._model.query(texts) if role == QUERY else self._model.passage(texts)
         return np.asarray(out, dtype=np.float32).reshape(len(texts), self.dim)

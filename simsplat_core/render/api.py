@@ -71,10 +71,12 @@ def render_channels(
     depth = depths.to(colors.dtype)[..., None]  # [C, N, 1]
     if render_mode == "RGB":
         return colors, backgrounds
-    zeros = None if backgrounds is None else torch.zeros_like(backgrounds[:, :1])  # [C, 1]
+    if backgrounds is None:
+        return (depth, None) if render_mode == "D" else (torch.cat([colors, depth], dim=-1), None)
+    zeros = torch.zeros_like(backgrounds[:, :1])  # [C, 1]
     if render_mode == "D":
         return depth, zeros
-    bgs = None if backgrounds is None else torch.cat([backgrounds, zeros], dim=-1)  # [C, D + 1]
+    bgs = torch.cat([backgrounds, zeros], dim=-1)  # [C, D + 1]
     return torch.cat([colors, depth], dim=-1), bgs
 
 

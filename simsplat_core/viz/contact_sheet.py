@@ -130,7 +130,7 @@ def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 
         color = CATEGORY_COLORS.get(categories.get(track.object_id, "other"), CATEGORY_COLORS["other"])
         cv2.polylines(canvas, [footprint], True, color, 1, cv2.LINE_AA)
         cv2.line(canvas, tuple(int(v) for v in footprint[0]), tuple(int(v) for v in footprint[3]), (255, 255, 255), 1)  # front edge
-    ego_box = to_px(box_corners(log.ego_poses[frame_idx][:3, 3] + [0, 0, 0.8], [4.6, 1.9, 1.6],
+    ego_box = to_px(box_corners(log.ego_poses[frame_idx][:3, 3] + [0, 0, 0.8], np.array([4.6, 1.9, 1.6]),
                                 math.atan2(log.ego_poses[frame_idx][1, 0], log.ego_poses[frame_idx][0, 0]))[:4])
     cv2.fillPoly(canvas, [ego_box], (255, 255, 0))
     cv2.putText(canvas, f"BEV f{frame_idx} ({extent_m:.0f} m)", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.45,

@@ -57,7 +57,8 @@ class AppearanceOnlyGrounder:
         if not nodes:
             return {}
         q = self.text_encoder.encode_queries([text])[0]
-        sims = cosine_scores(np.stack([n.f_app for n in nodes]), q)
+        appearance = [n.f_app for n in scene.nodes if n.f_app is not None]
+        sims = cosine_scores(np.stack(appearance), q)
         return {n.node_id: float(s) for n, s in zip(nodes, sims)}
 
     def ground(self, scene: LanguageScene, text: str) -> tuple[int, ...]:

@@ -521,7 +521,7 @@ def _single_queries(
         return []
     weights = dict(zip(FAMILIES, config.family_weights))
     styles = list(rng.permutation(SINGLE_STYLES))
-    out = []
+    out: list[tuple[Description, str, str, tuple[str, ...]]] = []
     remaining: list[str] = []
     for k in range(config.paraphrases_per_target):
         if not remaining:  # every family used once: start another round (distinct descriptions still)
@@ -633,7 +633,7 @@ def generate_queries(log: SceneLog, config: BenchmarkConfig | None = None,
             raw.append((desc, kind, style, ids, target.object_id if kind == "single" else "", ""))
     candidates = _group_candidates(all_facts, config)
     order = rng.permutation(len(candidates))
-    used_families: set[str] = set()
+    used_families: set[tuple[str, str]] = set()
     picked = 0
     for pass_ in range(2):
         for i in order:

@@ -106,11 +106,12 @@ def node_id_maps_from_log(log: SceneLog, node_ids: Mapping[str, int]) -> tuple[n
     no instance masks.
     """
     images = [img for img in log.images if img.instance is not None]
-    if not images:
+    instances = [img.instance for img in images if img.instance is not None]
+    if not instances:
         return None
     frames = sorted({img.frame_idx for img in images})
     cameras = tuple(dict.fromkeys(img.camera for img in images))
-    height, width = images[0].instance.shape
+    height, width = instances[0].shape
     lut_size = max([o.instance_id for o in log.objects] + [0]) + 1
     lut = np.zeros(lut_size, dtype=np.int32)
     for obj in log.objects:

@@ -227,7 +227,10 @@ def describe_track(crops: Sequence[ObjectCrop], subtype_hint: str | None = None)
 class AppearanceCaptioner(Protocol):
     """Anything that captions object crops (the built-in ``Captioner``, a VLM client, ...)."""
 
-    name: str
+    @property
+    def name(self) -> str:
+        """Identifies the captioner in content keys."""
+        ...
 
     def describe(self, crop: ObjectCrop) -> AppearanceCaption:
         """Caption of one crop."""

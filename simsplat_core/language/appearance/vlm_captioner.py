@@ -48,7 +48,7 @@ def masked_view(crop: ObjectCrop, min_side: int) -> np.ndarray:
     short = min(rgb.shape[:2])
     if short < min_side:
         scale = int(np.ceil(min_side / max(short, 1)))
-        rgb = cv2.resize(rgb, (rgb.shape[1] * scale, rgb.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
+        return cv2.resize(rgb, (rgb.shape[1] * scale, rgb.shape[0] * scale), interpolation=cv2.INTER_NEAREST)
     return rgb
 
 
