@@ -40,6 +40,7 @@ from simsplat_core.scene.losses import (
     ssim_map,
 )
 
+
 def mse(pred: Tensor, target: Tensor) -> Tensor:
     """Mean squared error per image: ``[H, W, C]`` -> ``[]``, ``[B, H, W, C]`` -> ``[B]``."""
     squeeze = pred.dim() == 3

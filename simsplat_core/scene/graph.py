@@ -27,7 +27,7 @@ import dataclasses
 import hashlib
 import logging
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Iterable
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
 import torch
@@ -69,7 +69,7 @@ class SceneGraph:
     """
 
     frame_indices: np.ndarray
-    nodes: tuple[SceneNode, ...]
+    nodes: Sequence[SceneNode]
     metadata: dict[str, str] = field(default_factory=dict)
     eps2d: float = DEFAULT_EPS2D
     revision: str = ""
@@ -295,9 +295,9 @@ class SceneGraph:
         if bg is not None and BACKGROUND_ID not in exclude:
             blocks.append((bg, -1))
         alive_list = alive.tolist()
-        for k, n in enumerate(objs):
-            if alive_list[k] and n.node_id not in exclude:
-                blocks.append((n, k))
+        for k, obj in enumerate(objs):
+            if alive_list[k] and obj.node_id not in exclude:
+                blocks.append((obj, k))
         if not blocks:
             return _empty_composed(float(t), device)
 
@@ -403,7 +403,8 @@ def _tensor_digest(*tensors: Tensor) -> str:
 def _track_digest(track: PoseTrack | None) -> str:
     if track is None:
         return ""
-    return _tensor_digest(torch.as_tensor(track.times), track.poses, track.mask) + track.before.value + track.after.value
+    digest = _tensor_digest(torch.as_tensor(track.times), track.poses, track.mask)
+    return f"{digest}:{track.before.value}:{track.after.value}"
 
 
 def _compose_features(nodes: list[SceneNode], counts: list[int], device: torch.device) -> Tensor | None:

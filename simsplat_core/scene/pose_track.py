@@ -152,9 +152,9 @@ class PoseTrack:
         i0 = torch.as_tensor([ft.i0 for ft in located], dtype=torch.long, device=device)
         i1 = torch.as_tensor([ft.i1 for ft in located], dtype=torch.long, device=device)
         w = torch.as_tensor([ft.w for ft in located], dtype=self.poses.dtype, device=device)
-        outside_absent = torch.as_tensor(
-            [(ft.side < 0 and self.before is Extrapolation.ABSENT) or (ft.side > 0 and self.after is Extrapolation.ABSENT)
-             for ft in located], dtype=torch.bool, device=device)
+        absent_before, absent_after = self.before is Extrapolation.ABSENT, self.after is Extrapolation.ABSENT
+        outside_absent = torch.as_tensor([(ft.side < 0 and absent_before) or (ft.side > 0 and absent_after)
+                                          for ft in located], dtype=torch.bool, device=device)
         present = self.mask[i0] & self.mask[i1] & ~outside_absent
         a, b = self.poses[i0], self.poses[i1]
         exact = w == 0
