@@ -169,7 +169,7 @@ def main() -> None:
                    "nodes_with_f_app": int(m["nodes_with_f_app"]), "nodes_with_motion": int(m["nodes_with_motion"]),
                    "captions_matching_gt": sum(o["caption"] == (o["gt_caption"] or "").replace(" pants", " trousers")
                                                for o in captioned)},
-        "relevance": relevance(built, graph, log, encoder),
+        "relevance": relevance(built, built.graph, log, encoder),
         "background_latent": background_choice(built, log, encoder),
         "objects": objects,
     }

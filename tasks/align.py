@@ -171,7 +171,8 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str, model_hash: str, 
                                  scene_hash=loaded.scene_hash)
     provenance = {"scene_hash": loaded.scene_hash, "model_hash": model_hash, "version": LANGUAGE_VERSION,
                   "config": canonical(dataclasses.asdict(config)), "text_encoder": encoder.name, "embedder": embedder.name}
-    write_language_scene(store, model_hash, key, built.scene, graph.to_records(loaded.records.scene_id),
+    fitted = built.graph if built.graph is not None else graph  # the graph with the fitted features
+    write_language_scene(store, model_hash, key, built.scene, fitted.to_records(loaded.records.scene_id),
                          autoencoder_state=None if built.autoencoder is None else built.autoencoder.state(),
                          metrics=built.metrics, provenance=provenance)
     seconds = time.perf_counter() - started

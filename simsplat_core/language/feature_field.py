@@ -34,7 +34,8 @@ gradient does not vanish at the exact fit, so Adam keeps shaking the already-rig
     views = feature_views(log, maps, frames=range(0, 40, 4))
     report = fit_feature_field(graph, views, node_latents, z_bg, FeatureFitConfig(), autoencoder=ae,
                                node_targets=targets, background_target=f_bg)
-    relevance = similarity_map(graph, 12, c2w, Ks, 240, 160, ae, query)          # [C, H, W]
+    fitted = report.graph                                                            # graph is unchanged
+    relevance = similarity_map(fitted, 12, c2w, Ks, 240, 160, ae, query)          # [C, H, W]
 """
 
 from __future__ import annotations
@@ -156,18 +157,22 @@ def feature_views(log: SceneLog, maps: NodeIdMaps, frames: Iterable[int] | None 
 
 
 # ---------------------------------------------------------------------------------------------- storage
-def set_gaussian_features(graph: SceneGraph, features: Tensor | np.ndarray) -> None:
-    """Store ``features [N, d]`` (rows in the graph's canonical order, ``SceneGraph.node_offsets``) in
-    each node's ``GaussianSet.features`` (detached copies on the graph's device)."""
+def set_gaussian_features(graph: SceneGraph, features: Tensor | np.ndarray) -> SceneGraph:
+    """A copy of ``graph`` whose nodes' ``GaussianSet.features`` are ``features [N, d]`` (rows in the graph's
+    canonical order, ``SceneGraph.node_offsets``; detached copies on the graph's device). ``graph`` is not
+    changed."""
     features = torch.as_tensor(np.asarray(features) if isinstance(features, np.ndarray) else features)
     n = graph.num_gaussians
     if features.dim() != 2 or features.shape[0] != n:
         raise FeatureFieldError(f"features must be [N={n}, d], got {list(features.shape)}")
     features = features.detach().to(device=graph.device, dtype=torch.float32)
     offsets = graph.node_offsets()
+    nodes = []
     for node in graph.nodes:
         start, stop = offsets[node.node_id]
-        node.gaussians = dataclasses.replace(node.gaussians, features=features[start:stop].clone())
+        gaussians = dataclasses.replace(node.gaussians, features=features[start:stop].clone())
+        nodes.append(dataclasses.replace(node, gaussians=gaussians))
+    return dataclasses.replace(graph, nodes=tuple(nodes))
 
 
 def gaussian_features(graph: SceneGraph) -> Tensor:
@@ -188,9 +193,10 @@ def gaussian_features(graph: SceneGraph) -> Tensor:
     return torch.cat(parts)  # a new tensor
 
 
-def store_background_latent(graph: SceneGraph, latent: np.ndarray) -> None:
-    """Keep ``z_bg [d]`` in ``graph.metadata`` (written to records with the graph)."""
-    graph.metadata[BACKGROUND_LATENT_KEY] = json.dumps([float(v) for v in np.asarray(latent, dtype=np.float64)])
+def store_background_latent(graph: SceneGraph, latent: np.ndarray) -> SceneGraph:
+    """A copy of ``graph`` that keeps ``z_bg [d]`` in its metadata (written to records with the graph)."""
+    return graph.with_metadata(**{BACKGROUND_LATENT_KEY: json.dumps([float(v) for v in
+                                                                     np.asarray(latent, dtype=np.float64)])})
 
 
 def background_latent(graph: SceneGraph) -> np.ndarray | None:
@@ -392,11 +398,12 @@ class FieldFitReport:
     object_accuracy_before: float
     object_accuracy_after: float
     node_features: dict[int, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
+    graph: SceneGraph | None = dataclasses.field(default=None, repr=False, compare=False)
 
     def summary(self, prefix: str = "fit_") -> dict[str, float]:
-        """Flat numbers for reports (``node_features`` left out)."""
+        """Flat numbers for reports (``node_features`` and ``graph`` left out)."""
         return {prefix + f.name: float(getattr(self, f.name)) for f in dataclasses.fields(self)
-                if f.name != "node_features"}
+                if f.name not in ("node_features", "graph")}
 
 
 class _VisibleAdam:
@@ -551,8 +558,7 @@ def fit_feature_field(
     """Initialise every Gaussian's feature at its node's latent and optimise the features only.
 
     Args:
-        graph: the scene (geometry is not changed); its nodes' ``GaussianSet.features`` are replaced
-            by the fitted ``[n, d]`` features and ``background`` is stored in its metadata.
+        graph: the scene; it is not changed (the fitted graph is ``report.graph``).
         views: training views with node-id targets (``feature_views``).
         node_latents: ``node_id -> [d]`` target latent of each object node with an appearance feature.
         background: ``[d]`` latent of the background and of pixels where nothing was hit.
@@ -562,15 +568,15 @@ def fit_feature_field(
 
     Returns:
         the fit report (latent MSE, decoded cosine and nearest-target accuracy before/after) with the
-        mean rendered latent over each node's own pixels in ``views`` (``node_features``).
+        mean rendered latent over each node's own pixels in ``views`` (``node_features``) and the fitted
+        graph (``graph``: a copy of ``graph`` whose nodes carry the fitted ``[n, d]`` features and whose
+        metadata keeps ``background``).
     """
     config.validate()
     t0 = time.perf_counter()
     device = graph.device
     background = np.asarray(background, dtype=np.float32).reshape(-1)
     features = initial_features(graph, node_latents, background)
-    set_gaussian_features(graph, features)
-    store_background_latent(graph, background)
     bg = torch.as_tensor(background, device=device)
     targets = _Targets(graph, node_latents, background, node_targets, background_target, device)
     renderers = [_ViewRenderer(graph, v.frame_idx, v.cam_to_world, v.Ks, v.width, v.height, config.backend)
@@ -598,7 +604,6 @@ def fit_feature_field(
         optim.step(renderers[k].visible)
         losses.append(float(loss.detach()))
     fitted = param.detach()
-    set_gaussian_features(graph, fitted)
     node_features = _rendered_node_means(renderers, views, fitted, bg, node_latents)
     after = _evaluate(eval_r, eval_v, fitted, bg, targets, autoencoder, config.eval_pixel_stride)
     seconds = time.perf_counter() - t0
@@ -612,6 +617,7 @@ def fit_feature_field(
         object_cosine_before=before["object_cosine"], object_cosine_after=after["object_cosine"],
         object_accuracy_before=before["object_accuracy"], object_accuracy_after=after["object_accuracy"],
         node_features=node_features,
+        graph=store_background_latent(set_gaussian_features(graph, fitted), background),
     )
     logger.info("feature field: %d steps on %d views in %.1f s; latent MSE %.4f -> %.4f, object cosine %.4f -> %.4f",
                 report.iterations, report.views, seconds, report.latent_mse_before, report.latent_mse_after,

@@ -54,6 +54,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
+from simsplat_core.compute_threads import compute_threads_limited
 from simsplat_core.language.codebooks import MotionCodebooks, centred_cosine, convex_combination, cosine_scores
 from simsplat_core.language.map_context import MapContext
 from simsplat_core.language.motion_dataset import SampleConfig, TrainingSamples, build_samples
@@ -198,12 +199,8 @@ def single_threaded_torch() -> Iterator[None]:
     machine the OpenMP spin-waits made a 10 s training run take minutes (measured: 10 s with one
     thread vs 250 s with two, 2 shared cores). One thread also makes the run bit-reproducible.
     """
-    previous = torch.get_num_threads()
-    torch.set_num_threads(1)
-    try:
+    with compute_threads_limited(1):
         yield
-    finally:
-        torch.set_num_threads(previous)
 
 
 def _commitment(weights: torch.Tensor, target: torch.Tensor, kind: str) -> torch.Tensor:

@@ -29,7 +29,7 @@ motion still works; the graph may then be ``None`` (object nodes numbered like
 
     built = build_language_scene(graph, log, text_encoder=encoder, aligner=aligner)
     built.scene                     # LanguageScene for the QueryEngine
-    built.gaussian_features         # [N, d] in graph order (also in graph's GaussianSet.features)
+    built.gaussian_features         # [N, d] in graph order (also in built.graph's GaussianSet.features)
 """
 
 from __future__ import annotations
@@ -187,6 +187,8 @@ class BuiltLanguageScene:
         autoencoder: the scene's autoencoder (fitted or passed in); ``None`` when there were no pixels and
             none was passed.
         captions: ``object_id -> caption`` of every object with crops.
+        graph: the scene graph with the fitted per-Gaussian features and background latent (a copy: the
+            graph passed in is not changed); the input graph (or ``None``) when there were no pixels.
         metrics: stage times (``time_<stage>_s``, ``time_total_s``), counts, the fit report
             (``fit_*``) and, for logs with instance masks, the projected-mask agreement (``mask_*``).
     """
@@ -196,6 +198,7 @@ class BuiltLanguageScene:
     autoencoder: FeatureAutoencoder | None
     captions: dict[str, AppearanceCaption]
     metrics: dict[str, float] = field(default_factory=dict)
+    graph: SceneGraph | None = None
 
 
 def _object_nodes(graph: SceneGraph | None, log: SceneLog) -> list[NodeObject]:
@@ -325,6 +328,8 @@ def build_language_scene(
         fit = fit_feature_field(graph, views, node_latents, z_bg, config.fit_config(), autoencoder=autoencoder,
                                 node_targets={node_of[o]: object_feats[o] for o in fitted_ids},
                                 background_target=f_bg)
+        assert fit.graph is not None
+        graph = fit.graph  # the input graph is not changed: the fitted features live in this copy
         metrics.update(fit.summary())
         # the field as rendered on each node's own pixels; the Gaussians' mean for nodes the fit views miss
         means = {**node_mean_features(graph, set(node_latents) - set(fit.node_features)), **fit.node_features}
@@ -371,7 +376,7 @@ def build_language_scene(
                 log.seq_id, len(nodes), int(metrics["nodes_with_f_app"]), int(metrics["nodes_with_motion"]),
                 times["total"])
     return BuiltLanguageScene(scene=scene, gaussian_features=gaussian_feats, autoencoder=autoencoder,
-                              captions=captions, metrics=metrics)
+                              captions=captions, metrics=metrics, graph=graph)
 
 
 __all__ = [

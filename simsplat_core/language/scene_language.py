@@ -6,17 +6,33 @@ per object node the language features of SIMSplat Sec. 3.2 and, per frame and ca
 rendered from the scene's Gaussians, from which every per-frame pixel mask is cut.
 
 Shapes: ``D`` is the text space's width (384 for E5), ``F`` frames, ``C`` cameras, ``H x W`` pixels.
+
+**Derived data, never silently stale.** The node-id maps are rendered from one scene graph. A scene
+records the ``SceneGraph.revision`` it describes (``graph_revision``) and the one its maps were rendered
+from (``maps_revision``); ``""`` is a reconstructed / stored graph. An edited graph (``graph.without``,
+``with_node``, ``with_poses``) has a new revision: :meth:`LanguageScene.for_graph` derives the scene of
+the edited graph, re-rendering the maps when given the log, otherwise carrying them as invalid, and
+``masks`` then raises instead of returning masks of the old scene. :meth:`LanguageScene.check_graph`
+tells whether a scene belongs to a given graph.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
-from typing import Iterable
+from typing import Iterable, Mapping
 
 import numpy as np
 
 from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.language.motion_training import ObjectMotionFeatures
+from simsplat_core.language.node_masks import render_node_id_maps
+from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.types import SceneLog
+
+
+class StaleSceneError(ValueError):
+    """Data derived from one scene graph was asked for another (edited) graph; the message says which."""
 
 
 @dataclass(frozen=True)
@@ -67,6 +83,9 @@ class LanguageScene:
             nothing opaque was hit (``SceneRender.node_id``); ``None`` for logs without cameras.
         text_encoder: name of the text encoder whose space the features live in.
         metadata: free-form string facts (aligner / autoencoder hashes, ...).
+        graph_revision: ``SceneGraph.revision`` of the graph whose nodes the scene describes.
+        maps_revision: revision of the graph ``node_id_maps`` were rendered from; the maps are valid only
+            when it equals ``graph_revision`` (see the module docstring).
     """
 
     seq_id: str
@@ -77,6 +96,56 @@ class LanguageScene:
     node_id_maps: np.ndarray | None
     text_encoder: str
     metadata: dict[str, str] = field(default_factory=dict)
+    graph_revision: str = ""
+    maps_revision: str = ""
+
+    @property
+    def maps_valid(self) -> bool:
+        """Whether ``node_id_maps`` were rendered from the graph the scene describes."""
+        return self.maps_revision == self.graph_revision
+
+    def check_graph(self, graph: SceneGraph) -> None:
+        """Raise :class:`StaleSceneError` unless the scene describes ``graph`` (same revision)."""
+        if graph.revision != self.graph_revision:
+            raise StaleSceneError(f"{self.seq_id}: the language scene describes graph revision "
+                                  f"{self.graph_revision or '(stored)'!r}, not {graph.revision or '(stored)'!r}; "
+                                  f"derive it with LanguageScene.for_graph(graph, log)")
+
+    def for_graph(self, graph: SceneGraph, log: SceneLog | None = None, *,
+                  new_nodes: Mapping[int, NodeLanguage] | None = None, backend: str = "auto") -> "LanguageScene":
+        """The scene of ``graph``, an edit of the graph this scene describes (this scene is not changed).
+
+        Nodes the graph no longer has are dropped; its object nodes the scene does not know get
+        ``new_nodes[node_id]`` or, without one, an entry with no language features. With ``log`` (the
+        cameras of the maps) the node-id maps are re-rendered from ``graph`` at the scene's frames;
+        without it they are kept but marked invalid (``masks`` raises) unless the graph is the one they
+        were rendered from.
+
+        Raises:
+            ValueError: a ``new_nodes`` entry names another node id than its key, or the re-rendered maps
+                have other cameras than the scene's.
+        """
+        known = {n.node_id: n for n in self.nodes}
+        extra = dict(new_nodes or {})
+        nodes = []
+        for obj in graph.object_nodes:
+            entry = extra.pop(obj.node_id, None) or known.get(obj.node_id)
+            if entry is None:
+                entry = NodeLanguage(obj.node_id, obj.object_id, obj.category, "", None, None, None)
+            if entry.node_id != obj.node_id:
+                raise ValueError(f"{self.seq_id}: new_nodes[{obj.node_id}] describes node {entry.node_id}")
+            nodes.append(entry)
+        if extra:
+            raise ValueError(f"{self.seq_id}: new_nodes {sorted(extra)} are not object nodes of the graph")
+        maps, maps_revision = self.node_id_maps, self.maps_revision
+        if log is not None and self.node_id_maps is not None and graph.revision != self.maps_revision:
+            rendered = render_node_id_maps(graph, log, self.frame_indices, backend=backend)
+            if rendered.cameras != tuple(self.cameras) or rendered.maps.shape != self.node_id_maps.shape:
+                raise ValueError(f"{self.seq_id}: the log's cameras {rendered.cameras} do not match the scene's "
+                                 f"{self.cameras}")
+            maps, maps_revision = rendered.maps, graph.revision
+        return dataclasses.replace(self, nodes=tuple(nodes), node_id_maps=maps, graph_revision=graph.revision,
+                                   maps_revision=maps_revision)
 
     def node(self, node_id: int) -> NodeLanguage:
         for n in self.nodes:
@@ -89,9 +158,14 @@ class LanguageScene:
 
         Raises:
             ValueError: the scene has no node-id maps (a log without cameras).
+            StaleSceneError: the maps were rendered from another graph than the one the scene describes.
         """
         if self.node_id_maps is None:
             raise ValueError(f"{self.seq_id}: the scene has no rendered node-id maps (no cameras)")
+        if not self.maps_valid:
+            raise StaleSceneError(f"{self.seq_id}: the node-id maps were rendered from graph revision "
+                                  f"{self.maps_revision or '(stored)'!r} but the scene describes the edited revision "
+                                  f"{self.graph_revision!r}; re-render them with LanguageScene.for_graph(graph, log)")
         return np.isin(self.node_id_maps, np.asarray(list(node_ids), dtype=np.int32))
 
     def busiest_frame(self, masks: np.ndarray) -> int:

@@ -10,7 +10,12 @@ Modules: ``gaussians`` (GaussianSet), ``nodes`` (background / rigid / non-rigid)
 ``at``), ``composed`` (ComposedGaussians), ``render`` (SceneRender, node ids), ``records``
 (SceneRecords), ``init`` (initialisation from depth or at random), ``knn``, ``transforms``, ``optim``
 (Adam groups per node), ``densify`` (DensifyStrategy and row ops), ``config`` (ReconstructionConfig),
-``views`` (camera batches of a log), ``evaluate`` (held-out metrics), ``trainer`` (reconstruct).
+``views`` (camera batches of a log), ``evaluate`` (held-out metrics), ``losses`` (L1/D-SSIM training
+losses, the SSIM kernel), ``pose_track`` (PoseTrack, extrapolation policies: poses at any time),
+``trainer`` (reconstruct).
+
+Graphs are values: ``graph.without(ids)``, ``graph.with_node(node, poses)``, ``graph.with_poses(id, poses)``,
+``graph.to(device)`` return new graphs and leave the original unchanged.
 """
 
 from simsplat_core.scene.composed import ComposedGaussians
@@ -27,7 +32,8 @@ from simsplat_core.scene.densify import DensifyState, DensifyStrategy
 from simsplat_core.scene.evaluate import TestFrameRender
 from simsplat_core.scene.gaussians import GaussianSet
 from simsplat_core.scene.graph import SceneGraph
-from simsplat_core.scene.nodes import NODE_TYPES, BackgroundNode, NonRigidNode, RigidNode, SceneNode
+from simsplat_core.scene.nodes import NODE_TYPES, BackgroundNode, NonRigidNode, ObjectNode, RigidNode, SceneNode
+from simsplat_core.scene.pose_track import Extrapolation, OffsetExtrapolation, PoseTrack
 from simsplat_core.scene.records import SceneRecords
 from simsplat_core.scene.render import SceneRender
 from simsplat_core.scene.trainer import ReconstructionResult, reconstruct
@@ -40,12 +46,16 @@ __all__ = [
     "DensifyConfig",
     "DensifyState",
     "DensifyStrategy",
+    "Extrapolation",
     "GaussianSet",
     "InitConfig",
     "LearningRates",
     "LossWeights",
     "NonRigidNode",
+    "ObjectNode",
+    "OffsetExtrapolation",
     "ParamLRs",
+    "PoseTrack",
     "ReconstructionConfig",
     "ReconstructionResult",
     "RigidNode",

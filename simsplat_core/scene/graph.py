@@ -6,21 +6,36 @@ S(t) = {G_bg} ∪ {T_v(t) ⊗ G_v} (rigid) ∪ {T_h(t) ⊗ (G_h + offsets_h(t))}
 ``at`` is a pure function of the parameters and ``t``: nothing is cached between calls. It is
 vectorised over nodes: the poses of all object nodes are stacked ``[K, F, 4, 4]`` and gathered once per
 call, then one batched transform moves every object Gaussian (the background block is passed through
-untransformed). Only the per-node offset interpolation of non-rigid nodes loops (a handful of nodes).
+untransformed). Only the per-node offset interpolation of non-rigid nodes loops (a handful of nodes),
+as does the sampling of edited nodes that carry a pose track of their own.
+
+**Any time.** ``t`` may lie outside the frame axis: log nodes follow their ``extrapolation`` policy
+(``HOLD`` the first / last frame by default, or ``ABSENT``), nodes with their own
+:class:`~simsplat_core.scene.pose_track.PoseTrack` follow that track and its policies (so an edited
+agent can drive on past the log's last frame).
+
+**By value.** A ``SceneGraph`` is frozen: ``to``, ``detached``, ``without``, ``with_node``,
+``with_poses``, ``with_metadata`` and ``with_eps2d`` return new graphs that share the unchanged nodes
+with the original, which is never changed. Each structural edit derives a new ``revision`` (a short
+hash chain from the stored scene's ``""``), so data derived from a graph (``LanguageScene``'s node-id
+maps) can tell which graph it was computed for.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
 import logging
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Iterable
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
 import torch
 from torch import Tensor
 
 from simsplat_core.scene.composed import ComposedGaussians
-from simsplat_core.scene.nodes import BACKGROUND_ID, BackgroundNode, NonRigidNode, RigidNode, SceneNode
+from simsplat_core.scene.nodes import BACKGROUND_ID, BackgroundNode, NonRigidNode, ObjectNode, SceneNode
+from simsplat_core.scene.pose_track import Extrapolation, FrameTime, PoseTrack, locate
 from simsplat_core.scene.render import DEFAULT_EPS2D, SceneRender, render_composed
 from simsplat_core.scene.transforms import interpolate_transforms, quat_multiply, rotmat_to_quat, se3_delta
 
@@ -33,40 +48,36 @@ logger = logging.getLogger(__name__)
 EPS2D_KEY = "render_eps2d"
 
 
-@dataclass(frozen=True)
-class FrameTime:
-    """A (fractional) frame index resolved on the graph's frame axis: ``t = (1 - w) f[i0] + w f[i1]``."""
-
-    t: float
-    i0: int
-    i1: int
-    w: float
-
-    @property
-    def exact(self) -> bool:
-        return self.w == 0.0
+#: Records metadata key of ``SceneGraph.revision`` (written only for edited graphs).
+REVISION_KEY = "graph_revision"
 
 
-@dataclass
+@dataclass(frozen=True, eq=False)
 class SceneGraph:
     """A background node and object nodes (ids ``1..K``) over ``frame_indices [F]`` (sorted, int64).
 
     Attributes:
         frame_indices: log frame index of each position of the frame axis shared by all node poses.
-        nodes: node list ordered by ``node_id`` (background, id 0, first).
-        metadata: free-form string facts (scene centre, scale, source sequence, ...).
+        nodes: nodes ordered by ``node_id`` (background, id 0, first); stored as a tuple.
+        metadata: free-form string facts (scene centre, scale, source sequence, ...); the graph keeps
+            its own copy (derive changes with :meth:`with_metadata`).
         eps2d: the rasterizer's screen-space low-pass (pixels^2) the scene is rendered with; it is part of
             the model (Gaussians trained with one value look blurred or aliased with another) and is
             persisted in the records' metadata.
+        revision: ``""`` for a reconstructed / stored scene; every structural edit (``without``,
+            ``with_node``, ``with_poses``) derives a new one.
     """
 
     frame_indices: np.ndarray
-    nodes: list[SceneNode]
+    nodes: Sequence[SceneNode]
     metadata: dict[str, str] = field(default_factory=dict)
     eps2d: float = DEFAULT_EPS2D
+    revision: str = ""
 
     def __post_init__(self) -> None:
-        self.frame_indices = np.asarray(self.frame_indices, dtype=np.int64)
+        object.__setattr__(self, "frame_indices", np.asarray(self.frame_indices, dtype=np.int64))
+        object.__setattr__(self, "nodes", tuple(self.nodes))
+        object.__setattr__(self, "metadata", dict(self.metadata))
         if self.frame_indices.ndim != 1 or self.frame_indices.size == 0:
             raise ValueError("SceneGraph.frame_indices must be a non-empty [F] array")
         if np.any(np.diff(self.frame_indices) <= 0):
@@ -76,7 +87,7 @@ class SceneGraph:
             raise ValueError(f"SceneGraph.nodes must be sorted by unique node_id, got {ids}")
         n_frames = self.frame_indices.size
         for node in self.nodes:
-            if isinstance(node, RigidNode) and node.present.shape[0] != n_frames:
+            if isinstance(node, ObjectNode) and node.present.shape[0] != n_frames:
                 raise ValueError(f"node {node.node_id}: present has {node.present.shape[0]} frames, "
                                  f"the graph has {n_frames}")
 
@@ -93,8 +104,8 @@ class SceneGraph:
         return first if isinstance(first, BackgroundNode) else None
 
     @property
-    def object_nodes(self) -> list[RigidNode]:
-        return [n for n in self.nodes if isinstance(n, RigidNode)]
+    def object_nodes(self) -> list[ObjectNode]:
+        return [n for n in self.nodes if isinstance(n, ObjectNode)]
 
     @property
     def num_gaussians(self) -> int:
@@ -112,39 +123,132 @@ class SceneGraph:
             start += len(n.gaussians)
         return out
 
+    # ------------------------------------------------------------------ derived graphs (by value)
     def to(self, device: torch.device | str) -> "SceneGraph":
-        for n in self.nodes:
-            n.to(device)
-        return self
+        """A copy of the graph on ``device`` (this graph is not changed)."""
+        return dataclasses.replace(self, nodes=tuple(n.to(device) for n in self.nodes))
+
+    def detached(self) -> "SceneGraph":
+        """A graph whose learnable tensors are detached (no grad, no optimizer references)."""
+        return dataclasses.replace(self, nodes=tuple(n.detached() for n in self.nodes))
+
+    def with_metadata(self, **facts: str) -> "SceneGraph":
+        """A graph whose metadata has ``facts`` added (or replaced)."""
+        return dataclasses.replace(self, metadata={**self.metadata, **{k: str(v) for k, v in facts.items()}})
+
+    def with_eps2d(self, eps2d: float) -> "SceneGraph":
+        """A graph rendered with another screen-space low-pass."""
+        return dataclasses.replace(self, eps2d=float(eps2d))
+
+    def _check_ids(self, node_ids: Iterable[int], what: str) -> list[int]:
+        ids = [int(i) for i in node_ids]
+        known = {n.node_id for n in self.nodes}
+        for nid in ids:
+            if nid not in known:
+                raise ValueError(f"SceneGraph.{what}: no node {nid} (nodes {sorted(known)})")
+            if nid == BACKGROUND_ID and what != "without":
+                raise ValueError(f"SceneGraph.{what}: node {nid} is the background, which has no poses")
+        return ids
+
+    def _derived(self, nodes: Iterable[SceneNode], *change: object) -> "SceneGraph":
+        digest = hashlib.sha1(repr((self.revision, *change)).encode()).hexdigest()[:16]
+        return dataclasses.replace(self, nodes=tuple(sorted(nodes, key=lambda n: n.node_id)), revision=digest)
+
+    def without(self, node_ids: Iterable[int]) -> "SceneGraph":
+        """The graph without the nodes ``node_ids`` (the others are shared, unchanged).
+
+        Raises:
+            ValueError: an id names no node (the message names it).
+        """
+        drop = set(self._check_ids(node_ids, "without"))
+        return self._derived([n for n in self.nodes if n.node_id not in drop], "without", sorted(drop))
+
+    def _axis_track(self, poses: PoseTrack | Tensor | np.ndarray, present: Tensor | np.ndarray | None,
+                    node_id: int) -> tuple[PoseTrack | None, Tensor, Tensor]:
+        """``(own track or None, poses [F, 4, 4], present [F])`` of a pose argument: ``[F, 4, 4]`` poses on
+        the frame axis (with ``present [F]``, default all), or a :class:`PoseTrack` (resampled on the axis)."""
+        device = self.device
+        n_frames = self.frame_indices.size
+        if isinstance(poses, PoseTrack):
+            if present is not None:
+                raise ValueError(f"node {node_id}: present comes with the PoseTrack, not separately")
+            track = poses.to(device)
+            on_axis = track.resampled(self.frame_indices.astype(np.float64))
+            eye = torch.eye(4, device=device).expand(n_frames, 4, 4)
+            axis_poses = torch.where(on_axis.mask[:, None, None], on_axis.poses, eye)
+            return track, axis_poses.contiguous(), on_axis.mask
+        axis_poses = torch.as_tensor(poses, dtype=torch.float32, device=device)
+        if tuple(axis_poses.shape) != (n_frames, 4, 4):
+            raise ValueError(f"node {node_id}: poses on the frame axis must be [F={n_frames}, 4, 4], "
+                             f"got {list(axis_poses.shape)} (pass a PoseTrack for poses on other times)")
+        mask = (torch.ones(n_frames, dtype=torch.bool, device=device) if present is None
+                else torch.as_tensor(present, dtype=torch.bool, device=device))
+        if tuple(mask.shape) != (n_frames,):
+            raise ValueError(f"node {node_id}: present must be [F={n_frames}], got {list(mask.shape)}")
+        return None, axis_poses, mask
+
+    def with_node(self, node: ObjectNode, poses: PoseTrack | Tensor | np.ndarray | None = None,
+                  present: Tensor | np.ndarray | None = None) -> "SceneGraph":
+        """The graph with ``node`` added (this graph is not changed).
+
+        Args:
+            node: an object node; ``node_id <= 0`` assigns the next free id (``max + 1``), any other id
+                must be free.
+            poses: the node's poses: ``[F, 4, 4]`` on the frame axis (with ``present [F]``), or a
+                :class:`PoseTrack` on its own times (kept as the node's track, so it can run past the
+                log's frames; resampled on the axis for records and training). ``None``: the node's
+                own ``poses`` / ``present`` (which must be on the frame axis).
+
+        Raises:
+            ValueError: the id is taken, the node is a background, or the poses have the wrong shape.
+        """
+        if not isinstance(node, ObjectNode):
+            raise ValueError(f"SceneGraph.with_node: node {node.node_id} is not an object node ({type(node).__name__})")
+        taken = {n.node_id for n in self.nodes}
+        node_id = node.node_id if node.node_id > 0 else max(taken) + 1
+        if node_id in taken:
+            raise ValueError(f"SceneGraph.with_node: node id {node_id} is taken")
+        if poses is None:
+            poses, present = node.poses, node.present if present is None else present
+        track, axis_poses, mask = self._axis_track(poses, present, node_id)
+        new = dataclasses.replace(node.to(self.device), node_id=node_id, poses=axis_poses, present=mask,
+                                  pose_deltas=None if track is not None else node.pose_deltas, track=track)
+        return self._derived([*self.nodes, new], "with_node", node_id, _tensor_digest(new.poses, new.present),
+                             _track_digest(track))
+
+    def with_poses(self, node_id: int, poses: PoseTrack | Tensor | np.ndarray,
+                   present: Tensor | np.ndarray | None = None) -> "SceneGraph":
+        """The graph with node ``node_id``'s pose track replaced (``poses`` as in :meth:`with_node`; the
+        learned pose refinement is dropped: the new poses are final).
+
+        Raises:
+            ValueError: no such object node (named), or the poses have the wrong shape.
+        """
+        (nid,) = self._check_ids([node_id], "with_poses")
+        old = self.node(nid)
+        assert isinstance(old, ObjectNode)
+        track, axis_poses, mask = self._axis_track(poses, present, nid)
+        new = dataclasses.replace(old, poses=axis_poses, present=mask, pose_deltas=None, track=track)
+        return self._derived([new if n.node_id == nid else n for n in self.nodes], "with_poses", nid,
+                             _tensor_digest(axis_poses, mask), _track_digest(track))
 
     # ------------------------------------------------------------------ time
     def resolve_time(self, t: float) -> FrameTime:
-        """Position of frame index ``t`` on the frame axis; raises outside ``[first, last]``."""
-        frames = self.frame_indices
-        t = float(t)
-        if not frames[0] <= t <= frames[-1]:
-            raise ValueError(f"t={t} is outside the graph's frames [{frames[0]}, {frames[-1]}]")
-        i1 = int(np.searchsorted(frames, t, side="left"))
-        if frames[i1] == t:
-            return FrameTime(t, i1, i1, 0.0)
-        i0 = i1 - 1
-        return FrameTime(t, i0, i1, float((t - frames[i0]) / (frames[i1] - frames[i0])))
+        """Position of frame index ``t`` on the frame axis (clamped to its ends; ``side`` says when)."""
+        return locate(self.frame_indices, t)
 
     def present_nodes(self, t: float) -> list[int]:
         """Ids of the nodes that exist at ``t`` (objects need a pose at both neighbouring frames)."""
-        ft = self.resolve_time(t)
-        out = []
-        for n in self.nodes:
-            if isinstance(n, RigidNode):
-                if not bool(n.present[ft.i0]) or not bool(n.present[ft.i1]):
-                    continue
-            out.append(n.node_id)
-        return out
+        objs, _, alive = self.object_poses_at(t)
+        alive_ids = {n.node_id for n, a in zip(objs, alive.tolist()) if a}
+        return [n.node_id for n in self.nodes if not isinstance(n, ObjectNode) or n.node_id in alive_ids]
 
-    def object_poses_at(self, t: float) -> tuple[list[RigidNode], Tensor, Tensor]:
+    def object_poses_at(self, t: float) -> tuple[list[ObjectNode], Tensor, Tensor]:
         """Poses of all object nodes at ``t``: ``(nodes, poses [K, 4, 4], present [K] bool)``.
 
         Poses are interpolated for fractional ``t`` and include the learned refinement (differentiable).
+        Outside the frame axis each node's policy applies (module docstring); nodes with a track of
+        their own are sampled on it.
         """
         ft = self.resolve_time(t)
         objs = self.object_nodes
@@ -154,15 +258,25 @@ class SceneGraph:
         poses = torch.stack([n.poses for n in objs])  # [K, F, 4, 4]
         present = torch.stack([n.present for n in objs])  # [K, F]
         alive = present[:, ft.i0] & present[:, ft.i1]
+        if not ft.inside:
+            absent = [n.extrapolation is Extrapolation.ABSENT for n in objs]
+            if any(absent):
+                alive = alive & ~torch.tensor(absent, device=alive.device)
         frames = [ft.i0] if ft.exact else [ft.i0, ft.i1]
         pose = poses[:, frames]  # [K, 1 or 2, 4, 4]
         if any(n.pose_deltas is not None for n in objs):
             deltas = torch.stack([n.pose_deltas if n.pose_deltas is not None
                                   else n.poses.new_zeros((n.poses.shape[0], 6)) for n in objs])  # [K, F, 6]
             pose = pose @ se3_delta(deltas[:, frames])  # refine at the frames, then interpolate
-        if ft.exact:
-            return objs, pose[:, 0], alive
-        return objs, interpolate_transforms(pose[:, 0], pose[:, 1], ft.w), alive
+        pose = pose[:, 0] if ft.exact else interpolate_transforms(pose[:, 0], pose[:, 1], ft.w)
+        own = [k for k, n in enumerate(objs) if n.track is not None]
+        if own:  # edited nodes: sampled on their own track
+            pose, alive = pose.clone(), alive.clone()
+            for k in own:
+                track = objs[k].track
+                assert track is not None
+                pose[k], alive[k] = track.sample(ft.t)
+        return objs, pose, alive
 
     # ------------------------------------------------------------------ composition
     def at(self, t: float, *, exclude: Iterable[int] = (), holdout_offsets: bool = False) -> ComposedGaussians:
@@ -181,9 +295,9 @@ class SceneGraph:
         if bg is not None and BACKGROUND_ID not in exclude:
             blocks.append((bg, -1))
         alive_list = alive.tolist()
-        for k, n in enumerate(objs):
-            if alive_list[k] and n.node_id not in exclude:
-                blocks.append((n, k))
+        for k, obj in enumerate(objs):
+            if alive_list[k] and obj.node_id not in exclude:
+                blocks.append((obj, k))
         if not blocks:
             return _empty_composed(float(t), device)
 
@@ -256,8 +370,16 @@ class SceneGraph:
         """Plain numpy/python records of the graph (see :mod:`simsplat_core.scene.records`)."""
         from simsplat_core.scene.records import graph_to_records
 
+        beyond = [n.node_id for n in self.object_nodes if n.track is not None
+                  and (n.track.start < self.frame_indices[0] or n.track.end > self.frame_indices[-1])]
+        if beyond:
+            logger.warning("scene %s: nodes %s have pose tracks beyond the frame axis [%d, %d]; the records keep "
+                           "their poses on the axis only", scene_id, beyond, self.frame_indices[0],
+                           self.frame_indices[-1])
         records = graph_to_records(self, scene_id)
         records.metadata[EPS2D_KEY] = repr(float(self.eps2d))
+        if self.revision:
+            records.metadata[REVISION_KEY] = self.revision
         return records
 
     @classmethod
@@ -267,7 +389,22 @@ class SceneGraph:
 
         frame_indices, nodes, metadata = nodes_from_records(records, device)
         eps2d = float(metadata.pop(EPS2D_KEY, DEFAULT_EPS2D))
-        return cls(frame_indices=frame_indices, nodes=nodes, metadata=metadata, eps2d=eps2d)
+        revision = metadata.pop(REVISION_KEY, "")
+        return cls(frame_indices=frame_indices, nodes=nodes, metadata=metadata, eps2d=eps2d, revision=revision)
+
+
+def _tensor_digest(*tensors: Tensor) -> str:
+    h = hashlib.sha1()
+    for t in tensors:
+        h.update(t.detach().cpu().contiguous().numpy().tobytes())
+    return h.hexdigest()[:16]
+
+
+def _track_digest(track: PoseTrack | None) -> str:
+    if track is None:
+        return ""
+    digest = _tensor_digest(torch.as_tensor(track.times), track.poses, track.mask)
+    return f"{digest}:{track.before.value}:{track.after.value}"
 
 
 def _compose_features(nodes: list[SceneNode], counts: list[int], device: torch.device) -> Tensor | None:

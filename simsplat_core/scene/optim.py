@@ -16,7 +16,7 @@ from torch import Tensor
 
 from simsplat_core.scene.config import LearningRates
 from simsplat_core.scene.graph import SceneGraph
-from simsplat_core.scene.nodes import RigidNode, SceneNode
+from simsplat_core.scene.nodes import ObjectNode, SceneNode
 
 #: Adam state entries that are per-row (the rest, e.g. ``step``, is copied as is).
 ROW_STATE_KEYS: tuple[str, ...] = ("exp_avg", "exp_avg_sq")
@@ -31,7 +31,7 @@ def make_trainable(graph: SceneGraph) -> None:
     """Turn every learnable tensor of the graph into a leaf that requires grad (in place)."""
     for node in graph.nodes:
         node.gaussians = node.gaussians.map_rows(lambda _, t: t.detach().requires_grad_(True))
-        if isinstance(node, RigidNode) and node.pose_deltas is not None:
+        if isinstance(node, ObjectNode) and node.pose_deltas is not None:
             node.pose_deltas = node.pose_deltas.detach().requires_grad_(True)
 
 

@@ -35,6 +35,7 @@ from simsplat_core.scene.nodes import (
     OFFSETS,
     BackgroundNode,
     NonRigidNode,
+    ObjectNode,
     RigidNode,
     SceneNode,
 )
@@ -120,7 +121,7 @@ def graph_to_records(graph: Any, scene_id: str) -> SceneRecords:
         if isinstance(node, BackgroundNode):
             info["center"] = [float(c) for c in node.center]
         nodes.append(info)
-        if isinstance(node, RigidNode):
+        if isinstance(node, ObjectNode):
             present = node.present.detach().cpu().numpy().astype(bool)
             tf = node.refined_poses().detach().cpu().numpy().astype(np.float32).reshape(-1, 16)
             pose_ids.append(np.full(int(present.sum()), node.node_id, dtype=np.int32))

@@ -20,14 +20,14 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from simsplat_core.compute_threads import set_compute_threads
-from simsplat_core.eval.image_metrics import dssim_loss, psnr_from_mse
+from simsplat_core.compute_threads import compute_threads_limited
 from simsplat_core.scene.config import ReconstructionConfig
 from simsplat_core.scene.densify import DensifyState, DensifyStrategy
 from simsplat_core.scene.evaluate import TestFrameRender, render_views, summarise
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.init import initial_graph
-from simsplat_core.scene.nodes import BACKGROUND_ID, NonRigidNode, RigidNode
+from simsplat_core.scene.losses import dssim_loss, psnr_from_mse
+from simsplat_core.scene.nodes import BACKGROUND_ID, NonRigidNode, ObjectNode, RigidNode
 from simsplat_core.scene.optim import build_optimizer, set_means_lr
 from simsplat_core.scene.render import SceneRender, render_composed
 from simsplat_core.scene.views import ViewBatch, view_batches
@@ -82,7 +82,7 @@ def regularisers(graph: SceneGraph, config: ReconstructionConfig) -> Tensor:
             if w.deform_accel and off.shape[1] > 2:
                 accel = off[:, 2:] - 2.0 * off[:, 1:-1] + off[:, :-2]
                 total = total + w.deform_accel * accel.square().sum((1, 2)).mean()
-        if isinstance(node, RigidNode) and node.pose_deltas is not None and w.pose_delta:
+        if isinstance(node, ObjectNode) and node.pose_deltas is not None and w.pose_delta:
             total = total + w.pose_delta * node.pose_deltas.square().sum(-1).mean()
     return total
 
@@ -136,17 +136,16 @@ def train_step(graph: SceneGraph, optimizer: torch.optim.Optimizer, strategy: De
     return float(loss.detach()), float(mse)
 
 
-def freeze(graph: SceneGraph) -> None:
-    """Detach every learnable tensor of a trained graph (no grad, no optimizer references)."""
-    for node in graph.nodes:
-        node.gaussians = node.gaussians.detach()
-        if isinstance(node, RigidNode) and node.pose_deltas is not None:
-            node.pose_deltas = node.pose_deltas.detach()
+def freeze(graph: SceneGraph) -> SceneGraph:
+    """A copy of a trained graph with every learnable tensor detached (no grad, no optimizer references);
+    ``graph`` is not changed."""
+    return graph.detached()
 
 
 def _add_pose_refinement(graph: SceneGraph) -> None:
+    """Zero learnable pose refinements on the moving object nodes of a graph the trainer owns (in place)."""
     for node in graph.object_nodes:
-        if not node.static:
+        if not (isinstance(node, RigidNode) and node.static):
             node.pose_deltas = torch.zeros((node.poses.shape[0], 6), device=node.poses.device)
 
 
@@ -160,10 +159,14 @@ def _evenly(items: list, count: int) -> list:
 def reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressFn | None = None
                 ) -> ReconstructionResult:
     """Reconstruct ``log`` as a scene graph (see the module docstring). Deterministic for a given seed on
-    the CPU (CUDA atomics may differ in the last bits)."""
+    the CPU (CUDA atomics may differ in the last bits). ``config.num_threads`` (when set) applies during
+    the call only: the process's thread counts are restored on return."""
+    with compute_threads_limited(config.num_threads or None):
+        return _reconstruct(log, config, progress)
+
+
+def _reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressFn | None) -> ReconstructionResult:
     t_start = time.perf_counter()
-    if config.num_threads:
-        set_compute_threads(config.num_threads)
     device = resolve_device(config.device)
     torch.manual_seed(config.seed)
     rng = np.random.default_rng(config.seed)
@@ -174,8 +177,7 @@ def reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressF
         raise ValueError(f"{log.seq_id}: no training images with pixels to reconstruct from")
     train_frames = {b.frame_idx for b in train}
 
-    graph = initial_graph(log, config.init, train_frames, seed=config.seed, device=device)
-    graph.eps2d = config.eps2d
+    graph = initial_graph(log, config.init, train_frames, seed=config.seed, device=device).with_eps2d(config.eps2d)
     if config.refine_poses:
         _add_pose_refinement(graph)
     optimizer = build_optimizer(graph, config.lr)
@@ -206,7 +208,7 @@ def reconstruct(log: SceneLog, config: ReconstructionConfig, progress: ProgressF
         if progress is not None and (step % config.progress_every == 0 or step == config.iterations - 1
                                      or "psnr_test" in report):
             progress(step + 1, config.iterations, report)
-    freeze(graph)
+    graph = freeze(graph)
     t_train = time.perf_counter()
 
     test_renders = render_views(graph, test, log.objects, backend=config.backend)

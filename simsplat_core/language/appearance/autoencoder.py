@@ -32,6 +32,8 @@ import numpy as np
 import torch
 from torch import nn
 
+from simsplat_core.compute_threads import compute_threads_limited
+
 logger = logging.getLogger(__name__)
 
 
@@ -223,10 +225,7 @@ class FeatureAutoencoder:
         sched = torch.optim.lr_scheduler.CosineAnnealingLR(optim, T_max=max(config.steps, 1), eta_min=config.lr * 0.05)
         every = max(config.steps // 50, 1)
         losses: list[float] = []
-        previous_threads = torch.get_num_threads()
-        if config.threads is not None:
-            torch.set_num_threads(config.threads)
-        try:
+        with compute_threads_limited(config.threads):
             for step in range(config.steps):
                 loss = _loss(decoder(encoder(x - mean)) + mean, x, w, config)
                 if step % every == 0:
@@ -237,8 +236,6 @@ class FeatureAutoencoder:
                 sched.step()
             with torch.no_grad():
                 final = float(_loss(decoder(encoder(x - mean)) + mean, x, w, config))
-        finally:
-            torch.set_num_threads(previous_threads)
         state = AutoencoderState(
             dim,
             config.latent_dim,

@@ -23,8 +23,7 @@ def _tiny() -> tuple[SceneLog, SceneGraph]:
     log = generate_log(TINY_SEED, TINY_WORLD)
     config = ReconstructionConfig()
     graph = initial_graph(log, config.init, {img.frame_idx for img in log.images if img.split == "train"},
-                          seed=config.seed)
-    graph.eps2d = config.eps2d
+                          seed=config.seed).with_eps2d(config.eps2d)
     return log, graph
 
 

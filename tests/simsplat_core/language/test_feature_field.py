@@ -60,7 +60,10 @@ def fitted(encoder: TextEncoder) -> Fitted:
     report = fit_feature_field(graph, feature_views(log, maps), latents, z[-1],
                                FeatureFitConfig(iterations=12, lr=0.05, object_weight=5.0),
                                autoencoder=ae, node_targets=targets, background_target=feats[-1])
-    return Fitted(log, graph, maps, ae, latents, targets, z[-1], report)
+    # the input graph is not changed: the fitted one is the report's
+    assert report.graph is not None and report.graph is not graph
+    assert background_latent(graph) is None and all(n.gaussians.features is None for n in graph.nodes)
+    return Fitted(log, report.graph, maps, ae, latents, targets, z[-1], report)
 
 
 def _cameras(log: SceneLog, frame: int) -> tuple[np.ndarray, np.ndarray, tuple[str, ...]]:
@@ -158,6 +161,10 @@ def test_missing_or_malformed_features_raise(fitted: Fitted) -> None:
         similarity_map(graph, 0, c2w, ks, 96, 64, fitted.autoencoder, np.ones(384, np.float32))
     with pytest.raises(FeatureFieldError, match=r"\[N="):
         set_gaussian_features(graph, np.zeros((3, 8), np.float32))
+    with_features = set_gaussian_features(graph, np.ones((graph.num_gaussians, 2), np.float32))
+    assert gaussian_features(with_features).shape == (graph.num_gaussians, 2)
+    with pytest.raises(FeatureFieldError, match="no per-Gaussian features"):
+        gaussian_features(graph)  # set_gaussian_features returned a copy
     with pytest.raises(ValueError, match="query has 5 dims"):
         similarity_map(fitted.graph, 0, c2w, ks, 96, 64, fitted.autoencoder, np.ones(5, np.float32))
     one = similarity_map(fitted.graph, 0, c2w, ks, 96, 64, fitted.autoencoder, np.ones(384, np.float32))

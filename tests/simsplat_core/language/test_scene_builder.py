@@ -81,11 +81,15 @@ def test_appearance_comes_from_projected_crops_and_the_field(built, encoder: Tex
 
 def test_the_graph_carries_the_fitted_features(built) -> None:
     graph, result = built
+    fitted = result.graph
+    assert fitted is not None and fitted is not graph
     assert result.gaussian_features.shape == (graph.num_gaussians, FAST.feature_dim)
-    np.testing.assert_array_equal(result.gaussian_features, gaussian_features(graph).numpy())
-    assert background_latent(graph).shape == (FAST.feature_dim,)
+    np.testing.assert_array_equal(result.gaussian_features, gaussian_features(fitted).numpy())
+    assert background_latent(fitted).shape == (FAST.feature_dim,)
+    # the graph passed in is not changed
+    assert background_latent(graph) is None and all(n.gaussians.features is None for n in graph.nodes)
     assert result.autoencoder is not None and result.autoencoder.latent_dim == FAST.feature_dim
-    back = SceneGraph.from_records(graph.to_records("tiny"))
+    back = SceneGraph.from_records(fitted.to_records("tiny"))
     np.testing.assert_array_equal(gaussian_features(back).numpy(), result.gaussian_features)
 
 

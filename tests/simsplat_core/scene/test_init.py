@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from simsplat_core.scene import InitConfig, NonRigidNode, RigidNode
+from simsplat_core.scene import InitConfig, NonRigidNode, ObjectNode, RigidNode
 from simsplat_core.scene.init import initial_graph, normal_map, quats_from_normals, voxel_merge
 from simsplat_core.scene.knn import BRUTE_FORCE_MAX, knn_sq_distances
 from simsplat_core.scene.transforms import quat_to_rotmat
@@ -77,7 +77,9 @@ def test_node_layout(tiny_log: SceneLog) -> None:
     for node, obj in zip(graph.nodes[1:], objects):
         assert node.object_id == obj.object_id and node.category == obj.category
         assert node.node_type == obj.node_type
-        assert isinstance(node, RigidNode) and len(node.gaussians) > 0
+        assert isinstance(node, ObjectNode) and len(node.gaussians) > 0
+        assert isinstance(node, NonRigidNode if obj.node_type == "nonrigid" else RigidNode)
+        assert not (isinstance(node, NonRigidNode) and isinstance(node, RigidNode))
         track = tiny_log.track(obj.object_id)
         row = len(track) // 2
         f = int(track.frame_idx[row])

@@ -74,7 +74,7 @@ def test_training_improves_on_the_initialisation(run, tiny_log: SceneLog) -> Non
     result, _ = run
     train_frames = {img.frame_idx for img in tiny_log.images if img.split == "train"}
     init = initial_graph(tiny_log, ReconstructionConfig().init, train_frames, seed=1)
-    init.eps2d = result.graph.eps2d
+    init = init.with_eps2d(result.graph.eps2d)
     test = [b for b in view_batches(tiny_log) if b.split == "test"]
     before = summarise(render_views(init, test, tiny_log.objects, with_node_ids=False), "test")["psnr_test"]
     assert result.metrics["psnr_test"] > before + 0.5

@@ -55,7 +55,7 @@ def test_record_columns() -> None:
 @pytest.mark.parametrize("t", [0.0, 2.0, 2.5, 3.0])
 def test_round_trip_renders_identically(t: float) -> None:
     graph = make_graph(features=2)
-    graph.eps2d = 0.1  # the render low-pass is part of the model and travels in the metadata
+    graph = graph.with_eps2d(0.1)  # the render low-pass is part of the model and travels in the metadata
     graph.node(1).pose_deltas = torch.full((N_FRAMES, 6), 0.01)  # refinement gets baked into the poses
     back = SceneGraph.from_records(graph.to_records("rt"))
     assert [n.node_type for n in back.nodes] == [n.node_type for n in graph.nodes]
