@@ -1,6 +1,6 @@
 """Evaluation of a reconstructed scene graph on held-out frames.
 
-Metrics follow :mod:`simsplat_core.eval.image_metrics`. Per image: PSNR and SSIM of the full image,
+Metrics follow :mod:`simsplat_core.scene.image_metrics`. Per image: PSNR and SSIM of the full image,
 and masked PSNR / SSIM over the *dynamic* pixels: ground-truth instance pixels of objects whose
 category is ``vehicle`` or ``pedestrian``. Scene figures are means over images (masked figures over
 the images with at least one dynamic pixel, the drivestudio convention).
@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from simsplat_core.eval.image_metrics import masked_psnr, masked_ssim, psnr, ssim
+from simsplat_core.scene.image_metrics import masked_psnr, masked_ssim, psnr, ssim
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.views import ViewBatch
 from simsplat_core.types import ObjectInfo

@@ -1,4 +1,4 @@
-"""Training losses of the reconstruction (and the SSIM kernel they share with ``eval.image_metrics``).
+"""Training losses of the reconstruction (and the SSIM kernel they share with ``scene.image_metrics``).
 
 Images are float tensors in ``[0, 1]`` laid out channels-last, ``[H, W, C]`` or batched ``[B, H, W, C]``.
 
@@ -9,8 +9,8 @@ Images are float tensors in ``[0, 1]`` laid out channels-last, ``[H, W, C]`` or 
 * **D-SSIM** loss ``= 1 - SSIM`` (``"same"`` padding, mean over the batch and pixels).
 * ``psnr_from_mse``: ``10 log10(1 / MSE)`` (data range 1), the trainer's running figure.
 
-These live with the trainer that minimises them; :mod:`simsplat_core.eval.image_metrics` builds the
-evaluation metrics on top of the same kernel.
+These live with the trainer that minimises them; :mod:`simsplat_core.scene.image_metrics` builds the
+held-out image metrics on top of the same kernel.
 """
 
 from __future__ import annotations

@@ -18,13 +18,6 @@ import simsplat_core
 
 CORE = Path(simsplat_core.__file__).resolve().parent
 
-#: Until the scene's training losses and test-view metrics stop importing ``eval.image_metrics``
-#: (``scene/trainer.py``, ``scene/evaluate.py``; the byvalue part of issue 9). Drop the marks then:
-#: they are strict, so a passing check fails until they go.
-SCENE_IMPORTS_EVAL = pytest.mark.xfail(
-    strict=True, reason="scene/trainer.py and scene/evaluate.py import simsplat_core.eval.image_metrics"
-)
-
 #: Imports every module of a package, then fails naming the simsplat_core.eval modules that got loaded.
 RUNTIME_CHECK = """
 import importlib, pkgutil, sys
@@ -59,7 +52,7 @@ def test_eval_imports_finds_every_import_form(tmp_path: Path) -> None:
     assert [hit.split(" ")[0] for hit in eval_imports(module, tmp_path)] == ["probe.py:1", "probe.py:2", "probe.py:3"]
 
 
-@pytest.mark.parametrize("package", ["language", pytest.param("scene", marks=SCENE_IMPORTS_EVAL)])
+@pytest.mark.parametrize("package", ["language", "scene"])
 def test_no_module_names_eval(package: str) -> None:
     bad = [hit for path in sorted((CORE / package).rglob("*.py")) for hit in eval_imports(path)]
     assert not bad, bad
@@ -68,8 +61,8 @@ def test_no_module_names_eval(package: str) -> None:
 @pytest.mark.parametrize(
     "package",
     [
-        pytest.param("simsplat_core.language", marks=SCENE_IMPORTS_EVAL),  # language imports scene
-        pytest.param("simsplat_core.scene", marks=SCENE_IMPORTS_EVAL),
+        "simsplat_core.language",
+        "simsplat_core.scene",
     ],
 )
 def test_importing_the_package_loads_no_eval_module(package: str) -> None:

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from simsplat_core.eval.image_metrics import psnr
+from simsplat_core.scene.image_metrics import psnr
 from simsplat_core.scene import (
     DensifyConfig,
     NonRigidNode,

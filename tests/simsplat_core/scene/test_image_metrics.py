@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from simsplat_core.eval.image_metrics import (
+from simsplat_core.scene.image_metrics import (
     SSIM_C1,
     SSIM_C2,
     dssim_loss,

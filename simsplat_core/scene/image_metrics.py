@@ -15,8 +15,10 @@ Images are float tensors in ``[0, 1]`` laid out channels-last, ``[H, W, 3]`` or 
   empty mask.
 * **D-SSIM** loss ``= 1 - SSIM`` (``"same"`` padding, mean over the map).
 
-The SSIM kernel, D-SSIM and ``psnr_from_mse`` are the trainer's losses and live in
-:mod:`simsplat_core.scene.losses`; they are re-exported here so evaluation code has one import.
+These score a reconstruction on held-out frames (:mod:`simsplat_core.scene.evaluate`, run by the trainer
+at checkpoints and at the end): validation belongs to the method it validates, so they live in
+``scene/`` beside the losses (:mod:`simsplat_core.scene.losses`, whose SSIM kernel they share), and the
+evaluation package ``eval/`` stays on top of the algorithms.
 """
 
 from __future__ import annotations
