@@ -13,7 +13,7 @@ TORCH_INDEX ?=
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export RAY_AUTH_MODE := disabled
 
-.PHONY: install demo test bench clean
+.PHONY: install demo test lint bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -32,8 +32,12 @@ demo: $(STAMP)
 	$(VENV)/bin/simsplat query --store $(STORE) --seq synth-000000 "the red car turning right" \
 		--out $(STORE)/query_red_car_turning_right.png
 
-test: $(STAMP)
+test: $(STAMP) lint
 	$(VENV)/bin/pytest -q
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/mypy
 
 bench: $(STAMP)
 	$(PY) bench/bench_world.py
