@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from simsplat_core.geometry import invert_transform, yaw_of_rotation
-from simsplat_core.language.map_context import MapContext, MapFacts
+from simsplat_core.scenario.map_context import MapContext, MapFacts
 from simsplat_core.types import SceneLog, Track
 
 #: Agent kinds with a motion codebook.
