@@ -22,7 +22,8 @@ def points_in_polygon(xy: np.ndarray, polygon: np.ndarray) -> np.ndarray:
     x, y = xy[:, 0:1], xy[:, 1:2]  # [N, 1]
     straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)  # [N, P]
     with np.errstate(divide="ignore", invalid="ignore"):
-        x_cross = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+        slope = (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
+        x_cross = a[None, :, 0] + (y - a[None, :, 1]) * slope
     return np.count_nonzero(straddle & (x < x_cross), axis=1) % 2 == 1
 
 

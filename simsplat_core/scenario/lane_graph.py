@@ -191,7 +191,8 @@ class LaneGraph:
                 lanes.append(Lane(feat.feature_id, pts, s))
         seg_a = np.concatenate([ln.points[:-1] for ln in lanes]) if lanes else np.zeros((0, 2))
         seg_b = np.concatenate([ln.points[1:] for ln in lanes]) if lanes else np.zeros((0, 2))
-        seg_lane = np.concatenate([np.full(len(ln.points) - 1, i) for i, ln in enumerate(lanes)]) if lanes else np.zeros(0, int)
+        counts = [len(ln.points) - 1 for ln in lanes]
+        seg_lane = np.repeat(np.arange(len(lanes)), counts) if lanes else np.zeros(0, int)
         seg_s = np.concatenate([ln.s[:-1] for ln in lanes]) if lanes else np.zeros(0)
         if successors is not None:
             index = {ln.lane_id: i for i, ln in enumerate(lanes)}
@@ -320,7 +321,8 @@ class LaneGraph:
         lane_start = np.concatenate([[0.0], np.cumsum(lengths)[:-1]])
         path = Path.from_points(np.concatenate(parts))
         first = self.lanes[chain[0]]
-        start_s = float(path.project(np.array([np.interp(start_on_lane, first.s, first.points[:, c]) for c in range(2)])))
+        start_pt = np.array([np.interp(start_on_lane, first.s, first.points[:, c]) for c in range(2)])
+        start_s = float(path.project(start_pt))
         return LanePath(path, tuple(chain), lane_start, start_s, taken)
 
     def _project_on(self, lane: int, point: np.ndarray, tol_m: float = 0.5) -> float | None:

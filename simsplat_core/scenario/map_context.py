@@ -67,7 +67,7 @@ class MapFacts:
     lane_dist: np.ndarray
     lane_offset: np.ndarray
 
-    def take(self, rows: np.ndarray | slice) -> "MapFacts":
+    def take(self, rows: np.ndarray | slice) -> MapFacts:
         """The facts of a subset of rows."""
         return MapFacts(*(getattr(self, f)[rows] for f in self.__dataclass_fields__))
 
@@ -96,7 +96,7 @@ class MapContext:
 
     @classmethod
     def from_features(cls, features: tuple[MapFeature, ...] | list[MapFeature], cluster_m: float = 40.0,
-                      margin_m: float = 1.5) -> "MapContext":
+                      margin_m: float = 1.5) -> MapContext:
         """Index ``features``; crosswalk groups within ``cluster_m`` become intersections."""
         by_kind: dict[str, list[np.ndarray]] = {}
         for feat in features:

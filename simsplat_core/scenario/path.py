@@ -28,7 +28,7 @@ class Path:
     marks: dict[str, float] = field(default_factory=dict)
 
     @classmethod
-    def from_points(cls, points: np.ndarray, marks_at: dict[str, np.ndarray] | None = None) -> "Path":
+    def from_points(cls, points: np.ndarray, marks_at: dict[str, np.ndarray] | None = None) -> Path:
         """Build a path from ``[N, 2]`` points (duplicates removed); ``marks_at`` names points to locate."""
         pts = np.asarray(points, dtype=np.float64)
         keep = np.concatenate([[True], np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-9])

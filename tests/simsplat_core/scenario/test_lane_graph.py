@@ -10,8 +10,8 @@ import pytest
 
 from simsplat_core.data import load_av2_log
 from simsplat_core.scenario.lane_graph import LaneGraph
-from simsplat_core.world import WorldConfig, generate_world
 from simsplat_core.types import MapFeature
+from simsplat_core.world import WorldConfig, generate_world
 from simsplat_core.world.road import arm_dir
 
 AV2_LOG = Path("av2") / "sensor-log-7fab2350"
