@@ -28,61 +28,62 @@ from simsplat_core.language.codebooks import cosine_scores
 from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_log
 from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
 from simsplat_core.language.text import TextEncoder
-from simsplat_core.language.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, MOTION_VOCABULARIES
+from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, MOTION_VOCABULARIES
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
 
 #: The world's motion captions (``world/captions.py``) as labeller classes.
 WORLD_MOTION: dict[str, str] = {
-    "turning left": "turning_left",
-    "turning right": "turning_right",
-    "veering left": "turning_left",
-    "veering right": "turning_right",
-    "changing lanes to the left": "changing_lane_left",
-    "changing lanes to the right": "changing_lane_right",
-    "coming to a stop": "stopping",
-    "slowing down": "slowing_down",
-    "speeding up": "speeding_up",
-    "going straight": "going_straight",
-    "parked": "parked",
-    "stopped": "stopped",
-    "standing": "standing",
-    "crossing the street from left to right": "crossing_left_to_right",
-    "crossing the street from right to left": "crossing_right_to_left",
-    "crossing the street": "crossing",
-    "walking along the sidewalk": "walking_along",
-    "walking": "walking_along",
+    "turning left": voc.TURNING_LEFT,
+    "turning right": voc.TURNING_RIGHT,
+    "veering left": voc.TURNING_LEFT,
+    "veering right": voc.TURNING_RIGHT,
+    "changing lanes to the left": voc.CHANGING_LANE_LEFT,
+    "changing lanes to the right": voc.CHANGING_LANE_RIGHT,
+    "coming to a stop": voc.STOPPING,
+    "slowing down": voc.SLOWING_DOWN,
+    "speeding up": voc.SPEEDING_UP,
+    "going straight": voc.GOING_STRAIGHT,
+    "parked": voc.PARKED,
+    "stopped": voc.STOPPED,
+    "standing": voc.STANDING,
+    "crossing the street from left to right": voc.CROSSING_LEFT_TO_RIGHT,
+    "crossing the street from right to left": voc.CROSSING_RIGHT_TO_LEFT,
+    "crossing the street": voc.CROSSING,
+    "walking along the sidewalk": voc.WALKING_ALONG,
+    "walking": voc.WALKING_ALONG,
 }
 #: The generator's intended behaviours (``world/behaviors.py``) as sets of acceptable classes.
 WORLD_BEHAVIOUR: dict[str, frozenset[str]] = {
-    "straight": frozenset({"going_straight"}),
-    "turn_left": frozenset({"turning_left"}),
-    "turn_right": frozenset({"turning_right"}),
-    "lane_change_left": frozenset({"changing_lane_left"}),
-    "lane_change_right": frozenset({"changing_lane_right"}),
-    "slow_down": frozenset({"slowing_down"}),
-    "stop": frozenset({"stopping", "slowing_down"}),
-    "stopped": frozenset({"stopped"}),
-    "parked": frozenset({"parked"}),
-    "crossing": frozenset({"crossing_left_to_right", "crossing_right_to_left", "crossing"}),
-    "walking": frozenset({"walking_along"}),
-    "standing": frozenset({"standing"}),
+    "straight": frozenset({voc.GOING_STRAIGHT}),
+    "turn_left": frozenset({voc.TURNING_LEFT}),
+    "turn_right": frozenset({voc.TURNING_RIGHT}),
+    "lane_change_left": frozenset({voc.CHANGING_LANE_LEFT}),
+    "lane_change_right": frozenset({voc.CHANGING_LANE_RIGHT}),
+    "slow_down": frozenset({voc.SLOWING_DOWN}),
+    "stop": frozenset({voc.STOPPING, voc.SLOWING_DOWN}),
+    "stopped": frozenset({voc.STOPPED}),
+    "parked": frozenset({voc.PARKED}),
+    "crossing": frozenset({voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT, voc.CROSSING}),
+    "walking": frozenset({voc.WALKING_ALONG}),
+    "standing": frozenset({voc.STANDING}),
 }
 WORLD_SECTOR: dict[str, str] = {
-    "in front of ego": "in_front_of_ego",
-    "behind ego": "behind_ego",
-    "on the left of ego": "left_of_ego",
-    "on the right of ego": "right_of_ego",
+    "in front of ego": voc.IN_FRONT_OF_EGO,
+    "behind ego": voc.BEHIND_EGO,
+    "on the left of ego": voc.LEFT_OF_EGO,
+    "on the right of ego": voc.RIGHT_OF_EGO,
 }
 WORLD_CONTEXT: dict[str, str] = {
-    "at the intersection": "at_the_intersection",
-    "on the crosswalk": "on_the_crosswalk",
-    "on the sidewalk": "on_the_sidewalk",
-    "by the curb": "by_the_curb",
-    "in the oncoming lane": "in_the_oncoming_lane",
-    "on the road": "on_the_road",
-    "": "on_the_road",
+    "at the intersection": voc.AT_THE_INTERSECTION,
+    "on the crosswalk": voc.ON_THE_CROSSWALK,
+    "on the sidewalk": voc.ON_THE_SIDEWALK,
+    "by the curb": voc.BY_THE_CURB,
+    "in the oncoming lane": voc.IN_THE_ONCOMING_LANE,
+    "on the road": voc.ON_THE_ROAD,
+    "": voc.ON_THE_ROAD,
 }
 #: Query subjects per agent kind for location queries.
 SUBJECTS: dict[str, tuple[str, ...]] = {"vehicle": ("the car", "the vehicle"), "pedestrian": ("the pedestrian", "the person")}

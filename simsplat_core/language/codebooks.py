@@ -24,7 +24,7 @@ import numpy as np
 import torch
 
 from simsplat_core.language.text import TextEncoder, l2_normalise
-from simsplat_core.language.vocabulary import (
+from simsplat_core.scenario.vocabulary import (
     LOCATION_CONTEXT,
     LOCATION_SECTOR,
     PEDESTRIAN_MOTION,

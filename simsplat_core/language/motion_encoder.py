@@ -28,8 +28,8 @@ import numpy as np
 import torch
 from torch import nn
 
-from simsplat_core.language.map_context import MapContext
-from simsplat_core.language.trajectory import ObjectTrajectory, ego_yaw, rotate_to_ego, to_ego_frame
+from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.scenario.trajectory import ObjectTrajectory, ego_yaw, rotate_to_ego, to_ego_frame
 
 SEQ_CHANNELS: tuple[str, ...] = (
     "ego_x", "ego_y", "ego_cos_h", "ego_sin_h", "ego_vx", "ego_vy",

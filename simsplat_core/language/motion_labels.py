@@ -50,8 +50,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.geometry import wrap_angle
-from simsplat_core.language.map_context import MapContext, MapFacts
-from simsplat_core.language.trajectory import ObjectTrajectory, ego_yaw, log_trajectories, to_ego_frame
+from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.map_context import MapContext, MapFacts
+from simsplat_core.scenario.trajectory import ObjectTrajectory, ego_yaw, log_trajectories, to_ego_frame
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -189,25 +190,25 @@ def vehicle_motion(
             and map_context is not None
             and bool(np.mean(vehicle_off_lane(traj.facts, map_context, th)) >= 0.5)
         )
-        return ("parked" if parked else "stopped"), 0.0, 0.0, v0, v1
+        return (voc.PARKED if parked else voc.STOPPED), 0.0, 0.0, v0, v1
     dh = heading_change_deg(traj, th)
     lat, left_lane = road_lateral_displacement(traj)
     back, fwd = _backward_forward_m(traj)
     if back >= th.reverse_m and back > fwd:
-        return "reversing", dh, lat, v0, v1
+        return voc.REVERSING, dh, lat, v0, v1
     if dh > th.turn_deg:
-        return "turning_left", dh, lat, v0, v1
+        return voc.TURNING_LEFT, dh, lat, v0, v1
     if dh < -th.turn_deg:
-        return "turning_right", dh, lat, v0, v1
+        return voc.TURNING_RIGHT, dh, lat, v0, v1
     if abs(dh) < th.veer_deg and abs(lat) > th.lane_change_m and left_lane:
-        return ("changing_lane_left" if lat > 0 else "changing_lane_right"), dh, lat, v0, v1
+        return (voc.CHANGING_LANE_LEFT if lat > 0 else voc.CHANGING_LANE_RIGHT), dh, lat, v0, v1
     if v0 > th.from_mps and v1 < th.stop_mps:
-        return "stopping", dh, lat, v0, v1
+        return voc.STOPPING, dh, lat, v0, v1
     if v0 > th.from_mps and v1 < th.slow_ratio * v0:
-        return "slowing_down", dh, lat, v0, v1
+        return voc.SLOWING_DOWN, dh, lat, v0, v1
     if v1 > th.from_mps and v0 < th.slow_ratio * v1:
-        return "speeding_up", dh, lat, v0, v1
-    return "going_straight", dh, lat, v0, v1
+        return voc.SPEEDING_UP, dh, lat, v0, v1
+    return voc.GOING_STRAIGHT, dh, lat, v0, v1
 
 
 def pedestrian_motion(
@@ -215,7 +216,7 @@ def pedestrian_motion(
 ) -> str:
     """Motion class of a pedestrian trajectory (``ego_poses`` ``[F, 4, 4]``)."""
     if is_stationary(traj, th):
-        return "standing"
+        return voc.STANDING
     moving = traj.speed >= th.moving_mps
     if moving.sum() < 2:
         moving = np.ones(len(traj), dtype=bool)
@@ -228,20 +229,20 @@ def pedestrian_motion(
     else:
         crossing = lateral
     if not crossing:
-        return "walking_along"
+        return voc.WALKING_ALONG
     if not lateral:
-        return "crossing"
-    return "crossing_left_to_right" if dy < 0 else "crossing_right_to_left"
+        return voc.CROSSING
+    return voc.CROSSING_LEFT_TO_RIGHT if dy < 0 else voc.CROSSING_RIGHT_TO_LEFT
 
 
 def location_sector(xy_ego: np.ndarray, th: LabelThresholds) -> str:
     """Sector of an ego-frame point ``[2]``."""
     ang = np.rad2deg(np.arctan2(xy_ego[1], xy_ego[0]))
     if abs(ang) <= th.front_deg:
-        return "in_front_of_ego"
+        return voc.IN_FRONT_OF_EGO
     if abs(ang) >= th.behind_deg:
-        return "behind_ego"
-    return "left_of_ego" if ang > 0 else "right_of_ego"
+        return voc.BEHIND_EGO
+    return voc.LEFT_OF_EGO if ang > 0 else voc.RIGHT_OF_EGO
 
 
 def location_context(
@@ -251,9 +252,9 @@ def location_context(
     facts = traj.facts.take(slice(row, row + 1)) if traj.facts is not None else None
     has_map = facts is not None and map_context is not None
     if has_map and traj.kind == "pedestrian" and facts.in_crosswalk[0] and not facts.on_sidewalk[0]:
-        return "on_the_crosswalk"
+        return voc.ON_THE_CROSSWALK
     if has_map and facts.at_intersection[0]:
-        return "at_the_intersection"
+        return voc.AT_THE_INTERSECTION
     if has_map and (
         facts.on_sidewalk[0]
         or (
@@ -263,14 +264,14 @@ def location_context(
             and not facts.on_drivable[0]
         )
     ):
-        return "on_the_sidewalk"
+        return voc.ON_THE_SIDEWALK
     if traj.kind == "vehicle":
         if has_map and vehicle_off_lane(facts, map_context, th)[0]:
-            return "by_the_curb"
+            return voc.BY_THE_CURB
         rel = abs(float(np.rad2deg(wrap_angle(traj.heading[row] - ego_yaw(ego_pose)))))
         if rel >= th.oncoming_deg:
-            return "in_the_oncoming_lane"
-    return "on_the_road"
+            return voc.IN_THE_ONCOMING_LANE
+    return voc.ON_THE_ROAD
 
 
 def label_trajectory(

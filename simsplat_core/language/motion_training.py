@@ -56,12 +56,12 @@ import torch
 
 from simsplat_core.compute_threads import compute_threads_limited
 from simsplat_core.language.codebooks import MotionCodebooks, centred_cosine, convex_combination, cosine_scores
-from simsplat_core.language.map_context import MapContext
 from simsplat_core.language.motion_dataset import SampleConfig, TrainingSamples, build_samples
 from simsplat_core.language.motion_encoder import HEADS, InputConfig, TrajectoryEncoder, trajectory_inputs
 from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_trajectory
 from simsplat_core.language.text import TextEncoder, default_text_encoder
-from simsplat_core.language.trajectory import AGENT_KINDS, log_trajectories
+from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.scenario.trajectory import AGENT_KINDS, log_trajectories
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)

@@ -96,6 +96,7 @@ from simsplat_core.language.query_scoring import (
 )
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import QUERY, EmbeddingCache, TextEncoder, l2_normalise
+from simsplat_core.scenario import vocabulary as voc
 
 logger = logging.getLogger(__name__)
 
@@ -204,7 +205,7 @@ class QueryEngine:
             context = group_distribution(
                 emb[ctx_text], books.context.classes, books.context.prototypes, books.location_centre,
                 cfg.location_temperature,
-                keyword_prior(ctx_text, CONTEXT_KEYWORDS, books.context.classes, fallback="on_the_road"),
+                keyword_prior(ctx_text, CONTEXT_KEYWORDS, books.context.classes, fallback=voc.ON_THE_ROAD),
                 cfg.lexicon_weight,
             )
         return _QueryVectors(emb[app_text] if app_text else None, motion, sector, context)

@@ -13,46 +13,48 @@ attribute factors.
 
 from __future__ import annotations
 
+from simsplat_core.scenario import vocabulary as voc
+
 #: Pedestrian motion classes merged into one "crossing" for scoring (the direction is checked on its own).
-CROSSING_CLASSES = ("crossing", "crossing_left_to_right", "crossing_right_to_left")
+CROSSING_CLASSES = (voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT)
 #: Motion classes of an object that does not move (the motion score of static objects and signs).
-STATIONARY_CLASSES = ("parked", "stopped", "standing")
+STATIONARY_CLASSES = (voc.PARKED, voc.STOPPED, voc.STANDING)
 
 #: Keyword priors: motion phrase regex -> the classes it names (``vocabulary.py`` names, "crossing" =
 #: any crossing); each query's prior is uniform over the named classes of the kinds it can refer to.
 MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
-    (r"\bleft\b.*\bturn|\bturn\w*\b.*\bleft\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?left", ("turning_left",)),
-    (r"\bright\b.*\bturn|\bturn\w*\b.*\bright\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?right", ("turning_right",)),
-    (r"^(?!.*\b(?:left|right)\b).*(?:\bturn|corner)", ("turning_left", "turning_right")),
-    (r"straight|cruising|\bcontinu", ("going_straight",)),
-    (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bleft\b|\bleft\b.*\blane", ("changing_lane_left",)),
-    (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bright\b|\bright\b.*\blane", ("changing_lane_right",)),
-    (r"\bslow|decelerat|\bbrak(?!\w* (?:to|until))|losing speed|reducing|easing off", ("slowing_down",)),
-    (r"speed\w* up|accelerat|picking up speed|gaining speed|pull\w* away|starting to move|moving off|on the gas", ("speeding_up",)),
-    (r"(?:coming|comes|pull\w*|brak\w*) (?:up )?to a (?:stop|halt|standstill)|\bstopping\b|\bstops\b|pull\w* up|until it stands", ("stopping",)),
-    (r"stationary|not moving|not going anywhere|sitting still|motionless|standstill|standing still(?! in traffic)", ("stopped", "parked", "standing")),
-    (r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b|sitting in (?:the|its) lane|in (?:its|the) lane", ("stopped", "standing")),
-    (r"\bparked\b|parking (?:spot|space|bay)", ("parked",)),
-    (r"revers|\bback(?:ing|s)? (?:up|out)|backwards?", ("reversing",)),
-    (r"cross|across|\bleft\b.*\bright\b|\bright\b.*\bleft\b|(?:to|towards) the (?:left|right)", ("crossing",)),
-    (r"walk|stroll|\bjog|running|\bruns\b|wander|pacing", ("walking_along",)),
-    (r"\bstand|waiting|loiter|linger|\bstill\b", ("standing",)),
+    (r"\bleft\b.*\bturn|\bturn\w*\b.*\bleft\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?left", (voc.TURNING_LEFT,)),
+    (r"\bright\b.*\bturn|\bturn\w*\b.*\bright\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?right", (voc.TURNING_RIGHT,)),
+    (r"^(?!.*\b(?:left|right)\b).*(?:\bturn|corner)", (voc.TURNING_LEFT, voc.TURNING_RIGHT)),
+    (r"straight|cruising|\bcontinu", (voc.GOING_STRAIGHT,)),
+    (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bleft\b|\bleft\b.*\blane", (voc.CHANGING_LANE_LEFT,)),
+    (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bright\b|\bright\b.*\blane", (voc.CHANGING_LANE_RIGHT,)),
+    (r"\bslow|decelerat|\bbrak(?!\w* (?:to|until))|losing speed|reducing|easing off", (voc.SLOWING_DOWN,)),
+    (r"speed\w* up|accelerat|picking up speed|gaining speed|pull\w* away|starting to move|moving off|on the gas", (voc.SPEEDING_UP,)),
+    (r"(?:coming|comes|pull\w*|brak\w*) (?:up )?to a (?:stop|halt|standstill)|\bstopping\b|\bstops\b|pull\w* up|until it stands", (voc.STOPPING,)),
+    (r"stationary|not moving|not going anywhere|sitting still|motionless|standstill|standing still(?! in traffic)", (voc.STOPPED, voc.PARKED, voc.STANDING)),
+    (r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b|sitting in (?:the|its) lane|in (?:its|the) lane", (voc.STOPPED, voc.STANDING)),
+    (r"\bparked\b|parking (?:spot|space|bay)", (voc.PARKED,)),
+    (r"revers|\bback(?:ing|s)? (?:up|out)|backwards?", (voc.REVERSING,)),
+    (r"cross|across|\bleft\b.*\bright\b|\bright\b.*\bleft\b|(?:to|towards) the (?:left|right)", (voc.CROSSING,)),
+    (r"walk|stroll|\bjog|running|\bruns\b|wander|pacing", (voc.WALKING_ALONG,)),
+    (r"\bstand|waiting|loiter|linger|\bstill\b", (voc.STANDING,)),
 )
 #: Merged motion classes by agent kind (what ``MOTION_KEYWORDS`` may name for each kind).
-PEDESTRIAN_MERGED = ("crossing", "walking_along", "standing")
+PEDESTRIAN_MERGED = (voc.CROSSING, voc.WALKING_ALONG, voc.STANDING)
 SECTOR_KEYWORDS: tuple[tuple[str, str], ...] = (
-    ("in_front_of_ego", r"front|ahead"),
-    ("behind_ego", r"behind|\bback\b|\brear\b|following"),
-    ("left_of_ego", r"\bleft\b"),
-    ("right_of_ego", r"\bright\b(?! (?:ahead|in front|behind))"),
+    (voc.IN_FRONT_OF_EGO, r"front|ahead"),
+    (voc.BEHIND_EGO, r"behind|\bback\b|\brear\b|following"),
+    (voc.LEFT_OF_EGO, r"\bleft\b"),
+    (voc.RIGHT_OF_EGO, r"\bright\b(?! (?:ahead|in front|behind))"),
 )
 CONTEXT_KEYWORDS: tuple[tuple[str, str], ...] = (
-    ("at_the_intersection", r"intersection|junction|crossroad"),
-    ("on_the_crosswalk", r"crosswalk|zebra|pedestrian crossing"),
-    ("on_the_sidewalk", r"sidewalk|pavement|footpath|walkway|footway"),
-    ("by_the_curb", r"\bcurb|\bkerb|roadside|side of the road|edge of the road|shoulder|parking"),
-    ("in_the_oncoming_lane", r"oncoming|opposite|opposing|towards? (?:us|me|ego|our car)"),
-    ("on_the_road", r"\broad\b|\bstreet\b|\blane\b|roadway|carriageway"),
+    (voc.AT_THE_INTERSECTION, r"intersection|junction|crossroad"),
+    (voc.ON_THE_CROSSWALK, r"crosswalk|zebra|pedestrian crossing"),
+    (voc.ON_THE_SIDEWALK, r"sidewalk|pavement|footpath|walkway|footway"),
+    (voc.BY_THE_CURB, r"\bcurb|\bkerb|roadside|side of the road|edge of the road|shoulder|parking"),
+    (voc.IN_THE_ONCOMING_LANE, r"oncoming|opposite|opposing|towards? (?:us|me|ego|our car)"),
+    (voc.ON_THE_ROAD, r"\broad\b|\bstreet\b|\blane\b|roadway|carriageway"),
 )
 
 #: Colour names the captioner confuses or people use interchangeably (symmetric).

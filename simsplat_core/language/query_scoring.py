@@ -30,7 +30,8 @@ from simsplat_core.language.query_lexicon import (
 from simsplat_core.language.query_parse import ParsedQuery
 from simsplat_core.language.scene_language import NodeLanguage
 from simsplat_core.language.text import l2_normalise
-from simsplat_core.language.trajectory import agent_kind
+from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.trajectory import agent_kind
 
 
 # ---------------------------------------------------------------------------------------------- text side
@@ -102,16 +103,16 @@ def motion_distribution(
         allowed |= set(books.vehicle.classes)
     if not kinds or "pedestrian" in kinds:
         allowed |= set(PEDESTRIAN_MERGED)
-    merged_classes = [c for c in classes if c not in CROSSING_CLASSES] + ["crossing"]
+    merged_classes = [c for c in classes if c not in CROSSING_CLASSES] + [voc.CROSSING]
     hits = [c for rx, named in MOTION_KEYWORDS if re.search(rx, parsed.motion) for c in named if c in allowed]
-    if "crossing" in hits:
-        hits = [c for c in hits if c != "walking_along"]  # "walking across" is a crossing
+    if voc.CROSSING in hits:
+        hits = [c for c in hits if c != voc.WALKING_ALONG]  # "walking across" is a crossing
     prior = _uniform(list(dict.fromkeys(hits)), merged_classes)
     centred = l2_normalise(prototypes - books.motion_centre) @ l2_normalise((query - books.motion_centre)[None])[0]
     probs = _softmax(centred, config.motion_temperature)
     merged = collections.defaultdict(float)
     for name, p in zip(classes, probs):
-        merged["crossing" if name in CROSSING_CLASSES else name] += float(p)
+        merged[voc.CROSSING if name in CROSSING_CLASSES else name] += float(p)
     probs = np.array([merged[c] for c in merged_classes])
     return _membership(probs, prior, merged_classes, config.lexicon_weight)
 
@@ -179,7 +180,7 @@ def motion_score(parsed: ParsedQuery, dist: dict[str, float], node: NodeLanguage
     score = 0.0
     label = feats.labels.motion
     for name, weight in _with_label(feats.motion_probs, label, 1.0, config.label_weight).items():
-        score += dist.get("crossing" if name in CROSSING_CLASSES else name, 0.0) * weight
+        score += dist.get(voc.CROSSING if name in CROSSING_CLASSES else name, 0.0) * weight
     if parsed.crossing_direction and feats.kind == "pedestrian":
         if feats.labels.motion != f"crossing_{parsed.crossing_direction}":
             score *= config.direction_mismatch

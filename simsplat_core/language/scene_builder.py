@@ -69,8 +69,8 @@ from simsplat_core.language.node_masks import (
 )
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import TextEncoder, l2_normalise
-from simsplat_core.language.trajectory import agent_kind
 from simsplat_core.render.types import BACKENDS
+from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.types import SceneLog
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.world import behaviors as bh
-from simsplat_core.world.collision import footprints_overlap
 from simsplat_core.world.mesh import Mesh, PedestrianRig, pedestrian_extent, static_mesh, vehicle_mesh
 from simsplat_core.world.palette import (
     HAIR_COLORS,

@@ -16,7 +16,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.world.paths import Path, lane_change_route, polyline_path, route
+from simsplat_core.scenario.path import Path
+from simsplat_core.world.paths import ROUTE_REACH, lane_change_route, polyline_path, route
 from simsplat_core.world.road import RoadLayout, arm_dir, arm_normal
 
 
@@ -153,8 +154,6 @@ def change_lanes(
     ``s_change`` is where the manoeuvre starts as a signed along-road distance *before* the stop line
     (negative values lie past the junction).
     """
-    from simsplat_core.world.paths import ROUTE_REACH
-
     s_start = ROUTE_REACH - s_change
     path = lane_change_route(layout, arm, lane_from, lane_to, s_start, change_len)
     s0 = path.marks["change_start"] - speed * t_change

@@ -1,4 +1,6 @@
-"""Named colours (display RGB in ``[0, 1]``) and the object catalogue of the procedural world.
+"""The colours the procedural world paints with and its object catalogue.
+
+Colour RGBs come from the naming palette of ``language/appearance/colors.py`` (one table).
 
 The catalogue fixes what kinds of vehicles, clothing and street furniture exist, with their
 dimensions; captions use the same names, so a colour word always matches the rendered colour.
@@ -8,19 +10,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-NAMED_COLORS: dict[str, tuple[float, float, float]] = {
-    "black": (0.05, 0.05, 0.06),
-    "white": (0.9, 0.9, 0.88),
-    "silver": (0.66, 0.68, 0.71),
-    "gray": (0.4, 0.41, 0.43),
-    "red": (0.75, 0.07, 0.07),
-    "blue": (0.1, 0.22, 0.68),
-    "yellow": (0.95, 0.78, 0.08),
-    "green": (0.08, 0.45, 0.18),
-    "orange": (0.95, 0.42, 0.05),
-    "brown": (0.42, 0.26, 0.13),
-    "beige": (0.78, 0.7, 0.53),
-}
+from simsplat_core.language.appearance.colors import DISPLAY_RGB
+
+#: Colours the world paints with, in this order (samplers index it); display RGB from the naming palette.
+WORLD_COLOR_NAMES: tuple[str, ...] = (
+    "black", "white", "silver", "gray", "red", "blue", "yellow", "green", "orange", "brown", "beige",
+)
+NAMED_COLORS: dict[str, tuple[float, float, float]] = {name: DISPLAY_RGB[name] for name in WORLD_COLOR_NAMES}
 
 
 @dataclass(frozen=True)

@@ -64,6 +64,55 @@ def opposite(arm: str) -> str:
     return ARMS[(ARMS.index(arm) + 2) % 4]
 
 
+def _bezier(p0: np.ndarray, p1: np.ndarray, p2: np.ndarray, p3: np.ndarray, n: int) -> np.ndarray:
+    t = np.linspace(0.0, 1.0, n)[:, None]
+    return (1 - t) ** 3 * p0 + 3 * (1 - t) ** 2 * t * p1 + 3 * (1 - t) * t**2 * p2 + t**3 * p3
+
+
+def target_arm(arm: str, turn: str) -> str:
+    """Arm a vehicle leaves by after ``turn`` (``straight``/``left``/``right``) from ``arm``."""
+    return {"straight": opposite, "left": left_of, "right": right_of}[turn](arm)
+
+
+def target_lane(layout: RoadLayout, arm: str, lane: int, turn: str) -> int | None:
+    """Outbound lane index for a manoeuvre, or ``None`` when the lane may not make it.
+
+    Left turns leave from the innermost lane into the innermost lane, right turns from the outermost
+    lane into the outermost lane; straight keeps the lane index.
+    """
+    out_arm = target_arm(arm, turn)
+    if turn == "straight":
+        return lane if lane < layout.lanes(out_arm) else None
+    if turn == "left":
+        return 0 if lane == 0 else None
+    return layout.lanes(out_arm) - 1 if lane == layout.lanes(arm) - 1 else None
+
+
+def connector_points(layout: RoadLayout, arm: str, lane: int, turn: str, n: int = 32) -> np.ndarray | None:
+    """``[n, 2]`` world points of the junction connector from inbound ``lane`` of ``arm``, or ``None``.
+
+    The connector runs from the inbound stop line to the outer edge of the exit arm's crosswalk.
+    """
+    out_lane = target_lane(layout, arm, lane, turn)
+    if out_lane is None:
+        return None
+    out_arm = target_arm(arm, turn)
+    d0, n0 = arm_dir(arm), arm_normal(arm)
+    d1, n1 = arm_dir(out_arm), arm_normal(out_arm)
+    p0 = d0 * layout.stopline_s(arm) + n0 * layout.lane_offset(arm, True, lane)
+    p3 = d1 * layout.crosswalk_range(out_arm)[1] + n1 * layout.lane_offset(out_arm, False, out_lane)
+    h0, h1 = -d0, d1
+    if turn == "straight":
+        pts = p0 + np.linspace(0.0, 1.0, n)[:, None] * (p3 - p0)
+    else:
+        # corner where the two lane lines meet: p0 + a*h0 == p3 - b*h1
+        mat = np.stack([h0, h1], axis=1)
+        a, b = np.linalg.solve(mat, p3 - p0)
+        k = 0.5523
+        pts = _bezier(p0, p0 + k * a * h0, p3 - k * b * h1, p3, n)
+    return layout.to_world(pts)
+
+
 def _arc(center: np.ndarray, radius: float, a0: float, a1: float, n: int = 9) -> np.ndarray:
     """``[n, 2]`` points on a circular arc from angle ``a0`` to ``a1`` (radians)."""
     ang = np.linspace(a0, a1, n)
@@ -289,8 +338,6 @@ class RoadLayout:
             quad = np.stack([d * s0 - n * hw, d * s1 - n * hw, d * s1 + n * hw, d * s0 + n * hw])
             add(f"crosswalk_{arm}", "crosswalk", self.to_world(quad))
         # connectors through the junction
-        from simsplat_core.world.paths import connector_points  # local import: paths depends on road
-
         for arm in ARMS:
             for turn in ("straight", "left", "right"):
                 for lane in range(self.lanes(arm)):

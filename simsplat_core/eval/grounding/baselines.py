@@ -28,7 +28,7 @@ import numpy as np
 from simsplat_core.language.codebooks import cosine_scores
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
-from simsplat_core.language.trajectory import ObjectTrajectory, log_trajectories
+from simsplat_core.scenario.trajectory import ObjectTrajectory, log_trajectories
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)

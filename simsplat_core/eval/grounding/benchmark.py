@@ -51,15 +51,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.geometry import wrap_angle
-from simsplat_core.language.map_context import MapContext
-from simsplat_core.language.motion_labels import (
-    LabelThresholds,
-    MotionLabel,
-    label_trajectories,
-    location_context,
-    vehicle_off_lane,
-)
 from simsplat_core.eval.grounding.paraphrases import (
     BROADER_TERMS,
     DESCRIBABLE_CONTEXTS,
@@ -71,8 +62,18 @@ from simsplat_core.eval.grounding.paraphrases import (
     realise,
     realise_group,
 )
-from simsplat_core.language.trajectory import ObjectTrajectory, ego_yaw, log_trajectories, to_ego_frame
-from simsplat_core.language.vocabulary import LOCATION_SECTOR, MOTION_VOCABULARIES
+from simsplat_core.geometry import wrap_angle
+from simsplat_core.language.motion_labels import (
+    LabelThresholds,
+    MotionLabel,
+    label_trajectories,
+    location_context,
+    vehicle_off_lane,
+)
+from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.scenario.trajectory import ObjectTrajectory, ego_yaw, log_trajectories, to_ego_frame
+from simsplat_core.scenario.vocabulary import LOCATION_SECTOR, MOTION_VOCABULARIES
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -124,9 +125,9 @@ class ObjectFacts:
 #: Auto-label classes whose trajectories also fit other classes' words ("a car coming to a stop" is
 #: also "slowing down" and "going straight"); the labeller's priority order keeps only the first.
 IMPLIED_MOTIONS: dict[str, frozenset[str]] = {
-    "stopping": frozenset({"slowing_down", "going_straight"}),
-    "slowing_down": frozenset({"going_straight"}),
-    "speeding_up": frozenset({"going_straight"}),
+    voc.STOPPING: frozenset({voc.SLOWING_DOWN, voc.GOING_STRAIGHT}),
+    voc.SLOWING_DOWN: frozenset({voc.GOING_STRAIGHT}),
+    voc.SPEEDING_UP: frozenset({voc.GOING_STRAIGHT}),
 }
 #: Location readings: sectors within this many degrees of the object's bearing, and every sector and
 #: map context the object is in within this many seconds of the reference frame, count as plausible.
@@ -138,13 +139,13 @@ def _sectors_of(angle_deg: float, th: LabelThresholds, margin: float) -> set[str
     a = float(angle_deg)
     out = set()
     if abs(a) <= th.front_deg + margin:
-        out.add("in_front_of_ego")
+        out.add(voc.IN_FRONT_OF_EGO)
     if abs(a) >= th.behind_deg - margin:
-        out.add("behind_ego")
+        out.add(voc.BEHIND_EGO)
     if th.front_deg - margin < a < th.behind_deg + margin:
-        out.add("left_of_ego")
+        out.add(voc.LEFT_OF_EGO)
     if -th.behind_deg - margin < a < -th.front_deg + margin:
-        out.add("right_of_ego")
+        out.add(voc.RIGHT_OF_EGO)
     return out
 
 
@@ -175,16 +176,16 @@ def plausible_readings(
             continue
         facts = traj.facts.take(slice(int(row), int(row) + 1))
         if facts.at_intersection[0]:
-            contexts.add("at_the_intersection")
+            contexts.add(voc.AT_THE_INTERSECTION)
         if facts.on_sidewalk[0]:
-            contexts.add("on_the_sidewalk")
+            contexts.add(voc.ON_THE_SIDEWALK)
         if traj.kind == "pedestrian" and facts.in_crosswalk[0]:
-            contexts.add("on_the_crosswalk")
+            contexts.add(voc.ON_THE_CROSSWALK)
         if traj.kind == "vehicle":
             if vehicle_off_lane(facts, map_context, th)[0]:
-                contexts.add("by_the_curb")
+                contexts.add(voc.BY_THE_CURB)
             if abs(float(np.rad2deg(wrap_angle(traj.heading[row] - ego_yaw(pose))))) >= th.oncoming_deg:
-                contexts.add("in_the_oncoming_lane")
+                contexts.add(voc.IN_THE_ONCOMING_LANE)
     return frozenset(motions), frozenset(sectors), frozenset(contexts)
 
 
@@ -572,8 +573,8 @@ PERTURBABLE: dict[str, tuple[str, ...]] = {
     "pedestrian": ("upper", "lower", "motion", "sector", "context"),
 }
 _CONTEXTS_BY_CATEGORY = {
-    "vehicle": ("at_the_intersection", "by_the_curb", "in_the_oncoming_lane"),
-    "pedestrian": ("at_the_intersection", "on_the_crosswalk", "on_the_sidewalk"),
+    "vehicle": (voc.AT_THE_INTERSECTION, voc.BY_THE_CURB, voc.IN_THE_ONCOMING_LANE),
+    "pedestrian": (voc.AT_THE_INTERSECTION, voc.ON_THE_CROSSWALK, voc.ON_THE_SIDEWALK),
 }
 
 

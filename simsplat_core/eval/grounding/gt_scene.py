@@ -31,7 +31,7 @@ from simsplat_core.language.motion_labels import MotionLabel, label_log
 from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import TextEncoder, l2_normalise
-from simsplat_core.language.trajectory import agent_kind
+from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.types import ObjectInfo, SceneLog
 
 AppearanceSource = Literal["captioner", "ground_truth"]

@@ -29,98 +29,99 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.language.appearance.captioner import article
+from simsplat_core.scenario import vocabulary as voc
 
 #: Motion terms: term -> (agent kind, auto-label classes it denotes).
 MOTION_TERMS: dict[str, tuple[str, frozenset[str]]] = {
-    "turning_left": ("vehicle", frozenset({"turning_left"})),
-    "turning_right": ("vehicle", frozenset({"turning_right"})),
-    "turning_any": ("vehicle", frozenset({"turning_left", "turning_right"})),
-    "going_straight": ("vehicle", frozenset({"going_straight"})),
-    "changing_lane_left": ("vehicle", frozenset({"changing_lane_left"})),
-    "changing_lane_right": ("vehicle", frozenset({"changing_lane_right"})),
-    "slowing_down": ("vehicle", frozenset({"slowing_down"})),
-    "speeding_up": ("vehicle", frozenset({"speeding_up"})),
-    "stopping": ("vehicle", frozenset({"stopping"})),
-    "stopped": ("vehicle", frozenset({"stopped"})),
-    "parked": ("vehicle", frozenset({"parked"})),
-    "stationary_vehicle": ("vehicle", frozenset({"stopped", "parked"})),
-    "reversing": ("vehicle", frozenset({"reversing"})),
-    "crossing_left_to_right": ("pedestrian", frozenset({"crossing_left_to_right"})),
-    "crossing_right_to_left": ("pedestrian", frozenset({"crossing_right_to_left"})),
-    "crossing_any": ("pedestrian", frozenset({"crossing", "crossing_left_to_right", "crossing_right_to_left"})),
-    "walking_along": ("pedestrian", frozenset({"walking_along"})),
-    "standing": ("pedestrian", frozenset({"standing"})),
+    voc.TURNING_LEFT: ("vehicle", frozenset({voc.TURNING_LEFT})),
+    voc.TURNING_RIGHT: ("vehicle", frozenset({voc.TURNING_RIGHT})),
+    "turning_any": ("vehicle", frozenset({voc.TURNING_LEFT, voc.TURNING_RIGHT})),
+    voc.GOING_STRAIGHT: ("vehicle", frozenset({voc.GOING_STRAIGHT})),
+    voc.CHANGING_LANE_LEFT: ("vehicle", frozenset({voc.CHANGING_LANE_LEFT})),
+    voc.CHANGING_LANE_RIGHT: ("vehicle", frozenset({voc.CHANGING_LANE_RIGHT})),
+    voc.SLOWING_DOWN: ("vehicle", frozenset({voc.SLOWING_DOWN})),
+    voc.SPEEDING_UP: ("vehicle", frozenset({voc.SPEEDING_UP})),
+    voc.STOPPING: ("vehicle", frozenset({voc.STOPPING})),
+    voc.STOPPED: ("vehicle", frozenset({voc.STOPPED})),
+    voc.PARKED: ("vehicle", frozenset({voc.PARKED})),
+    "stationary_vehicle": ("vehicle", frozenset({voc.STOPPED, voc.PARKED})),
+    voc.REVERSING: ("vehicle", frozenset({voc.REVERSING})),
+    voc.CROSSING_LEFT_TO_RIGHT: ("pedestrian", frozenset({voc.CROSSING_LEFT_TO_RIGHT})),
+    voc.CROSSING_RIGHT_TO_LEFT: ("pedestrian", frozenset({voc.CROSSING_RIGHT_TO_LEFT})),
+    "crossing_any": ("pedestrian", frozenset({voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT})),
+    voc.WALKING_ALONG: ("pedestrian", frozenset({voc.WALKING_ALONG})),
+    voc.STANDING: ("pedestrian", frozenset({voc.STANDING})),
 }
 
 #: The terms that name an auto-label class exactly, and the broader terms that also cover it.
 EXACT_TERM: dict[str, str] = {
-    "turning_left": "turning_left",
-    "turning_right": "turning_right",
-    "going_straight": "going_straight",
-    "changing_lane_left": "changing_lane_left",
-    "changing_lane_right": "changing_lane_right",
-    "slowing_down": "slowing_down",
-    "speeding_up": "speeding_up",
-    "stopping": "stopping",
-    "stopped": "stopped",
-    "parked": "parked",
-    "reversing": "reversing",
-    "crossing_left_to_right": "crossing_left_to_right",
-    "crossing_right_to_left": "crossing_right_to_left",
-    "crossing": "crossing_any",
-    "walking_along": "walking_along",
-    "standing": "standing",
+    voc.TURNING_LEFT: voc.TURNING_LEFT,
+    voc.TURNING_RIGHT: voc.TURNING_RIGHT,
+    voc.GOING_STRAIGHT: voc.GOING_STRAIGHT,
+    voc.CHANGING_LANE_LEFT: voc.CHANGING_LANE_LEFT,
+    voc.CHANGING_LANE_RIGHT: voc.CHANGING_LANE_RIGHT,
+    voc.SLOWING_DOWN: voc.SLOWING_DOWN,
+    voc.SPEEDING_UP: voc.SPEEDING_UP,
+    voc.STOPPING: voc.STOPPING,
+    voc.STOPPED: voc.STOPPED,
+    voc.PARKED: voc.PARKED,
+    voc.REVERSING: voc.REVERSING,
+    voc.CROSSING_LEFT_TO_RIGHT: voc.CROSSING_LEFT_TO_RIGHT,
+    voc.CROSSING_RIGHT_TO_LEFT: voc.CROSSING_RIGHT_TO_LEFT,
+    voc.CROSSING: "crossing_any",
+    voc.WALKING_ALONG: voc.WALKING_ALONG,
+    voc.STANDING: voc.STANDING,
 }
 BROADER_TERMS: dict[str, tuple[str, ...]] = {
-    "turning_left": ("turning_any",),
-    "turning_right": ("turning_any",),
-    "stopped": ("stationary_vehicle",),
-    "parked": ("stationary_vehicle",),
-    "crossing_left_to_right": ("crossing_any",),
-    "crossing_right_to_left": ("crossing_any",),
+    voc.TURNING_LEFT: ("turning_any",),
+    voc.TURNING_RIGHT: ("turning_any",),
+    voc.STOPPED: ("stationary_vehicle",),
+    voc.PARKED: ("stationary_vehicle",),
+    voc.CROSSING_LEFT_TO_RIGHT: ("crossing_any",),
+    voc.CROSSING_RIGHT_TO_LEFT: ("crossing_any",),
 }
 
 # participle phrases ("the car ___"); colloquial ones are used by the colloquial style only
 _MOTION: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "turning_left": (
+    voc.TURNING_LEFT: (
         ("turning left", "making a left turn", "taking a left", "turning to the left"),
         ("hanging a left", "swinging left", "taking a left"),
     ),
-    "turning_right": (
+    voc.TURNING_RIGHT: (
         ("turning right", "making a right turn", "taking a right", "turning to the right"),
         ("hanging a right", "swinging right", "taking a right"),
     ),
     "turning_any": (("turning", "making a turn", "turning a corner"), ("turning off", "taking a turn")),
-    "going_straight": (
+    voc.GOING_STRAIGHT: (
         ("going straight", "driving straight ahead", "heading straight on", "continuing straight"),
         ("going straight through", "cruising straight on"),
     ),
-    "changing_lane_left": (
+    voc.CHANGING_LANE_LEFT: (
         ("changing lanes to the left", "moving over into the left lane", "switching to the lane on its left"),
         ("cutting over to the left lane", "hopping into the left lane"),
     ),
-    "changing_lane_right": (
+    voc.CHANGING_LANE_RIGHT: (
         ("changing lanes to the right", "moving over into the right lane", "switching to the lane on its right"),
         ("cutting over to the right lane", "hopping into the right lane"),
     ),
-    "slowing_down": (("slowing down", "decelerating", "reducing its speed"), ("easing off", "slowing up")),
-    "speeding_up": (("speeding up", "accelerating", "picking up speed"), ("stepping on the gas", "speeding up")),
-    "stopping": (
+    voc.SLOWING_DOWN: (("slowing down", "decelerating", "reducing its speed"), ("easing off", "slowing up")),
+    voc.SPEEDING_UP: (("speeding up", "accelerating", "picking up speed"), ("stepping on the gas", "speeding up")),
+    voc.STOPPING: (
         ("coming to a stop", "braking to a halt", "pulling up to a stop"),
         ("pulling up", "braking to a standstill"),
     ),
-    "stopped": (
+    voc.STOPPED: (
         ("stopped in its lane", "waiting in the lane", "standing still in traffic"),
         ("just sitting in the lane", "stuck waiting in its lane"),
     ),
-    "parked": (("parked", "parked at the curb", "parked by the side of the road"), ("parked up", "sitting parked")),
+    voc.PARKED: ((voc.PARKED, "parked at the curb", "parked by the side of the road"), ("parked up", "sitting parked")),
     "stationary_vehicle": (("not moving", "stationary", "standing still"), ("not going anywhere", "sitting still")),
-    "reversing": (("reversing", "backing up", "driving backwards"), ("backing out", "going in reverse")),
-    "crossing_left_to_right": (
+    voc.REVERSING: ((voc.REVERSING, "backing up", "driving backwards"), ("backing out", "going in reverse")),
+    voc.CROSSING_LEFT_TO_RIGHT: (
         ("crossing the street from left to right", "walking across the road from left to right", "crossing from the left to the right"),
         ("heading across the road left to right", "crossing over left to right"),
     ),
-    "crossing_right_to_left": (
+    voc.CROSSING_RIGHT_TO_LEFT: (
         ("crossing the street from right to left", "walking across the road from right to left", "crossing from the right to the left"),
         ("heading across the road right to left", "crossing over right to left"),
     ),
@@ -128,25 +129,25 @@ _MOTION: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
         ("crossing the street", "walking across the road", "crossing the road"),
         ("heading across the street", "making their way across the road"),
     ),
-    "walking_along": (
+    voc.WALKING_ALONG: (
         ("walking along the sidewalk", "walking down the pavement", "walking beside the road"),
         ("strolling along the sidewalk", "wandering down the pavement"),
     ),
-    "standing": (("standing still", "standing and waiting", "not moving"), ("just standing around", "waiting around")),
+    voc.STANDING: (("standing still", "standing and waiting", "not moving"), ("just standing around", "waiting around")),
 }
 
 _SECTOR: dict[str, tuple[str, ...]] = {
-    "in_front_of_ego": ("in front of us", "ahead of us", "in front of me", "up ahead", "ahead of the ego car"),
-    "behind_ego": ("behind us", "behind me", "behind the ego car", "at our rear"),
-    "left_of_ego": ("on my left", "to our left", "on the left-hand side", "to the left of the ego car"),
-    "right_of_ego": ("on my right", "to our right", "on the right-hand side", "to the right of the ego car"),
+    voc.IN_FRONT_OF_EGO: ("in front of us", "ahead of us", "in front of me", "up ahead", "ahead of the ego car"),
+    voc.BEHIND_EGO: ("behind us", "behind me", "behind the ego car", "at our rear"),
+    voc.LEFT_OF_EGO: ("on my left", "to our left", "on the left-hand side", "to the left of the ego car"),
+    voc.RIGHT_OF_EGO: ("on my right", "to our right", "on the right-hand side", "to the right of the ego car"),
 }
 _CONTEXT: dict[str, tuple[str, ...]] = {
-    "at_the_intersection": ("at the intersection", "in the junction", "at the crossroads", "inside the intersection"),
-    "on_the_crosswalk": ("on the crosswalk", "on the zebra crossing", "in the crosswalk"),
-    "on_the_sidewalk": ("on the sidewalk", "on the pavement", "on the footpath"),
-    "by_the_curb": ("by the curb", "at the roadside", "next to the curb", "along the kerb"),
-    "in_the_oncoming_lane": ("in the oncoming lane", "in the opposite lane", "in the lane coming towards us"),
+    voc.AT_THE_INTERSECTION: ("at the intersection", "in the junction", "at the crossroads", "inside the intersection"),
+    voc.ON_THE_CROSSWALK: ("on the crosswalk", "on the zebra crossing", "in the crosswalk"),
+    voc.ON_THE_SIDEWALK: ("on the sidewalk", "on the pavement", "on the footpath"),
+    voc.BY_THE_CURB: ("by the curb", "at the roadside", "next to the curb", "along the kerb"),
+    voc.IN_THE_ONCOMING_LANE: ("in the oncoming lane", "in the opposite lane", "in the lane coming towards us"),
 }
 #: Location contexts a description may name ("on the road" is true of almost everything: never used).
 DESCRIBABLE_CONTEXTS: tuple[str, ...] = tuple(_CONTEXT)

@@ -24,8 +24,8 @@ from simsplat_core.language.motion_labels import MotionLabel
 from simsplat_core.language.motion_training import MotionAligner
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import TextEncoder, l2_normalise
-from simsplat_core.language.trajectory import agent_kind
-from simsplat_core.language.vocabulary import PEDESTRIAN_MOTION
+from simsplat_core.scenario.trajectory import agent_kind
+from simsplat_core.scenario.vocabulary import PEDESTRIAN_MOTION
 from simsplat_core.types import SceneLog
 from simsplat_core.world import WorldConfig, generate_log
 

@@ -11,7 +11,8 @@ from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.motion_dataset import mirror_log
 from simsplat_core.language.motion_labels import label_log
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig, MotionAlignerState
-from simsplat_core.language.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, PEDESTRIAN_MOTION, VEHICLE_MOTION
+from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, PEDESTRIAN_MOTION, VEHICLE_MOTION
 
 
 def test_prototypes_are_unit_text_embeddings(aligner: MotionAligner, encoder) -> None:
@@ -22,7 +23,7 @@ def test_prototypes_are_unit_text_embeddings(aligner: MotionAligner, encoder) ->
         assert book.classes == vocab.names
         assert book.prototypes.shape == (len(vocab), encoder.dim)
         np.testing.assert_allclose(np.linalg.norm(book.prototypes, axis=1), 1.0, atol=1e-5)
-    phrase = encoder.encode_passages(list(VEHICLE_MOTION["turning_left"].prototypes)).mean(axis=0)
+    phrase = encoder.encode_passages(list(VEHICLE_MOTION[voc.TURNING_LEFT].prototypes)).mean(axis=0)
     np.testing.assert_allclose(books.vehicle.prototypes[0], phrase / np.linalg.norm(phrase), atol=1e-6)
 
 
@@ -51,11 +52,11 @@ def test_training_reduces_the_loss(aligner: MotionAligner, held_out_log) -> None
 
 
 QUERIES = {
-    "turning_right": "the vehicle making a right at the junction",
-    "turning_left": "a car that takes a left turn",
-    "parked": "a car left parked by the roadside",
-    "standing": "a person who stands still",
-    "walking_along": "someone walking on the pavement",
+    voc.TURNING_RIGHT: "the vehicle making a right at the junction",
+    voc.TURNING_LEFT: "a car that takes a left turn",
+    voc.PARKED: "a car left parked by the roadside",
+    voc.STANDING: "a person who stands still",
+    voc.WALKING_ALONG: "someone walking on the pavement",
 }
 
 
@@ -76,7 +77,7 @@ def test_trained_aligner_ranks_the_right_object_first(aligner: MotionAligner, en
     # a location query: the object most "ahead of me" among vehicles is in front of the ego
     vehicles = {oid: f for oid, f in feats.items() if f.kind == "vehicle"}
     _, loc_sim = aligner.score(encoder.encode_queries(["the car right ahead of us"])[0], vehicles)
-    assert list(vehicles.values())[int(np.argmax(loc_sim))].labels.sector == "in_front_of_ego"
+    assert list(vehicles.values())[int(np.argmax(loc_sim))].labels.sector == voc.IN_FRONT_OF_EGO
 
 
 def test_save_load_round_trip_gives_identical_features(aligner: MotionAligner, held_out_log, tmp_path) -> None:

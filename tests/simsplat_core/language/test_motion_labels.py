@@ -7,6 +7,7 @@ import pytest
 
 from simsplat_core.eval.motion import labeller_agreement
 from simsplat_core.language.motion_labels import label_log
+from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.types import MapFeature
 
 from .scenes import FRAMES, arc, lane, lane_change, polygon, scene, straight, times
@@ -32,15 +33,15 @@ def test_vehicle_manoeuvres_without_a_map() -> None:
         }
     )
     assert labels == {
-        "straight": "going_straight",
-        "left": "turning_left",
-        "right": "turning_right",
-        "lc_left": "changing_lane_left",
-        "lc_right": "changing_lane_right",
-        "stop": "stopping",
-        "slow": "slowing_down",
-        "reverse": "reversing",
-        "static": "stopped",
+        "straight": voc.GOING_STRAIGHT,
+        "left": voc.TURNING_LEFT,
+        "right": voc.TURNING_RIGHT,
+        "lc_left": voc.CHANGING_LANE_LEFT,
+        "lc_right": voc.CHANGING_LANE_RIGHT,
+        "stop": voc.STOPPING,
+        "slow": voc.SLOWING_DOWN,
+        "reverse": voc.REVERSING,
+        "static": voc.STOPPED,
     }
 
 
@@ -54,13 +55,13 @@ def test_lane_change_is_measured_against_lanes_not_the_initial_heading() -> None
         "curve", "lane", np.stack([radius * np.sin(lane_ang), radius * (1.0 - np.cos(lane_ang)), 0 * lane_ang], axis=1)
     )
     follow = ("vehicle", curve_xy, ang)
-    assert _motion({"follow": follow}) == {"follow": "changing_lane_left"}  # no map: initial-heading fallback
-    assert _motion({"follow": follow}, map_features=(curved_lane,)) == {"follow": "going_straight"}
+    assert _motion({"follow": follow}) == {"follow": voc.CHANGING_LANE_LEFT}  # no map: initial-heading fallback
+    assert _motion({"follow": follow}, map_features=(curved_lane,)) == {"follow": voc.GOING_STRAIGHT}
     lanes = (lane("l0", 0.0), lane("l1", 3.5))
     labels = _motion(
         {"lc": ("vehicle", *lane_change(+1.0)), "drift": ("vehicle", *straight((5.0, 1.0), 0.0, 8.0))}, map_features=lanes
     )
-    assert labels == {"lc": "changing_lane_left", "drift": "going_straight"}
+    assert labels == {"lc": voc.CHANGING_LANE_LEFT, "drift": voc.GOING_STRAIGHT}
 
 
 def test_parked_versus_stopped_uses_the_lanes() -> None:
@@ -69,7 +70,7 @@ def test_parked_versus_stopped_uses_the_lanes() -> None:
         {"in_lane": ("vehicle", *straight((15.0, 0.2), 0.0, 0.0)), "kerb": ("vehicle", *straight((15.0, 4.5), 0.0, 0.0))},
         map_features=feats,
     )
-    assert labels == {"in_lane": "stopped", "kerb": "parked"}
+    assert labels == {"in_lane": voc.STOPPED, "kerb": voc.PARKED}
 
 
 @pytest.mark.parametrize("ego_yaw", [0.0, np.pi / 2, -2.5])
@@ -83,10 +84,10 @@ def test_pedestrian_crossing_direction_is_relative_to_the_ego(ego_yaw: float) ->
     }
     labels = _motion(objects, ego_yaw=ego_yaw)
     assert labels == {
-        "l2r": "crossing_left_to_right",
-        "r2l": "crossing_right_to_left",
-        "stand": "standing",
-        "along": "walking_along",
+        "l2r": voc.CROSSING_LEFT_TO_RIGHT,
+        "r2l": voc.CROSSING_RIGHT_TO_LEFT,
+        "stand": voc.STANDING,
+        "along": voc.WALKING_ALONG,
     }
 
 
@@ -104,7 +105,7 @@ def test_pedestrian_crossing_needs_the_road_when_the_map_has_one() -> None:
         "side_cross": ("pedestrian", *straight((29.0, 7.0), 0.0, 1.4)),
     }
     labels = _motion(objects, map_features=feats)
-    assert labels == {"cross": "crossing_left_to_right", "side": "walking_along", "side_cross": "crossing"}
+    assert labels == {"cross": voc.CROSSING_LEFT_TO_RIGHT, "side": voc.WALKING_ALONG, "side_cross": voc.CROSSING}
 
 
 def test_location_sectors_and_oncoming() -> None:
@@ -119,14 +120,14 @@ def test_location_sectors_and_oncoming() -> None:
     )
     labels = label_log(log)
     assert {k: v.sector for k, v in labels.items()} == {
-        "front": "in_front_of_ego",
-        "behind": "behind_ego",
-        "left": "left_of_ego",
-        "right": "right_of_ego",
-        "oncoming": "in_front_of_ego",
+        "front": voc.IN_FRONT_OF_EGO,
+        "behind": voc.BEHIND_EGO,
+        "left": voc.LEFT_OF_EGO,
+        "right": voc.RIGHT_OF_EGO,
+        "oncoming": voc.IN_FRONT_OF_EGO,
     }
-    assert labels["oncoming"].context == "in_the_oncoming_lane"
-    assert labels["front"].context == "on_the_road"
+    assert labels["oncoming"].context == voc.IN_THE_ONCOMING_LANE
+    assert labels["front"].context == voc.ON_THE_ROAD
 
 
 def test_location_contexts_from_the_map() -> None:
@@ -153,12 +154,12 @@ def test_location_contexts_from_the_map() -> None:
     )
     contexts = {k: v.context for k, v in label_log(log).items()}
     assert contexts == {
-        "junction": "at_the_intersection",
-        "zebra": "on_the_crosswalk",
-        "walk": "on_the_sidewalk",
-        "kerb": "by_the_curb",
-        "oncoming": "in_the_oncoming_lane",
-        "lane": "on_the_road",
+        "junction": voc.AT_THE_INTERSECTION,
+        "zebra": voc.ON_THE_CROSSWALK,
+        "walk": voc.ON_THE_SIDEWALK,
+        "kerb": voc.BY_THE_CURB,
+        "oncoming": voc.IN_THE_ONCOMING_LANE,
+        "lane": voc.ON_THE_ROAD,
     }
 
 

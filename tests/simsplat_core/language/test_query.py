@@ -15,6 +15,7 @@ from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.query_config import QueryConfig
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
+from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.world import generate_log
 from tests.simsplat_core.language.language_scene_factory import (
     SMALL_WORLD,
@@ -353,12 +354,12 @@ def test_auto_labels_correct_an_unsure_aligner(encoder: TextEncoder, codebooks: 
     """The aligner's weights say "going straight", the node's auto-label says "changing lanes to the right":
     with the default blend the lane change is found, with the aligner alone it is not."""
     specs = [
-        ObjectSpec("X", "vehicle", vehicle_caption("red", "sedan"), motion_label("X", "going_straight", "in_front_of_ego", "on_the_road")),
-        ObjectSpec("Y", "vehicle", vehicle_caption("blue", "SUV"), motion_label("Y", "going_straight", "in_front_of_ego", "on_the_road")),
+        ObjectSpec("X", "vehicle", vehicle_caption("red", "sedan"), motion_label("X", voc.GOING_STRAIGHT, voc.IN_FRONT_OF_EGO, voc.ON_THE_ROAD)),
+        ObjectSpec("Y", "vehicle", vehicle_caption("blue", "SUV"), motion_label("Y", voc.GOING_STRAIGHT, voc.IN_FRONT_OF_EGO, voc.ON_THE_ROAD)),
     ]
     scene = hand_built_scene(specs, encoder, codebooks)
     x = scene.nodes[0]
-    relabelled = dataclasses.replace(x.motion, labels=motion_label("X", "changing_lane_right", "in_front_of_ego", "on_the_road"))
+    relabelled = dataclasses.replace(x.motion, labels=motion_label("X", voc.CHANGING_LANE_RIGHT, voc.IN_FRONT_OF_EGO, voc.ON_THE_ROAD))
     scene = dataclasses.replace(scene, nodes=(dataclasses.replace(x, motion=relabelled), *scene.nodes[1:]))
     text = "the car changing lanes to the right"
     blended = QueryEngine(encoder, QueryConfig(), codebooks=codebooks)

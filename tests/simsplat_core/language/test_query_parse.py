@@ -5,6 +5,7 @@ from __future__ import annotations
 import pytest
 
 from simsplat_core.language.query_parse import crossing_direction, find_spans, normalise, parse_query
+from simsplat_core.scenario import vocabulary as voc
 
 
 @pytest.mark.parametrize(
@@ -22,11 +23,11 @@ from simsplat_core.language.query_parse import crossing_direction, find_spans, n
         ),
         (
             "which SUV is parked on the right?",
-            dict(categories=("vehicle",), subtype="SUV", noun="SUV", motion="parked", sector="on the right",
+            dict(categories=("vehicle",), subtype="SUV", noun="SUV", motion=voc.PARKED, sector="on the right",
                  context="", appearance="SUV", group=False),
         ),
-        ("all crossing pedestrians", dict(categories=("pedestrian",), motion="crossing", group=True, noun="pedestrian")),
-        ("every parked car", dict(categories=("vehicle",), motion="parked", group=True)),
+        ("all crossing pedestrians", dict(categories=("pedestrian",), motion=voc.CROSSING, group=True, noun="pedestrian")),
+        ("every parked car", dict(categories=("vehicle",), motion=voc.PARKED, group=True)),
         ("the purple bus", dict(subtype="bus", colors=("purple",), motion="", sector="", context="", group=False)),
         ("Show me the white sedan that is making a right turn.", dict(subtype="sedan", colors=("white",), motion="making a right turn")),
         ("the car ahead of us that is slowing down", dict(motion="slowing down", sector="ahead of us")),
@@ -37,9 +38,9 @@ from simsplat_core.language.query_parse import crossing_direction, find_spans, n
         ("the bicycle", dict(categories=("cyclist",), subtype="bicycle")),
         ("a person in a blue jacket walking along the sidewalk",
          dict(upper_color="blue", lower_color=None, motion="walking along the sidewalk", context="")),
-        ("pedestrians standing on the sidewalk", dict(motion="standing", context="on the sidewalk", group=True)),
+        ("pedestrians standing on the sidewalk", dict(motion=voc.STANDING, context="on the sidewalk", group=True)),
         ("the person on the pedestrian crossing", dict(motion="", context="on the pedestrian crossing")),
-        ("the person crossing at the crosswalk", dict(motion="crossing", context="at the crosswalk")),
+        ("the person crossing at the crosswalk", dict(motion=voc.CROSSING, context="at the crosswalk")),
         ("the van going straight through the intersection", dict(motion="going straight", context="through the intersection")),
         ("the car right ahead of us", dict(motion="", sector="right ahead of us")),
         ("the car turning to the left of the ego car", dict(motion="turning", sector="to the left of the ego car")),
@@ -50,8 +51,8 @@ from simsplat_core.language.query_parse import crossing_direction, find_spans, n
         ("the blue car merging into the left lane", dict(motion="merging into the left lane", sector="")),
         ("the truck backing up", dict(subtype="truck", motion="backing up")),
         ("the kid in a yellow top and brown trousers standing on the left of ego",
-         dict(subtype="child", upper_color="yellow", lower_color="brown", motion="standing", sector="on the left of ego")),
-        ("both cars parked by the curb", dict(group=True, motion="parked", context="by the curb")),
+         dict(subtype="child", upper_color="yellow", lower_color="brown", motion=voc.STANDING, sector="on the left of ego")),
+        ("both cars parked by the curb", dict(group=True, motion=voc.PARKED, context="by the curb")),
         ("the vehicles in the lane coming towards us", dict(group=True, context="in the lane coming towards us")),
         ("that red ride hanging a left by the crossroads", dict(subtype="car", colors=("red",), motion="hanging a left", context="by the crossroads")),
         ("the woman dressed in red", dict(categories=("pedestrian",), colors=("red",), upper_color=None, lower_color=None)),
@@ -138,7 +139,7 @@ def test_appearance_text_and_extra_words() -> None:
 
 def test_motion_text_carries_the_subject_noun() -> None:
     assert parse_query("the white vans that are parked").motion_text == "van parked"
-    assert parse_query("something reversing").motion_text == "reversing"
+    assert parse_query("something reversing").motion_text == voc.REVERSING
     assert parse_query("the white van").motion_text == ""
 
 

@@ -9,6 +9,7 @@ import pytest
 
 from simsplat_core.data.av2 import load_av2_log
 from simsplat_core.language.motion_labels import label_log
+from simsplat_core.scenario import vocabulary as voc
 
 AV2_LOG = "av2/sensor-log-7fab2350"
 
@@ -25,10 +26,10 @@ def test_av2_label_distribution_is_plausible(av2_log) -> None:
     assert len(labels) == len(movable)
     motion = collections.Counter(lb.motion for lb in labels.values())
     # a city street: most vehicles are parked or waiting, pedestrians stand or walk on sidewalks
-    assert motion["parked"] + motion["stopped"] > len(labels) / 3
-    assert motion["walking_along"] >= 3 and motion["standing"] >= 3
+    assert motion[voc.PARKED] + motion[voc.STOPPED] > len(labels) / 3
+    assert motion[voc.WALKING_ALONG] >= 3 and motion[voc.STANDING] >= 3
     peds = [lb for lb in labels.values() if lb.kind == "pedestrian"]
-    assert sum(lb.context == "on_the_sidewalk" for lb in peds) >= 0.8 * len(peds)
+    assert sum(lb.context == voc.ON_THE_SIDEWALK for lb in peds) >= 0.8 * len(peds)
 
 
 @pytest.mark.shared_data

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.world import WorldConfig, generate_world
 from simsplat_core.world import behaviors as bh
 from simsplat_core.world.agents import EGO_SIZE
-from simsplat_core.world.collision import footprints_overlap
 from simsplat_core.world.road import RoadLayout
 
 

@@ -16,10 +16,10 @@ from simsplat_core.eval.grounding.baselines import (
 )
 from simsplat_core.eval.grounding.gt_scene import ground_truth_caption, node_ids_of
 from simsplat_core.language.appearance.captioner import AppearanceCaption
-from simsplat_core.language.map_context import MapContext
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import TextEncoder
-from simsplat_core.language.trajectory import log_trajectories
+from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.scenario.trajectory import log_trajectories
 from simsplat_core.world import generate_log
 from tests.simsplat_core.language import scenes
 from tests.simsplat_core.language.language_scene_factory import SMALL_WORLD

@@ -20,6 +20,7 @@ from simsplat_core.eval.grounding.benchmark import (
     unambiguous_targets,
 )
 from simsplat_core.eval.grounding.paraphrases import MOTION_TERMS, SINGLE_STYLES
+from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.types import SceneLog
 from simsplat_core.world import generate_log
 from tests.simsplat_core.language.language_scene_factory import SMALL_WORLD
@@ -106,7 +107,7 @@ def test_texts_put_the_constraints_into_words(bench) -> None:
                 assert any(re.search(rf"\b{w}\b", text) for w in words), (color, q.text)
         if d.category == "pedestrian":
             assert re.search(r"pedestrian|person|people|walker|passer|individual|someone", text), q.text
-        if d.motion in ("turning_left", "crossing_left_to_right"):
+        if d.motion in (voc.TURNING_LEFT, voc.CROSSING_LEFT_TO_RIGHT):
             assert "left" in text, q.text
 
 
@@ -126,34 +127,34 @@ def test_paraphrases_of_one_target_differ(bench) -> None:
 
 
 def test_candidates_cover_appearance_motion_location() -> None:
-    f = ObjectFacts("v", "vehicle", 1, "SUV", "red", None, None, "turning_left", "left_of_ego",
-                    "at_the_intersection", 10, 500)
+    f = ObjectFacts("v", "vehicle", 1, "SUV", "red", None, None, voc.TURNING_LEFT, voc.LEFT_OF_EGO,
+                    voc.AT_THE_INTERSECTION, 10, 500)
     cands = candidate_descriptions(f)
     assert all(c.matches(f) for c in cands)
     fams = {c.family for c in cands}
     assert {"app", "app+mot", "app+loc", "app+mot+loc", "mot", "loc", "mot+loc", "category"} <= fams
     # broader motion terms are offered and cover the exact class
     assert any(c.motion == "turning_any" for c in cands)
-    assert "turning_left" in MOTION_TERMS["turning_any"][1]
-    twin = dataclasses.replace(f, object_id="w", motion="going_straight")
+    assert voc.TURNING_LEFT in MOTION_TERMS["turning_any"][1]
+    twin = dataclasses.replace(f, object_id="w", motion=voc.GOING_STRAIGHT)
     unique = [c for c in cands if [m.object_id for m in matching(c, [f, twin])] == ["v"]]
-    assert unique and all(c.motion in ("turning_left", "turning_any") for c in unique)
+    assert unique and all(c.motion in (voc.TURNING_LEFT, "turning_any") for c in unique)
 
 
 def test_plausible_readings_widen_matching() -> None:
-    stopping = ObjectFacts("s", "vehicle", 1, "sedan", "red", None, None, "stopping", "in_front_of_ego",
-                           "at_the_intersection", motions=frozenset({"stopping", "slowing_down", "going_straight"}),
-                           sectors=frozenset({"in_front_of_ego", "left_of_ego"}),
-                           contexts=frozenset({"at_the_intersection", "in_the_oncoming_lane"}))
-    straight = Description("vehicle", color="red", motion="going_straight")
+    stopping = ObjectFacts("s", "vehicle", 1, "sedan", "red", None, None, voc.STOPPING, voc.IN_FRONT_OF_EGO,
+                           voc.AT_THE_INTERSECTION, motions=frozenset({voc.STOPPING, voc.SLOWING_DOWN, voc.GOING_STRAIGHT}),
+                           sectors=frozenset({voc.IN_FRONT_OF_EGO, voc.LEFT_OF_EGO}),
+                           contexts=frozenset({voc.AT_THE_INTERSECTION, voc.IN_THE_ONCOMING_LANE}))
+    straight = Description("vehicle", color="red", motion=voc.GOING_STRAIGHT)
     assert not straight.matches(stopping) and straight.matches(stopping, lenient=True)
-    left = Description("vehicle", sector="left_of_ego")
+    left = Description("vehicle", sector=voc.LEFT_OF_EGO)
     assert not left.matches(stopping) and left.matches(stopping, lenient=True)
-    assert not Description("vehicle", context="by_the_curb").matches(stopping, lenient=True)
+    assert not Description("vehicle", context=voc.BY_THE_CURB).matches(stopping, lenient=True)
     # a description that fits one object by its labels but another one by a plausible reading is not unique
-    other = dataclasses.replace(stopping, object_id="t", motion="going_straight", motions=frozenset({"going_straight"}))
+    other = dataclasses.replace(stopping, object_id="t", motion=voc.GOING_STRAIGHT, motions=frozenset({voc.GOING_STRAIGHT}))
     assert unambiguous_targets(straight, [stopping, other]) is None
-    assert [f.object_id for f in unambiguous_targets(Description("vehicle", motion="stopping"), [stopping, other])] == ["s"]
+    assert [f.object_id for f in unambiguous_targets(Description("vehicle", motion=voc.STOPPING), [stopping, other])] == ["s"]
 
 
 def test_readings_of_a_real_log_contain_the_labels(logs: list[SceneLog], facts) -> None:
@@ -161,12 +162,12 @@ def test_readings_of_a_real_log_contain_the_labels(logs: list[SceneLog], facts) 
         if f.motion is None:
             continue
         assert f.motion in f.motions and f.sector in f.sectors and f.context in f.contexts
-        if f.motion == "stopping":
-            assert {"slowing_down", "going_straight"} <= f.motions
+        if f.motion == voc.STOPPING:
+            assert {voc.SLOWING_DOWN, voc.GOING_STRAIGHT} <= f.motions
 
 
 def test_generic_nouns_match_every_vehicle() -> None:
-    bus = ObjectFacts("b", "vehicle", 1, "bus", "red", None, None, "parked", "left_of_ego", "by_the_curb")
+    bus = ObjectFacts("b", "vehicle", 1, "bus", "red", None, None, voc.PARKED, voc.LEFT_OF_EGO, voc.BY_THE_CURB)
     assert Description("vehicle", color="red").matches(bus)
     assert not Description("vehicle", subtype="sedan", color="red").matches(bus)
     assert not Description("pedestrian").matches(bus)

@@ -14,11 +14,12 @@ from simsplat_core.eval.grounding.paraphrases import (
     realise,
     realise_group,
 )
+from simsplat_core.scenario import vocabulary as voc
 
-CAR = Wording("vehicle", "SUV", ("SUV",), color="red", motion="turning_left", sector="left_of_ego",
-              context="at_the_intersection")
-PED = Wording("pedestrian", upper="blue", lower="gray", motion="crossing_any", context="on_the_crosswalk")
-GENERIC = Wording("vehicle", None, ("sedan", "hatchback"), color="white", motion="parked")
+CAR = Wording("vehicle", "SUV", ("SUV",), color="red", motion=voc.TURNING_LEFT, sector=voc.LEFT_OF_EGO,
+              context=voc.AT_THE_INTERSECTION)
+PED = Wording("pedestrian", upper="blue", lower="gray", motion="crossing_any", context=voc.ON_THE_CROSSWALK)
+GENERIC = Wording("vehicle", None, ("sedan", "hatchback"), color="white", motion=voc.PARKED)
 
 
 @pytest.mark.parametrize("style", SINGLE_STYLES)
@@ -74,7 +75,7 @@ def test_plural_and_article() -> None:
 
 
 def test_motion_terms_cover_vocabulary_classes() -> None:
-    from simsplat_core.language.vocabulary import MOTION_VOCABULARIES
+    from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES
 
     covered = {c for _, classes in MOTION_TERMS.values() for c in classes}
     for vocab in MOTION_VOCABULARIES.values():
@@ -96,7 +97,7 @@ def test_no_dangling_clauses_and_unambiguous_turns() -> None:
         for _ in range(5):
             text = realise(bare, style, rng).rstrip(".?")
             assert not text.endswith(("that is", "that's", "which is", "who is", "who's")), text
-    turn = Wording("vehicle", "sedan", ("sedan",), motion="turning_any", sector="left_of_ego")
+    turn = Wording("vehicle", "sedan", ("sedan",), motion="turning_any", sector=voc.LEFT_OF_EGO)
     for style in SINGLE_STYLES:
         for _ in range(5):
             text = realise(turn, style, rng)
@@ -107,7 +108,7 @@ def test_no_dangling_clauses_and_unambiguous_turns() -> None:
 
 def test_group_wordings_agree_in_number() -> None:
     rng = np.random.default_rng(6)
-    stopped = Wording("vehicle", None, ("sedan",), motion="stopped")
+    stopped = Wording("vehicle", None, ("sedan",), motion=voc.STOPPED)
     texts = [realise_group(stopped, style, rng) for style in GROUP_STYLES for _ in range(6)]
     assert not any(" its " in t or t.endswith(" its") for t in texts)
     assert any("their lane" in t for t in texts)

@@ -17,53 +17,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.scenario.geometry import convex_hull, points_in_polygon, polygon_edges, segment_distances
 from simsplat_core.types import MapFeature
 
 _CHUNK = 512  # points per vectorised block (bounds the [points, segments] temporaries)
-
-
-def points_in_polygon(xy: np.ndarray, polygon: np.ndarray) -> np.ndarray:
-    """``[N]`` bool: even-odd test of ``[N, 2]`` points against a closed ``[P, 2]`` polygon."""
-    xy = np.atleast_2d(xy)
-    a = polygon[:, :2]
-    b = np.roll(a, -1, axis=0)
-    x, y = xy[:, 0:1], xy[:, 1:2]  # [N, 1]
-    straddle = (a[None, :, 1] > y) != (b[None, :, 1] > y)  # [N, P]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        x_cross = a[None, :, 0] + (y - a[None, :, 1]) * (b[None, :, 0] - a[None, :, 0]) / (b[None, :, 1] - a[None, :, 1])
-    return np.count_nonzero(straddle & (x < x_cross), axis=1) % 2 == 1
-
-
-def segment_distances(xy: np.ndarray, seg_a: np.ndarray, seg_b: np.ndarray) -> np.ndarray:
-    """``[N, S]`` distances from ``[N, 2]`` points to ``[S, 2]`` segments ``a -> b``."""
-    ab = seg_b - seg_a  # [S, 2]
-    rel = xy[:, None, :] - seg_a[None]  # [N, S, 2]
-    t = np.clip((rel * ab[None]).sum(-1) / np.maximum((ab * ab).sum(-1), 1e-12)[None], 0.0, 1.0)
-    return np.linalg.norm(rel - t[..., None] * ab[None], axis=-1)
-
-
-def polygon_edges(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Edges ``([P, 2], [P, 2])`` of a closed polygon."""
-    a = polygon[:, :2]
-    return a, np.roll(a, -1, axis=0)
-
-
-def convex_hull(points: np.ndarray) -> np.ndarray:
-    """Counter-clockwise convex hull ``[H, 2]`` of ``[N, 2]`` points (Andrew's monotone chain)."""
-    pts = np.unique(np.asarray(points, dtype=np.float64)[:, :2], axis=0)
-    if len(pts) < 3:
-        return pts
-
-    def half(seq: np.ndarray) -> list[np.ndarray]:
-        out: list[np.ndarray] = []
-        for p in seq:
-            while len(out) >= 2 and np.cross(out[-1] - out[-2], p - out[-2]) <= 0:
-                out.pop()
-            out.append(p)
-        return out
-
-    lower, upper = half(pts), half(pts[::-1])
-    return np.array(lower[:-1] + upper[:-1])
 
 
 def _clusters(centroids: np.ndarray, max_dist: float) -> list[list[int]]:
@@ -110,7 +67,7 @@ class MapFacts:
     lane_dist: np.ndarray
     lane_offset: np.ndarray
 
-    def take(self, rows: np.ndarray | slice) -> "MapFacts":
+    def take(self, rows: np.ndarray | slice) -> MapFacts:
         """The facts of a subset of rows."""
         return MapFacts(*(getattr(self, f)[rows] for f in self.__dataclass_fields__))
 
@@ -139,7 +96,7 @@ class MapContext:
 
     @classmethod
     def from_features(cls, features: tuple[MapFeature, ...] | list[MapFeature], cluster_m: float = 40.0,
-                      margin_m: float = 1.5) -> "MapContext":
+                      margin_m: float = 1.5) -> MapContext:
         """Index ``features``; crosswalk groups within ``cluster_m`` become intersections."""
         by_kind: dict[str, list[np.ndarray]] = {}
         for feat in features:

@@ -12,7 +12,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from simsplat_core.geometry import invert_transform, yaw_of_rotation
-from simsplat_core.language.map_context import MapContext, MapFacts
+from simsplat_core.scenario.map_context import MapContext, MapFacts
 from simsplat_core.types import SceneLog, Track
 
 #: Agent kinds with a motion codebook.
@@ -102,7 +102,7 @@ class ObjectTrajectory:
     def duration(self) -> float:
         return float(self.t[-1] - self.t[0]) if len(self) else 0.0
 
-    def window(self, rows: slice) -> "ObjectTrajectory":
+    def window(self, rows: slice) -> ObjectTrajectory:
         """The rows ``rows`` (a contiguous slice) as a trajectory of their own; velocities are kept."""
         return replace(
             self,
@@ -128,7 +128,7 @@ class ObjectTrajectory:
         timestamps_us: np.ndarray,
         map_context: MapContext | None = None,
         half_window_s: float = 0.5,
-    ) -> "ObjectTrajectory":
+    ) -> ObjectTrajectory:
         """Prepare a ``Track`` (``timestamps_us`` ``[F]`` of the log; velocities smoothed over ``±half_window_s``)."""
         kind = agent_kind(category)
         if kind is None:

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from simsplat_core.language.map_context import MapContext, convex_hull, points_in_polygon
-
-from .scenes import lane, polygon
+from simsplat_core.scenario.geometry import convex_hull, points_in_polygon
+from simsplat_core.scenario.map_context import MapContext
+from tests.simsplat_core.language.scenes import lane, polygon
 
 
 def test_points_in_polygon_and_convex_hull() -> None:
