@@ -42,7 +42,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from simsplat_core.language.appearance.colors import COLOR_NAMES
+from simsplat_core.color_names import COLOR_NAMES
 
 # ---------------------------------------------------------------------------------------------- lexicons
 

@@ -1,6 +1,6 @@
 """The colours the procedural world paints with and its object catalogue.
 
-Colour RGBs come from the naming palette of ``language/appearance/colors.py`` (one table).
+Colour RGBs come from the one table of named colours, ``simsplat_core/color_names.py``.
 
 The catalogue fixes what kinds of vehicles, clothing and street furniture exist, with their
 dimensions; captions use the same names, so a colour word always matches the rendered colour.
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from simsplat_core.language.appearance.colors import DISPLAY_RGB
+from simsplat_core.color_names import DISPLAY_RGB
 
 #: Colours the world paints with, in this order (samplers index it); display RGB from the naming palette.
 WORLD_COLOR_NAMES: tuple[str, ...] = (

@@ -28,8 +28,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from simsplat_core.color_names import COLOR_NAMES
 from simsplat_core.language.appearance.colors import (
-    COLOR_NAMES,
     UNKNOWN,
     ColorEstimate,
     clothing_colors,

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from simsplat_core.color_names import ACHROMATIC_NAMES, CHROMATIC_PALETTE
+
 logger = logging.getLogger(__name__)
 
 #: Below this saturation ``C / (L + 16)`` a pixel or region is achromatic (silver ~0.05, gray ~0.06,
@@ -42,40 +44,6 @@ BLACK_L = 14.0
 SHADOW_PERCENTILE = 10.0
 #: The name given when a surface's colour cannot be told (no usable pixels).
 UNKNOWN = "unknown"
-
-
-@dataclass(frozen=True)
-class NamedColor:
-    """One entry of the naming palette: a name and a representative display RGB in ``[0, 1]``."""
-
-    name: str
-    rgb: tuple[float, float, float]
-
-
-#: Chromatic reference colours; a chromatic region takes the name whose chromaticity
-#: ``(a, b) / (L + 16)`` is nearest.
-CHROMATIC_PALETTE: tuple[NamedColor, ...] = (
-    NamedColor("red", (0.75, 0.07, 0.07)),
-    NamedColor("orange", (0.95, 0.42, 0.05)),
-    NamedColor("yellow", (0.95, 0.78, 0.08)),
-    NamedColor("green", (0.08, 0.45, 0.18)),
-    NamedColor("blue", (0.1, 0.22, 0.68)),
-    NamedColor("brown", (0.42, 0.26, 0.13)),
-    NamedColor("beige", (0.78, 0.7, 0.53)),
-    NamedColor("purple", (0.45, 0.2, 0.6)),
-    NamedColor("pink", (0.95, 0.55, 0.7)),
-)
-ACHROMATIC_NAMES: tuple[str, ...] = ("black", "gray", "silver", "white")
-#: Representative display colours of the achromatic names (the synthetic world paints with them).
-ACHROMATIC_PALETTE: tuple[NamedColor, ...] = (
-    NamedColor("black", (0.05, 0.05, 0.06)),
-    NamedColor("gray", (0.4, 0.41, 0.43)),
-    NamedColor("silver", (0.66, 0.68, 0.71)),
-    NamedColor("white", (0.9, 0.9, 0.88)),
-)
-COLOR_NAMES: tuple[str, ...] = ACHROMATIC_NAMES + tuple(c.name for c in CHROMATIC_PALETTE)
-#: The one table of colour name -> display RGB in ``[0, 1]`` (``world/palette.py`` paints with it).
-DISPLAY_RGB: dict[str, tuple[float, float, float]] = {c.name: c.rgb for c in ACHROMATIC_PALETTE + CHROMATIC_PALETTE}
 
 
 @dataclass(frozen=True)

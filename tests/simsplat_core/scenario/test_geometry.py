@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simsplat_core.language.appearance.colors import DISPLAY_RGB
+from simsplat_core.color_names import DISPLAY_RGB
 from simsplat_core.scenario.geometry import box_footprints, corner_road_distances, footprints_overlap, offroad
 from simsplat_core.world.palette import NAMED_COLORS
 

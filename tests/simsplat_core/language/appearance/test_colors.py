@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from simsplat_core.color_names import CHROMATIC_PALETTE
 from simsplat_core.language.appearance.colors import (
-    CHROMATIC_PALETTE,
     CLOTHING_SCALE,
     UNKNOWN,
     chromaticity,
