@@ -42,7 +42,10 @@ own with the text encoder (query role), so "turning left" is compared with motio
   groups the query mentions ("on my left at the intersection" must be both).
 
 A node that lacks a signal gets a fixed score for it: ``missing_appearance`` without caption and
-``f_app`` (too few pixels ever to be described: unlikely to be what someone describes), and
+``f_app`` (too few pixels ever to be described: unlikely to be what someone describes; in a scene
+where *no* node has either, a log without camera images such as Argoverse 2's, appearance is neutral
+instead: the category still filters, and a query naming colours or other looks matches nothing and
+says the log has no images), and
 ``missing_motion`` without motion features (static objects get the query's stationary mass for
 motion instead).
 
@@ -631,7 +634,8 @@ class QueryEngine:
                 if not parsed.categories and not parsed.named_colors:  # "the giraffe": nothing known to check
                     g[has_feature & (np.nan_to_num(sims, nan=1.0) < cfg.unknown_floor)] = 0.0
             attrs = np.array([attribute_fit(parsed, n, cfg) if n.caption is not None else 1.0 for n in nodes])
-            p_app = np.where(has_caption | has_feature, g * attrs, cfg.missing_appearance)
+            missing = cfg.missing_appearance if scene_has_appearance(scene) else 1.0  # no images: neutral
+            p_app = np.where(has_caption | has_feature, g * attrs, missing)
         p_mot = np.full(len(nodes), nan)
         if use_mot:
             p_mot = np.array([self._motion_score(parsed, vectors.motion, n) for n in nodes])
@@ -690,7 +694,13 @@ class QueryEngine:
             matches = tuple(candidates[:1]) if candidates and candidates[0].score >= cfg.no_match_threshold else ()
         if not self._scored_parts(parsed):
             matches = ()
-        message = self._message(scene, parsed, ranking, matches)
+        looks = _looks_named(parsed)
+        if cfg.use_appearance and looks and not scene_has_appearance(scene):
+            matches = ()
+            message = (f"{scene.seq_id} has no camera images: its objects' looks ({looks}) cannot be checked; "
+                       "ask by category, motion or location instead")
+        else:
+            message = self._message(scene, parsed, ranking, matches)
         logger.debug("%s: %r -> %s (%s)", scene.seq_id, text, [m.node_id for m in matches], message)
         return Grounding(text, parsed, matches, ranking, parsed.group, message)
 
@@ -752,6 +762,19 @@ class QueryEngine:
             return f"no {subject} in this scene"
         verb = "is" if not clauses[0].startswith("that ") else ""
         return " ".join(w for w in ("no", subject, "in this scene", verb, " ".join(clauses)) if w)
+
+
+def scene_has_appearance(scene: LanguageScene) -> bool:
+    """Whether any object node of ``scene`` has a caption or ``f_app`` (``False`` for logs without images)."""
+    return any(n.caption is not None or n.f_app is not None for n in scene.nodes)
+
+
+def _looks_named(parsed: ParsedQuery) -> str:
+    """The query's appearance words beyond the category ("red", "not red", "big"); ``""`` when none."""
+    words = [*parsed.named_colors, *(f"not {c}" for c in parsed.excluded_colors)]
+    if parsed.appearance_extra and not parsed.named_colors:
+        words.append(parsed.appearance_extra)
+    return ", ".join(words)
 
 
 def _with_label(probs: dict[str, float], label: str | None, mass: float, weight: float,
