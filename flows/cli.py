@@ -5,6 +5,7 @@ Run ``simsplat --help`` or ``simsplat COMMAND --help``.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 from pathlib import Path
@@ -83,10 +84,43 @@ def _world_config(frames: int, width: int, height: int):
     return WorldConfig(num_frames=frames, width=width, height=height)
 
 
+def _print_stages(stages) -> None:
+    """The stages each log skipped, and why (nothing when every log went through every stage)."""
+    skipped = [(p.seq_id, stage, reason) for p in stages for stage, reason in p.skipped().items()]
+    if not skipped:
+        return
+    table = Table(title="Stages skipped")
+    for col in ("sequence", "stage", "why"):
+        table.add_column(col, no_wrap=True)
+    for seq_id, stage, reason in skipped:
+        table.add_row(seq_id, stage, f"skipped: {reason}")
+    console.print(table)
+
+
+def _alignment_config(captioner: str):
+    """The validated ``AlignmentConfig`` of ``--captioner`` (a VLM endpoint is checked now, not after hours)."""
+    from simsplat_core.language.scene_builder import AlignmentConfig, AlignmentConfigError
+    from simsplat_core.vlm import OpenAIChatConfig, VLMError
+
+    try:
+        alignment = AlignmentConfig(captioner=captioner).validate()
+        if captioner == "vlm":
+            OpenAIChatConfig.from_env()
+    except (AlignmentConfigError, VLMError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--captioner") from exc
+    return alignment
+
+
+CaptionerOption = Annotated[str, typer.Option(
+    help="Object captioner of the alignment: 'builtin' (offline) or 'vlm' (an OpenAI-compatible server "
+         "from SIMSPLAT_VLM_URL / SIMSPLAT_VLM_MODEL; key in SIMSPLAT_VLM_API_KEY).")]
+
+
 @app.command()
 def run(
     store: Annotated[str, typer.Option(help="Artifact store root: a local directory or an object-store URI.")] = "artifacts",
-    sequences: Annotated[int, typer.Option(min=1, help="Number of synthetic sequences.")] = 2,
+    sequences: Annotated[int, typer.Option(min=0, help="Synthetic sequences to generate into the store first "
+                                           "(0: only the logs already there; `make demo` asks for 2).")] = 0,
     seed: Annotated[int, typer.Option(help="Seed of the first sequence; sequence i uses seed + i.")] = 0,
     frames: Annotated[int, typer.Option(min=2, help="Frames per sequence (10 Hz).")] = 40,
     width: Annotated[int, typer.Option(min=16)] = 240,
@@ -95,27 +129,26 @@ def run(
     workers: WorkersOption = None,
     iterations: IterationsOption = None,
     align: Annotated[bool, typer.Option(help="Run the language-alignment stage after reconstruction.")] = True,
-    captioner: Annotated[str, typer.Option(
-        help="Object captioner of the alignment: 'builtin' (offline) or 'vlm' (an OpenAI-compatible server "
-             "from SIMSPLAT_VLM_URL / SIMSPLAT_VLM_MODEL; key in SIMSPLAT_VLM_API_KEY).")] = "builtin",
+    captioner: CaptionerOption = "builtin",
 ) -> None:
-    """Run the main job on the embedded default data: synthetic sequences, one reconstructed scene per
-    sequence, then language alignment (motion aligner + one queryable language scene per sequence)."""
+    """Run the main job over every log in the store (ingested real logs included), after generating
+    --sequences synthetic ones: one reconstructed scene per log with camera images, then language
+    alignment (motion aligner trained on every log + one queryable language scene per log; a log without
+    images is aligned from its tracks and map) and the grounding benchmark on the synthetic logs."""
     from flows.pipeline import main_flow, reconstruction_config
-    from simsplat_core.language.scene_builder import AlignmentConfig, AlignmentConfigError
-    from simsplat_core.vlm import OpenAIChatConfig, VLMError
+    from storage import ArtifactStore, list_logs
 
-    try:
-        alignment = AlignmentConfig(captioner=captioner).validate()
-        if captioner == "vlm":
-            OpenAIChatConfig.from_env()  # fail now, not after the reconstructions
-    except (AlignmentConfigError, VLMError, ValueError) as exc:
-        raise typer.BadParameter(str(exc), param_hint="--captioner") from exc
+    alignment = _alignment_config(captioner)
+    if sequences == 0 and not list_logs(ArtifactStore(store)):
+        raise typer.BadParameter(f"no driving log in {store}/logs: pass --sequences N to generate synthetic ones, "
+                                 "or ingest real ones first (simsplat ingest av2 / waymo-frame)", param_hint="--sequences")
     result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                        config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
                        alignment=alignment, align=align)
     _print_logs(result.logs)
-    _print_scenes(result.scenes)
+    _print_stages(result.stages)
+    if result.scenes:
+        _print_scenes(result.scenes)
     if result.language:
         _print_language(result.aligner, result.language)
     if result.grounding is not None:
@@ -123,6 +156,30 @@ def run(
     console.print(f"Artifacts under [bold]{store}[/bold]: logs/<seq_id>/ (Parquet tables, EXR images), "
                   "scenes/<seq_id>/<scene_hash>/ (Gaussians, nodes, poses, metrics, test renders), "
                   "alignment/<model_hash>/ (motion aligner, language scenes).")
+
+
+@app.command("align")
+def align_command(
+    store: Annotated[str, typer.Option(help="Artifact store root holding logs/<seq_id>/ (and scenes of logs with images).")],
+    seq: Annotated[Optional[list[str]], typer.Option(help="Sequence to align (repeatable; default: every log).")] = None,
+    runner: RunnerOption = RunnerKind.threads,
+    workers: WorkersOption = None,
+    captioner: CaptionerOption = "builtin",
+) -> None:
+    """Align language to stored logs: train (or reuse) the motion aligner on every log in the store, then
+    build one queryable language scene per chosen log (through its newest reconstructed scene; a log without
+    camera images from its tracks and map: motion and location language, no appearance)."""
+    from flows.pipeline import align_flow, plan_alignment
+
+    alignment = _alignment_config(captioner)
+    try:
+        plan_alignment(store, list(seq) if seq else None)  # fail before starting Prefect
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--seq") from exc
+    result = _run_flow(align_flow, runner, workers, store_root=store, seq_ids=list(seq) if seq else None,
+                       alignment=alignment)
+    _print_stages(result.stages)
+    _print_language(result.aligner, result.language)
 
 
 def _print_language(aligner, scenes) -> None:
@@ -203,14 +260,20 @@ def query(
                                                "relevance maps (default: STORE/queries/<seq>/<query>.png).")] = None,
     frame: Annotated[Optional[int], typer.Option(min=0, help="Frame shown (default: where the match is largest).")] = None,
     top: Annotated[int, typer.Option(min=1, help="Candidates listed.")] = 5,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the answer as one JSON object on stdout (for "
+                                          "scripts): query, matches, ranking (--top), message, picture.")] = False,
 ) -> None:
-    """Ground a description to scene-graph nodes of a stored, aligned scene; print them and write a PNG."""
-    from tasks.query import answer_query
+    """Ground a description to scene-graph nodes of a stored, aligned scene; print them and write a PNG
+    (no PNG for a log without camera images)."""
+    from tasks.query import answer_as_dict, answer_query
 
     try:
         answer = answer_query(store, seq, text, out=out, frame=frame)
     except (FileNotFoundError, ValueError, KeyError) as exc:
         raise typer.BadParameter(str(exc)) from exc
+    if as_json:
+        typer.echo(json.dumps(answer_as_dict(answer, top), allow_nan=False))
+        return
     grounding = answer.grounding
     table = Table(title=f"{seq}: {text!r}")
     for column in ("rank", "node", "object", "category", "caption", "motion", "score", "app", "mot", "loc", "chosen"):

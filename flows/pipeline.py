@@ -19,11 +19,13 @@ from simsplat_core.language.motion_training import MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
+from storage import ArtifactStore, list_logs, list_scenes
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
-from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log
+from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.reconstruct import StoredScene, reconstruct_scene
+from tasks.stages import LogStages, plan_stages
 
 logger = logging.getLogger(__name__)
 
@@ -67,6 +69,35 @@ def generate_logs(store_root: str, seeds: list[int], config: WorldConfig) -> lis
     logs = _gather(futures, "generate")
     _publish_logs_table(logs)
     return logs
+
+
+def _publish_stages_table(plans: list[LogStages]) -> None:
+    rows = [{"seq_id": p.seq_id, "source": p.source, "images": p.images,
+             "reconstruct": f"skipped: {p.skip_reconstruct}" if p.skip_reconstruct else "yes",
+             "align": "yes", "evaluate": f"skipped: {p.skip_evaluate}" if p.skip_evaluate else "yes"}
+            for p in plans]
+    create_table_artifact(rows, key="stages", description="Stages per stored log (and why one is skipped)")
+
+
+def store_logs(store_root: str, generated: list[StoredLog]) -> tuple[list[StoredLog], list[LogStages]]:
+    """Every complete log in the store (``generated`` ones as produced now, the others as found) and the
+    stages each goes through; publishes the stages table.
+
+    Raises:
+        ValueError: the store holds no log (the message says how to add one).
+    """
+    seq_ids = list_logs(ArtifactStore(store_root))
+    if not seq_ids:
+        raise ValueError(f"no driving log in {store_root}/logs: generate synthetic ones (simsplat run --sequences N) "
+                         "or ingest real ones (simsplat ingest av2 / waymo-frame)")
+    produced = {s.summary.seq_id: s for s in generated}
+    logs = [produced.get(seq_id) or stored_log(store_root, seq_id) for seq_id in seq_ids]
+    plans = plan_stages(store_root, seq_ids)
+    for plan in plans:
+        for stage, reason in plan.skipped().items():
+            logger.info("%s: %s skipped: %s", plan.seq_id, stage, reason)
+    _publish_stages_table(plans)
+    return logs, plans
 
 
 def _rounded(value: float | None, digits: int = 4) -> float | None:
@@ -124,16 +155,26 @@ def _publish_grounding_table(result: GroundingEvaluation) -> None:
                           f"{len(result.seq_ids)} sequences (accuracy / vIoU)")
 
 
-def align_scenes(store_root: str, scenes: list[StoredScene], training_seq_ids: list[str],
+def align_targets(plans: list[LogStages], scenes: list[StoredScene]) -> list[tuple[str, str | None]]:
+    """``(seq_id, scene_hash)`` to align per planned log: its reconstructed scene, or ``None`` for a log
+    without camera images (aligned from its tracks and map). Logs that reconstruct but have no scene in
+    ``scenes`` are left out."""
+    by_seq = {s.seq_id: s.scene_hash for s in scenes}
+    return [(p.seq_id, by_seq[p.seq_id] if p.reconstructs else None) for p in plans
+            if not p.reconstructs or p.seq_id in by_seq]
+
+
+def align_scenes(store_root: str, targets: list[tuple[str, str | None]], training_seq_ids: list[str],
                  config: AlignmentConfig, aligner_config: MotionAlignerConfig | None = None
                  ) -> tuple[StoredAligner, list[StoredLanguageScene]]:
-    """Train the motion/location aligner on ``training_seq_ids`` (one task), then align every scene (one
-    task per sequence, each with its share of the cores); publish the alignment table."""
+    """Train the motion/location aligner on ``training_seq_ids`` (one task), then align every
+    ``(seq_id, scene_hash)`` target (one task per sequence, each with its share of the cores; a ``None``
+    scene hash aligns an image-less log from its tracks); publish the alignment table."""
     aligner = train_motion_aligner.submit(store_root, training_seq_ids, aligner_config).result()
-    threads = task_cpu_share(len(scenes))
+    threads = task_cpu_share(len(targets))
     with reserving_cpus(threads):
-        futures = [align_scene.submit(store_root, s.seq_id, s.scene_hash, aligner.model_hash, config, threads)
-                   for s in scenes]
+        futures = [align_scene.submit(store_root, seq_id, scene_hash, aligner.model_hash, config, threads)
+                   for seq_id, scene_hash in targets]
     aligned = _gather(futures, "align", label=lambda s: s.seq_id)
     _publish_language_table(aligner, aligned)
     return aligner, aligned
@@ -156,7 +197,8 @@ def ingest_flow(store_root: str, source: str, paths: list[str], image_scale: flo
 
 @dataclass(frozen=True)
 class MainResult:
-    """What the main job produced: one stored log, scene and language scene per sequence, and the aligner."""
+    """What the main job produced: every stored log, a scene per log with images, a language scene per
+    log, the aligner, and the stages each log went through (with the reasons for those it skipped)."""
 
     logs: list[StoredLog]
     scenes: list[StoredScene]
@@ -164,6 +206,7 @@ class MainResult:
     language: list[StoredLanguageScene] = dataclasses.field(default_factory=list)
     grounding: GroundingEvaluation | None = None
     run_id: str = ""
+    stages: list[LogStages] = dataclasses.field(default_factory=list)
 
 
 def _summary_markdown(result: MainResult) -> str:
@@ -171,12 +214,19 @@ def _summary_markdown(result: MainResult) -> str:
         "| sequence | frames | objects | MB | PSNR test (dB) | SSIM test | PSNR dynamic (dB) | Gaussians | reconstruct s |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
-    for log, scene in zip(result.logs, result.scenes):
-        m = scene.metrics
+    scenes = {s.seq_id: s for s in result.scenes}
+    skipped = {p.seq_id: p.skip_reconstruct for p in result.stages}
+    for log in result.logs:
+        seq_id = log.summary.seq_id
         objects = ", ".join(f"{n} {c}" for c, n in log.summary.objects_by_category.items())
+        row = f"| {seq_id} | {log.summary.num_frames} | {objects} | {log.bytes_on_disk / 1e6:.1f} "
+        scene = scenes.get(seq_id)
+        if scene is None:
+            lines.append(row + f"| skipped: {skipped.get(seq_id) or 'not reconstructed'} | | | | |")
+            continue
+        m = scene.metrics
         lines.append(
-            f"| {log.summary.seq_id} | {log.summary.num_frames} | {objects} | {log.bytes_on_disk / 1e6:.1f} "
-            f"| {m.get('psnr_test', float('nan')):.2f} | {m.get('ssim_test', float('nan')):.3f} "
+            row + f"| {m.get('psnr_test', float('nan')):.2f} | {m.get('ssim_test', float('nan')):.3f} "
             f"| {m.get('psnr_test_dynamic', float('nan')):.2f} | {int(m.get('num_gaussians', 0))} | {scene.seconds:.1f} |"
         )
     return "\n".join(lines)
@@ -194,37 +244,129 @@ def main_flow(
     evaluate: bool = True,
     run_id: str | None = None,
 ) -> MainResult:
-    """The main job: synthetic logs in, one reconstructed scene per log, language alignment (aligner
-    trained on the run's logs, one language scene per sequence), then a summary.
+    """The main job over every log in the store: ``seeds`` synthetic logs generated first (none: only the
+    stored ones, ingested real logs included), one reconstructed scene per log with camera images, language
+    alignment (aligner trained on every stored log, one language scene per log: image-less logs get motion
+    and location language from their tracks and map), the grounding benchmark on the synthetic logs, a summary.
 
     Args:
+        seeds: synthetic sequences to generate into the store first (may be empty).
         reconstruction: scene reconstruction settings (default ``ReconstructionConfig()``).
         alignment: language-scene settings (default ``AlignmentConfig()``).
         align: run the language-alignment stage.
         aligner: motion/location aligner training settings (default ``MotionAlignerConfig()``).
-        evaluate: after alignment, run the grounding benchmark on the run's sequences and write its
+        evaluate: after alignment, run the grounding benchmark on the synthetic logs and write its
             tables under ``runs/<run_id>/tables/``.
         run_id: names the run directory (default: ``main-<UTC time>``).
+
+    Raises:
+        ValueError: the store holds no log and ``seeds`` is empty.
     """
-    logs = generate_logs(store_root, seeds, config)
-    seq_ids = [s.summary.seq_id for s in logs]
-    scenes = reconstruct_scenes(store_root, seq_ids, reconstruction or ReconstructionConfig())
+    generated = generate_logs(store_root, seeds, config) if seeds else []
+    logs, plans = store_logs(store_root, generated)
+    seq_ids = [p.seq_id for p in plans]
+    scenes = reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs],
+                                reconstruction or ReconstructionConfig())
     stored_aligner, language, grounding = None, [], None
     run_id = run_id or new_run_id("main")
     if align:
-        stored_aligner, language = align_scenes(store_root, scenes, seq_ids, alignment or AlignmentConfig(), aligner)
-        if evaluate:
-            grounding = evaluate_grounding_run.submit(store_root, seq_ids, store_root, run_dir(run_id)).result()
+        stored_aligner, language = align_scenes(store_root, align_targets(plans, scenes), seq_ids,
+                                                alignment or AlignmentConfig(), aligner)
+        evaluated = [p.seq_id for p in plans if p.evaluates]
+        if evaluate and evaluated:
+            grounding = evaluate_grounding_run.submit(store_root, evaluated, store_root, run_dir(run_id)).result()
             _publish_grounding_table(grounding)
-    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id)
+    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans)
     create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
     return result
 
 
+@dataclass(frozen=True)
+class AlignmentPlan:
+    """What the alignment flow will do: the aligner's training logs and the ``(seq_id, scene_hash)`` targets.
+
+    Attributes:
+        training_seq_ids: every log in the store (the aligner trains on all of them).
+        stages: the stages of the chosen logs.
+        targets: per chosen log its newest reconstructed scene, ``None`` for a log without camera images.
+    """
+
+    training_seq_ids: list[str]
+    stages: list[LogStages]
+    targets: list[tuple[str, str | None]]
+
+
+def plan_alignment(store_root: str, seq_ids: list[str] | None = None) -> AlignmentPlan:
+    """The ``AlignmentPlan`` of aligning ``seq_ids`` (default: every log) in the store; no Prefect needed,
+    so the CLI checks it before starting a flow.
+
+    Raises:
+        ValueError: no log in the store, or a chosen log is unknown or has camera images but no
+            reconstructed scene (named, with the command that makes one).
+    """
+    store = ArtifactStore(store_root)
+    every = list_logs(store)
+    if not every:
+        raise ValueError(f"no driving log in {store_root}/logs to align")
+    chosen = list(seq_ids) if seq_ids else every
+    unknown = [s for s in chosen if s not in every]
+    if unknown:
+        raise ValueError(f"no complete log {unknown} in {store_root}/logs; available: {every}")
+    stages = plan_stages(store_root, chosen)
+    targets: list[tuple[str, str | None]] = []
+    for plan in stages:
+        if not plan.reconstructs:
+            targets.append((plan.seq_id, None))
+            continue
+        stored = list_scenes(store, plan.seq_id)
+        if not stored:
+            raise ValueError(f"{plan.seq_id}: the log has camera images but no reconstructed scene in "
+                             f"{store_root}/scenes (run simsplat reconstruct --store {store_root} --seq {plan.seq_id})")
+        targets.append((plan.seq_id, stored[-1]))
+    return AlignmentPlan(every, stages, targets)
+
+
+@dataclass(frozen=True)
+class AlignResult:
+    """What the alignment flow produced: the aligner (trained on every stored log), the language scenes
+    of the chosen logs, and their stages."""
+
+    aligner: StoredAligner
+    language: list[StoredLanguageScene]
+    stages: list[LogStages]
+
+
+@flow(name="simsplat-align")
+def align_flow(store_root: str, seq_ids: list[str] | None = None, alignment: AlignmentConfig | None = None,
+               aligner: MotionAlignerConfig | None = None) -> AlignResult:
+    """Language alignment over stored logs: train (or reuse) the motion/location aligner on every log in
+    the store, real ones included (their auto-labels), then align ``seq_ids`` (default: every log): a log
+    with camera images through its newest reconstructed scene, a log without from its tracks and map.
+
+    Raises:
+        ValueError: see ``plan_alignment``.
+    """
+    plan = plan_alignment(store_root, seq_ids)
+    for stages in plan.stages:
+        if not stages.reconstructs:
+            logger.info("%s: no reconstruction (%s): aligned from its tracks and map", stages.seq_id,
+                        stages.skip_reconstruct)
+    _publish_stages_table(plan.stages)
+    model, language = align_scenes(store_root, plan.targets, plan.training_seq_ids, alignment or AlignmentConfig(),
+                                   aligner)
+    return AlignResult(model, language, plan.stages)
+
+
 @flow(name="simsplat-reconstruct")
 def reconstruct_flow(store_root: str, seq_ids: list[str], config: ReconstructionConfig) -> list[StoredScene]:
-    """Reconstruct stored logs (one task per sequence) into scene-graph Gaussian scenes."""
-    return reconstruct_scenes(store_root, seq_ids, config)
+    """Reconstruct stored logs (one task per sequence) into scene-graph Gaussian scenes; logs without
+    camera images are skipped (logged and in the stages table: they cannot be reconstructed)."""
+    plans = plan_stages(store_root, seq_ids)
+    for plan in plans:
+        if not plan.reconstructs:
+            logger.info("%s: reconstruct skipped: %s", plan.seq_id, plan.skip_reconstruct)
+    _publish_stages_table(plans)
+    return reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs], config)
 
 
 @flow(name="simsplat-scheduled-main")

@@ -7,13 +7,15 @@ Layout of one language scene (one ``staged_directory``: complete or absent)::
                                none; ``node_language.has_*`` says which)
         node_language.parquet  per object node: kind, caption, caption/motion details as JSON
         gaussians.parquet      the scene's Gaussians with ``feature[d]`` (fitted appearance latents), in the
-                               scene graph's canonical order
+                               scene graph's canonical order (absent for a log without camera images:
+                               its scene is built from the log's tracks, no Gaussians)
         autoencoder.npz        the scene's feature autoencoder (``d -> D`` decoder for relevance maps)
         node_ids/<camera>/<frame_idx:06d>.exr   rendered node-id maps (channel ``id``; -1 = nothing)
         _SUCCESS.json          manifest: key, scene hash, frames, cameras, metrics, provenance
 
 ``<model_hash>`` names the motion aligner the features come from (``storage.alignment``);
-``<language_hash>`` is the content key of (aligner, reconstructed scene, alignment config, versions).
+``<language_hash>`` is the content key of (aligner, reconstructed scene -- or, without images, the log --,
+alignment config, versions).
 Node poses and deformations are not copied: they are read from the reconstructed scene
 (``scenes/<seq_id>/<scene_hash>/``) the manifest names.
 """
@@ -32,6 +34,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from simsplat_core.types import node_type_for_category
 from storage.alignment import ALIGNMENT_DIR, model_dir
 from storage.errors import CorruptArtifactError
 from storage.exr import read_exr, render_channels, write_exr
@@ -133,6 +136,12 @@ def _language_tables(scene_id: str, scene, scene_nodes: list[Mapping[str, Any]],
             "node_language": (language, NODE_LANGUAGE_SCHEMA)}
 
 
+def _track_nodes(scene) -> list[dict[str, Any]]:
+    """Node rows of a scene built from a log's tracks (no reconstruction): one per object node."""
+    return [{"node_id": n.node_id, "node_type": node_type_for_category(n.category), "object_id": n.object_id,
+             "category": n.category} for n in scene.nodes]
+
+
 def write_language_scene(
     store: ArtifactStore,
     model_hash: str,
@@ -149,7 +158,8 @@ def write_language_scene(
 
     Args:
         scene: the ``LanguageScene`` (its ``scene_hash`` names the reconstructed scene it came from).
-        records: ``SceneRecords`` of the scene graph *with* the fitted per-Gaussian features.
+        records: ``SceneRecords`` of the scene graph *with* the fitted per-Gaussian features; ``None`` for a
+            scene built from a log without camera images (one node row per object node, no Gaussians).
         autoencoder_state: the scene autoencoder's ``AutoencoderState`` (``to_arrays``), if any.
     """
     rel = language_dir(model_hash, scene.seq_id, language_hash)
@@ -157,11 +167,15 @@ def write_language_scene(
     if existing is not None and not overwrite:
         logger.info("language scene %s already stored, skipping write", store.uri(rel))
         return existing
-    scene_id = str(records.scene_id)
     dim = len(next((n.f_app for n in scene.nodes if n.f_app is not None),
                    next((n.f_mot for n in scene.nodes if n.f_mot is not None), np.zeros(384))))
-    tables = _language_tables(scene_id, scene, list(records.nodes), dim)
-    tables["gaussians"] = gaussians_table(scene_id, records.gaussians)
+    if records is not None:
+        scene_id = str(records.scene_id)
+        tables = _language_tables(scene_id, scene, list(records.nodes), dim)
+        tables["gaussians"] = gaussians_table(scene_id, records.gaussians)
+    else:
+        scene_id = f"{scene.seq_id}/log"
+        tables = _language_tables(scene_id, scene, _track_nodes(scene), dim)
     with store.staged_directory(rel) as tmp:
         stats = {}
         for name, (table, schema) in tables.items():

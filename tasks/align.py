@@ -108,7 +108,8 @@ class StoredLanguageScene:
     """What ``align_scene`` returns.
 
     Attributes:
-        seq_id, scene_hash: the reconstructed scene that was aligned.
+        seq_id, scene_hash: the reconstructed scene that was aligned (``scene_hash`` ``""``: a log without
+            camera images, aligned from its tracks and map).
         model_hash: the motion aligner used.
         language_hash: content key of (aligner, scene, config, version); the directory name.
         relpath: ``alignment/<model_hash>/scenes/<seq_id>/<language_hash>``.
@@ -138,44 +139,63 @@ def language_hash(model_hash: str, scene_hash: str, config: AlignmentConfig, enc
                        config_settings(config, RUN_ONLY_ALIGNMENT_FIELDS), encoder_name, embedder_name)
 
 
+def _log_key(store: ArtifactStore, seq_id: str) -> str:
+    manifest = read_log_manifest(store, seq_id)
+    if manifest is None:
+        raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log to align")
+    return str(manifest["key"])
+
+
 @task(name="align-scene", retries=0, cache_policy=NO_CACHE)
-def align_scene(store_root: str, seq_id: str, scene_hash: str, model_hash: str, config: AlignmentConfig | None = None,
-                threads: int = 0) -> StoredLanguageScene:
+def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash: str,
+                config: AlignmentConfig | None = None, threads: int = 0) -> StoredLanguageScene:
     """Build and store the language scene of ``scenes/<seq_id>/<scene_hash>`` with aligner ``model_hash``.
 
     Args:
+        scene_hash: the reconstructed scene; ``None`` for a log without camera images, aligned straight
+            from the log (object nodes from its tracks: motion and location language, no appearance, no
+            Gaussians); its language hash is keyed by the log's content key instead.
         threads: torch/numba threads for this task (0 = leave the process setting).
 
     Raises:
         FileNotFoundError: the log, scene or aligner is missing (named).
+        ValueError: ``scene_hash`` is ``None`` but the log has images (build_language_scene's check).
     """
     config = (config or AlignmentConfig()).validate()
     store = ArtifactStore(store_root)
     encoder = default_text_encoder()
     embedder = appearance_embedder(config.captioner, encoder)
-    key = language_hash(model_hash, scene_hash, config, encoder.name, embedder.name)
+    log_key = _log_key(store, seq_id)
+    key = language_hash(model_hash, scene_hash if scene_hash is not None else f"log-{log_key}", config, encoder.name,
+                        embedder.name)
     relpath = language_dir(model_hash, seq_id, key)
     existing = read_language_manifest(store, model_hash, seq_id, key)
     if existing is not None:
         logger.info("%s: language scene %s already stored, skipping", seq_id, key[:12])
-        return StoredLanguageScene(seq_id, scene_hash, model_hash, key, relpath, dict(existing.get("metrics", {})),
-                                   0.0, True)
+        return StoredLanguageScene(seq_id, scene_hash or "", model_hash, key, relpath,
+                                   dict(existing.get("metrics", {})), 0.0, True)
     if threads:
         set_compute_threads(threads)
     started = time.perf_counter()
     aligner = load_motion_aligner(store, model_hash)
-    loaded = read_scene(store, seq_id, scene_hash)
-    graph = SceneGraph.from_records(loaded.records)
     log = read_scene_log(store, seq_id)
+    graph, scene_id = None, ""
+    if scene_hash is not None:
+        loaded = read_scene(store, seq_id, scene_hash)
+        scene_hash, scene_id = loaded.scene_hash, loaded.records.scene_id
+        graph = SceneGraph.from_records(loaded.records)
     built = build_language_scene(graph, log, text_encoder=encoder, aligner=aligner, embedder=embedder, config=config,
-                                 scene_hash=loaded.scene_hash)
-    provenance = {"scene_hash": loaded.scene_hash, "model_hash": model_hash, "version": LANGUAGE_VERSION,
-                  "config": canonical(dataclasses.asdict(config)), "text_encoder": encoder.name, "embedder": embedder.name}
+                                 scene_hash=scene_hash or "")
     fitted = built.graph if built.graph is not None else graph  # the graph with the fitted features
-    write_language_scene(store, model_hash, key, built.scene, fitted.to_records(loaded.records.scene_id),
+    records = fitted.to_records(scene_id) if fitted is not None else None
+    provenance = {"scene_hash": scene_hash or "", "log_key": log_key, "model_hash": model_hash,
+                  "version": LANGUAGE_VERSION, "config": canonical(dataclasses.asdict(config)),
+                  "text_encoder": encoder.name, "embedder": embedder.name}
+    write_language_scene(store, model_hash, key, built.scene, records,
                          autoencoder_state=None if built.autoencoder is None else built.autoencoder.state(),
                          metrics=built.metrics, provenance=provenance)
     seconds = time.perf_counter() - started
-    logger.info("%s: aligned scene %s in %.1f s", seq_id, loaded.scene_hash[:12], seconds)
-    return StoredLanguageScene(seq_id, loaded.scene_hash, model_hash, key, relpath,
+    logger.info("%s: aligned %s in %.1f s", seq_id, f"scene {scene_hash[:12]}" if scene_hash else "log (no images)",
+                seconds)
+    return StoredLanguageScene(seq_id, scene_hash or "", model_hash, key, relpath,
                                {k: float(v) for k, v in built.metrics.items()}, round(seconds, 3), False)

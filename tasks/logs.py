@@ -19,7 +19,14 @@ from prefect.cache_policies import NO_CACHE
 from simsplat_core.summary import LogSummary, summarize_log
 from simsplat_core.types import SceneLog
 from simsplat_core.world import WORLD_VERSION, WorldConfig, generate_log, default_seq_id
-from storage import ArtifactStore, content_key, manifest_bytes, read_log_manifest, write_scene_log
+from storage import (
+    ArtifactStore,
+    content_key,
+    manifest_bytes,
+    read_log_manifest,
+    read_scene_log,
+    write_scene_log,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -57,6 +64,24 @@ def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[]
     seconds = time.perf_counter() - started
     logger.info("%s: wrote %d bytes in %.1f s", seq_id, written.bytes, seconds)
     return StoredLog(summary, relpath, written.bytes, round(seconds, 3), False)
+
+
+def stored_log(store_root: str, seq_id: str) -> StoredLog:
+    """The ``StoredLog`` of a log already in the store (``skipped``: nothing was produced now).
+
+    The summary comes from the manifest's provenance when the producer recorded it (every log that
+    ``generate_synthetic_log`` / ``ingest_real_log`` wrote), else from reading the log without pixels.
+
+    Raises:
+        FileNotFoundError: no complete log ``seq_id`` in the store (named).
+    """
+    store = ArtifactStore(store_root)
+    manifest = read_log_manifest(store, seq_id)
+    if manifest is None:
+        raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log")
+    recorded = manifest.get("provenance", {}).get("summary")
+    summary = LogSummary(**recorded) if recorded else summarize_log(read_scene_log(store, seq_id, load_images=False))
+    return StoredLog(summary, f"logs/{seq_id}", manifest_bytes(manifest), 0.0, True)
 
 
 @task(name="generate-synthetic-log", retries=1, retry_delay_seconds=2, cache_policy=NO_CACHE)

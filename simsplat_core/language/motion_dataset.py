@@ -27,6 +27,8 @@ from simsplat_core.types import SceneLog
 logger = logging.getLogger(__name__)
 
 _MIRROR = np.diag([1.0, -1.0, 1.0, 1.0])
+#: ``SceneLog.source`` of the procedural world's logs (the ones ``RealismConfig`` roughens).
+SYNTHETIC_SOURCE = "synthetic"
 
 
 def mirror_log(log: SceneLog) -> SceneLog:
@@ -47,6 +49,53 @@ def mirror_log(log: SceneLog) -> SceneLog:
 
 
 @dataclass(frozen=True)
+class RealismConfig:
+    """How synthetic logs are made to look like real tracks for training (``realistic_log``).
+
+    Synthetic trajectories are exact, short (4 s at 10 Hz) and fast; real annotated tracks (Argoverse 2:
+    15.6 s at 10 Hz) jitter by centimetres, have gaps where the object was not annotated, and move slower
+    on average in city traffic. Each synthetic log adds ``copies`` re-timed, jittered and thinned copies
+    of itself (the clean log is kept), relabelled by the auto-labeller like any real log.
+
+    Attributes:
+        copies: realistic copies per synthetic log (0: off).
+        time_stretch: each copy's timestamps are stretched by a factor drawn uniformly from this range:
+            tracks last longer and move proportionally slower.
+        position_noise_m: std of the per-frame jitter of box centres (x, y), metres.
+        heading_noise_rad: std of the per-frame jitter of box headings, radians.
+        drop_rate: share of a track's interior frames dropped (annotation gaps).
+    """
+
+    copies: int = 1
+    time_stretch: tuple[float, float] = (1.0, 3.0)
+    position_noise_m: float = 0.05
+    heading_noise_rad: float = 0.02
+    drop_rate: float = 0.1
+
+
+def realistic_log(log: SceneLog, config: RealismConfig, rng: np.random.Generator, copy: int = 0) -> SceneLog:
+    """One realistic copy of ``log`` (``RealismConfig``): stretched time, jittered and thinned tracks,
+    images dropped; map and ego poses kept (the ego's own speed scales with the time stretch)."""
+    stretch = float(rng.uniform(*config.time_stretch))
+    ts = np.asarray(log.timestamps_us, dtype=np.int64)
+    timestamps = ts[0] + np.round((ts - ts[0]) * stretch).astype(np.int64)
+    tracks = []
+    for tr in log.tracks:
+        n = len(tr)
+        keep = np.ones(n, dtype=bool)
+        if n > 4 and config.drop_rate > 0:
+            keep[1:-1] = rng.random(n - 2) >= config.drop_rate
+        center = np.array(tr.center, dtype=np.float64)
+        center[:, :2] += rng.normal(0.0, config.position_noise_m, size=(n, 2))
+        heading = np.asarray(tr.heading, dtype=np.float64) + rng.normal(0.0, config.heading_noise_rad, size=n)
+        tracks.append(dataclasses.replace(
+            tr, frame_idx=tr.frame_idx[keep], center=center[keep], size=tr.size[keep], heading=heading[keep],
+            speed=tr.speed[keep] / stretch, visible=tr.visible[keep]))
+    return dataclasses.replace(log, seq_id=f"{log.seq_id}-real{copy}", timestamps_us=timestamps, images=(),
+                               tracks=tuple(tracks))
+
+
+@dataclass(frozen=True)
 class SampleConfig:
     """Which samples a log yields.
 
@@ -55,12 +104,15 @@ class SampleConfig:
         min_window_s: shortest window.
         min_frames: trajectories with fewer frames are skipped.
         mirror: add the mirrored log.
+        realism: realistic copies of synthetic logs (``RealismConfig``; ``None``: off). Real logs are
+            used as they are.
     """
 
     windows_per_track: int = 6
     min_window_s: float = 1.0
     min_frames: int = 3
     mirror: bool = True
+    realism: RealismConfig | None = None
 
 
 @dataclass(frozen=True)
@@ -131,7 +183,11 @@ def build_samples(
     rng = np.random.default_rng(seed)
     rows: list[tuple[np.ndarray, np.ndarray, MotionLabel]] = []
     for log in logs:
-        variants = (log, mirror_log(log)) if sample_config.mirror else (log,)
+        bases = [log]
+        realism = sample_config.realism
+        if realism is not None and log.source == SYNTHETIC_SOURCE:
+            bases += [realistic_log(log, realism, rng, copy) for copy in range(realism.copies)]
+        variants = [v for base in bases for v in ((base, mirror_log(base)) if sample_config.mirror else (base,))]
         for variant in variants:
             rows += log_samples(variant, input_config, sample_config, thresholds, rng)
     if not rows:

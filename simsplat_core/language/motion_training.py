@@ -56,7 +56,7 @@ import torch
 
 from simsplat_core.compute_threads import compute_threads_limited
 from simsplat_core.language.codebooks import MotionCodebooks, centred_cosine, convex_combination, cosine_scores
-from simsplat_core.language.motion_dataset import SampleConfig, TrainingSamples, build_samples
+from simsplat_core.language.motion_dataset import RealismConfig, SampleConfig, TrainingSamples, build_samples
 from simsplat_core.language.motion_encoder import HEADS, InputConfig, TrajectoryEncoder, trajectory_inputs
 from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_trajectory
 from simsplat_core.language.text import TextEncoder, default_text_encoder
@@ -104,9 +104,13 @@ class MotionAlignerConfig:
     @classmethod
     def from_json(cls, text: str) -> "MotionAlignerConfig":
         data = json.loads(text)
+        samples = data.pop("samples")
+        realism = samples.pop("realism", None)
+        if realism is not None:
+            realism = RealismConfig(**{**realism, "time_stretch": tuple(realism["time_stretch"])})
         return cls(
             inputs=InputConfig(**data.pop("inputs")),
-            samples=SampleConfig(**data.pop("samples")),
+            samples=SampleConfig(**samples, realism=realism),
             thresholds=LabelThresholds(**data.pop("thresholds")),
             **data,
         )

@@ -42,7 +42,10 @@ own with the text encoder (query role), so "turning left" is compared with motio
   groups the query mentions ("on my left at the intersection" must be both).
 
 A node that lacks a signal gets a fixed score for it: ``missing_appearance`` without caption and
-``f_app`` (too few pixels ever to be described: unlikely to be what someone describes), and
+``f_app`` (too few pixels ever to be described: unlikely to be what someone describes; in a scene
+where *no* node has either, a log without camera images such as Argoverse 2's, appearance is neutral
+instead: the category still filters, and a query naming colours or other looks matches nothing and
+says the log has no images), and
 ``missing_motion`` without motion features (static objects get the query's stationary mass for
 motion instead).
 
@@ -83,7 +86,7 @@ import numpy as np
 from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.query_config import QueryConfig
 from simsplat_core.language.query_lexicon import CONTEXT_KEYWORDS, SECTOR_KEYWORDS
-from simsplat_core.language.query_messages import grounding_message
+from simsplat_core.language.query_messages import grounding_message, no_images_message
 from simsplat_core.language.query_parse import ParsedQuery, parse_query
 from simsplat_core.language.query_result import Grounding, NodeMatch
 from simsplat_core.language.query_scoring import (
@@ -91,8 +94,10 @@ from simsplat_core.language.query_scoring import (
     group_distribution,
     keyword_prior,
     location_score,
+    looks_named,
     motion_distribution,
     motion_score,
+    scene_has_appearance,
 )
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import QUERY, EmbeddingCache, TextEncoder, l2_normalise
@@ -243,7 +248,8 @@ class QueryEngine:
                 if not parsed.categories and not parsed.named_colors:  # "the giraffe": nothing known to check
                     g[has_feature & (np.nan_to_num(sims, nan=1.0) < cfg.unknown_floor)] = 0.0
             attrs = np.array([attribute_fit(parsed, n, cfg) if n.caption is not None else 1.0 for n in nodes])
-            p_app = np.where(has_caption | has_feature, g * attrs, cfg.missing_appearance)
+            missing = cfg.missing_appearance if scene_has_appearance(scene) else 1.0  # no images: neutral
+            p_app = np.where(has_caption | has_feature, g * attrs, missing)
         p_mot = np.full(len(nodes), nan)
         if use_mot:
             p_mot = np.array([motion_score(parsed, vectors.motion, n, cfg) for n in nodes])
@@ -301,6 +307,11 @@ class QueryEngine:
             matches = tuple(candidates[:1]) if candidates and candidates[0].score >= cfg.no_match_threshold else ()
         if not cfg.scored_parts(parsed):
             matches = ()
-        message = grounding_message(scene, parsed, ranking, matches, cfg)
+        looks = looks_named(parsed)
+        if cfg.use_appearance and looks and not scene_has_appearance(scene):
+            matches = ()
+            message = no_images_message(scene, looks)
+        else:
+            message = grounding_message(scene, parsed, ranking, matches, cfg)
         logger.debug("%s: %r -> %s (%s)", scene.seq_id, text, [m.node_id for m in matches], message)
         return Grounding(text, parsed, matches, ranking, parsed.group, message)

@@ -66,6 +66,12 @@ def grounding_message(
 
 
 
+def no_images_message(scene: LanguageScene, looks: str) -> str:
+    """Why a query about looks (``looks``: "red, big") has no answer in a scene built without images."""
+    return (f"{scene.seq_id} has no camera images: its objects' looks ({looks}) cannot be checked; "
+            "ask by category, motion or location instead")
+
+
 def _predicate(motion: str) -> str:
     """"crossing" -> "crossing"; "turns left" -> "that turns left" (a finite verb needs a relative pronoun)."""
     first = motion.split(" ", 1)[0]

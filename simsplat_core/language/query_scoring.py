@@ -28,7 +28,7 @@ from simsplat_core.language.query_lexicon import (
     SUBTYPE_FIT,
 )
 from simsplat_core.language.query_parse import ParsedQuery
-from simsplat_core.language.scene_language import NodeLanguage
+from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import l2_normalise
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.trajectory import agent_kind
@@ -39,6 +39,19 @@ def _softmax(x: np.ndarray, temperature: float) -> np.ndarray:
     z = (x - x.max()) / temperature
     e = np.exp(z)
     return e / e.sum()
+
+
+def scene_has_appearance(scene: LanguageScene) -> bool:
+    """Whether any object node of ``scene`` has a caption or ``f_app`` (``False`` for logs without images)."""
+    return any(n.caption is not None or n.f_app is not None for n in scene.nodes)
+
+
+def looks_named(parsed: ParsedQuery) -> str:
+    """The query's appearance words beyond the category ("red", "not red", "big"); ``""`` when none."""
+    words = [*parsed.named_colors, *(f"not {c}" for c in parsed.excluded_colors)]
+    if parsed.appearance_extra and not parsed.named_colors:
+        words.append(parsed.appearance_extra)
+    return ", ".join(words)
 
 
 def keyword_prior(

@@ -22,7 +22,8 @@ def _tree_digest(root: Path) -> dict[str, str]:
 
 
 @pytest.mark.parametrize("command", [[], ["run"], ["world"], ["ingest"], ["ingest", "waymo-frame"], ["ingest", "av2"], ["inspect"],
-                                     ["reconstruct"], ["render"], ["query"], ["eval"], ["eval", "grounding"]])
+                                     ["reconstruct"], ["render"], ["query"], ["eval"], ["eval", "grounding"],
+                                     ["align"]])
 def test_every_command_has_help(command):
     result = runner.invoke(app, [*command, "--help"])
     assert result.exit_code == 0, result.output
@@ -150,3 +151,47 @@ def test_run_rejects_an_unknown_captioner(tmp_path):
     assert result.exit_code != 0
     assert "captioner" in result.output and "builtin" in result.output
     assert not (tmp_path / "store").exists()
+
+
+def test_run_on_an_empty_store_without_sequences_says_how_to_add_logs(tmp_path):
+    result = runner.invoke(app, ["run", "--store", str(tmp_path / "store")])
+    assert result.exit_code != 0
+    text = _flat(result.output)
+    assert "no driving log" in text and "--sequences" in text and "simsplat ingest" in text
+    assert not (tmp_path / "store").exists()
+
+
+def test_align_names_an_unknown_sequence_before_starting_anything(tmp_path):
+    store = tmp_path / "store"
+    write_scene_log(ArtifactStore(str(store)), generate_log(seed=0, config=WorldConfig(num_frames=2, width=32, height=24),
+                                                            seq_id="s0"))
+    result = runner.invoke(app, ["align", "--store", str(store), "--seq", "nope"])
+    assert result.exit_code != 0 and "nope" in _flat(result.output)
+    result = runner.invoke(app, ["align", "--store", str(store)])  # images but no reconstruction yet
+    assert result.exit_code != 0 and "simsplat reconstruct" in _flat(result.output)
+
+
+@pytest.mark.orchestration
+@pytest.mark.shared_data
+def test_run_align_and_query_on_a_store_holding_only_the_av2_sample(prefect_api_url, shared_data, tmp_path):
+    """Done-when of issue 9: `simsplat run` and `simsplat align` on an AV2-only store work end to end (no
+    reconstruction: no camera images) and `simsplat query` answers motion / location queries."""
+    from simsplat_core.data.av2 import load_av2_log
+
+    store = tmp_path / "store"
+    log = load_av2_log(shared_data / "av2" / "sensor-log-7fab2350")
+    write_scene_log(ArtifactStore(str(store)), log)
+    result = runner.invoke(app, ["run", "--store", str(store), "--runner", "threads", "--workers", "1"])
+    assert result.exit_code == 0, result.output
+    text = _flat(result.output)
+    assert "reconstruct skipped: no camera images" in text and "Language scenes" in text
+    assert list_scenes(ArtifactStore(str(store)), log.seq_id) == []
+
+    result = runner.invoke(app, ["align", "--store", str(store), "--seq", log.seq_id])
+    assert result.exit_code == 0, result.output
+    assert "skipped" in result.output  # the aligner and the language scene are reused
+
+    result = runner.invoke(app, ["query", "--store", str(store), "--seq", log.seq_id,
+                                 "the vehicle changing lanes to the left"])
+    assert result.exit_code == 0, result.output
+    assert "(node " in _flat(result.output) and "yes" in result.output  # one chosen node, named in the message

@@ -8,7 +8,14 @@ import numpy as np
 import pytest
 
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.motion_dataset import mirror_log
+from simsplat_core.language.motion_dataset import (
+    RealismConfig,
+    SampleConfig,
+    TrainingSamples,
+    build_samples,
+    mirror_log,
+    realistic_log,
+)
 from simsplat_core.language.motion_labels import label_log
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig, MotionAlignerState
 from simsplat_core.scenario import vocabulary as voc
@@ -126,3 +133,38 @@ def test_codebooks_round_trip_through_arrays(aligner: MotionAligner) -> None:
     again = MotionCodebooks.from_arrays(books.encoder_name, classes, books.arrays())
     np.testing.assert_array_equal(again.location_prototypes, books.location_prototypes)
     np.testing.assert_array_equal(again.motion_centre, books.motion_centre)
+
+
+def test_realistic_copy_stretches_time_jitters_and_thins_tracks(train_logs) -> None:
+    log = train_logs[0]
+    config = RealismConfig(time_stretch=(2.0, 2.0), position_noise_m=0.05, drop_rate=0.3)
+    real = realistic_log(log, config, np.random.default_rng(0))
+    assert real.images == () and real.map_features == log.map_features
+    duration = lambda lg: (lg.timestamps_us[-1] - lg.timestamps_us[0]) * 1e-6  # noqa: E731
+    assert duration(real) == pytest.approx(2.0 * duration(log), abs=1e-5)
+    long = [(a, b) for a, b in zip(log.tracks, real.tracks) if len(a) > 20]
+    assert long and all(len(b) < len(a) for a, b in long)  # interior frames dropped...
+    for a, b in long:  # ...never the first or the last; centres jittered by centimetres
+        assert (b.frame_idx[0], b.frame_idx[-1]) == (a.frame_idx[0], a.frame_idx[-1])
+        rows = np.searchsorted(a.frame_idx, b.frame_idx)
+        offsets = np.linalg.norm(b.center[:, :2] - a.center[rows, :2], axis=1)
+        assert 0.0 < offsets.mean() < 0.2
+        assert np.allclose(b.speed, a.speed[rows] / 2.0)
+
+
+def test_realism_adds_samples_for_synthetic_logs_only(train_logs, encoder) -> None:
+    books = MotionCodebooks.build(encoder)
+    config = MotionAlignerConfig()
+    plain = build_samples(train_logs[:1], books, config.inputs, config.samples, config.thresholds, 0)
+    realistic = dataclasses.replace(config.samples, realism=RealismConfig(copies=1))
+    more = build_samples(train_logs[:1], books, config.inputs, realistic, config.thresholds, 0)
+    assert isinstance(more, TrainingSamples) and len(more) > len(plain)
+    real_source = dataclasses.replace(train_logs[0], source="av2")
+    same = build_samples([real_source], books, config.inputs, realistic, config.thresholds, 0)
+    assert len(same) == len(plain)
+
+
+def test_config_with_realism_round_trips_through_json() -> None:
+    config = MotionAlignerConfig(samples=SampleConfig(realism=RealismConfig(copies=2, time_stretch=(1.5, 2.5))))
+    assert MotionAlignerConfig.from_json(config.to_json()) == config
+    assert MotionAlignerConfig.from_json(MotionAlignerConfig().to_json()) == MotionAlignerConfig()
