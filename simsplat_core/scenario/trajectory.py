@@ -1,4 +1,5 @@
-"""Object trajectories prepared for motion labelling and encoding: smoothed velocities, ego frames, map facts.
+"""Object trajectories prepared for motion labelling and encoding: smoothed velocities, yaw rate and curvature,
+resampling, ego frames, map facts.
 
 Conventions (``types.py``): world frame = first ego pose, right-handed, z up; the ego frame has x
 forward and y to the left, so a positive yaw change is a left (counter-clockwise) turn and a negative
@@ -45,6 +46,31 @@ def smoothed_velocity(t: np.ndarray, xy: np.ndarray, half_window_s: float) -> np
     var = (w * dt * dt).sum(axis=1, keepdims=True)
     cov = np.einsum("ij,ij,jk->ik", w, dt, xy) - xy_mean * (w * dt).sum(axis=1, keepdims=True)
     return np.where(var > 1e-12, cov / np.maximum(var, 1e-12), 0.0)
+
+
+def resample_series(t: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray:
+    """``[L, C]`` linear interpolation of ``values`` ``[T, C]`` observed at ``t`` ``[T]`` (increasing), at
+    times ``at`` ``[L]``; held constant outside ``t``'s span. Unwrap angles before resampling them."""
+    values = np.asarray(values, dtype=np.float64)
+    if len(t) == 1:
+        return np.repeat(values, len(at), axis=0)
+    return np.stack([np.interp(at, t, values[:, c]) for c in range(values.shape[1])], axis=1)
+
+
+def yaw_rate(t: np.ndarray, heading: np.ndarray, half_window_s: float) -> np.ndarray:
+    """``[T]`` rad/s: slope of the unwrapped ``heading`` ``[T]`` over ``t`` ``[T]`` by the same local line
+    fit as ``smoothed_velocity`` (positive = turning left)."""
+    unwrapped = np.unwrap(np.asarray(heading, dtype=np.float64))[:, None]
+    return smoothed_velocity(np.asarray(t, dtype=np.float64), unwrapped, half_window_s)[:, 0]
+
+
+def curvature(t: np.ndarray, heading: np.ndarray, speed: np.ndarray, half_window_s: float,
+              min_speed_mps: float = 0.5) -> np.ndarray:
+    """``[T]`` signed path curvature (1/m, positive = left) ``= yaw_rate / speed``; 0 where the agent
+    moves slower than ``min_speed_mps`` (a standing box's yaw jitter has no path to curve)."""
+    speed = np.asarray(speed, dtype=np.float64)
+    rate = yaw_rate(t, heading, half_window_s)
+    return np.where(speed >= min_speed_mps, rate / np.maximum(speed, min_speed_mps), 0.0)
 
 
 def ego_yaw(ego_pose: np.ndarray) -> float:
@@ -97,6 +123,10 @@ class ObjectTrajectory:
     def speed(self) -> np.ndarray:
         """``[T]`` smoothed speed, m/s."""
         return np.linalg.norm(self.velocity, axis=1)
+
+    def curvature(self, half_window_s: float = 0.5) -> np.ndarray:
+        """``[T]`` signed path curvature, 1/m (``curvature``)."""
+        return curvature(self.t, self.heading, self.speed, half_window_s)
 
     @property
     def duration(self) -> float:
