@@ -1,7 +1,16 @@
-"""Storage layer: artifact store, Parquet schemas, EXR I/O, content keys and atomic writes.
+"""Storage layer: everything that reads or writes the artifact store, with atomic writes throughout.
 
-Imports ``simsplat_core.types`` (and, only when a scene is read, ``simsplat_core.scene.SceneRecords``);
-never prefect or ray. ``simsplat_core`` never imports this.
+* ``store``: ``ArtifactStore`` over ``pyarrow.fs`` (local paths or object-store URIs), atomic puts.
+* ``schemas``: every Parquet table's ``pyarrow.schema`` with its version, validated on read.
+* ``parquet_io``, ``exr``, ``png``: table, EXR (OpenImageIO, zip) and PNG I/O.
+* ``keys``, ``markers``: content keys of stage inputs/configs and the ``_SUCCESS.json`` manifests that
+  mark finished work (a re-run skips it).
+* ``logs``, ``scenes``: scene logs (``logs/<seq_id>``) and reconstructed scenes (``scenes/<seq_id>/<hash>``).
+* ``alignment``, ``language_scenes``: the motion aligner models and language scenes (``alignment/``).
+* ``runs``: run directories and evaluation tables (``runs/<run_id>/tables``).
+
+Imports ``simsplat_core`` (types, scene records, language scenes); never prefect or ray.
+``simsplat_core`` never imports this.
 """
 
 from storage.errors import CorruptArtifactError, SchemaError, StorageError, UnsafePathError
