@@ -9,7 +9,7 @@ import json
 import logging
 import os
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated
 
 import typer
 from rich.console import Console
@@ -31,14 +31,16 @@ console = Console()
 logger = logging.getLogger("flows.cli")
 
 RunnerOption = Annotated[RunnerKind, typer.Option(help="Where per-sequence tasks run: a local Ray cluster or threads.")]
-WorkersOption = Annotated[Optional[int], typer.Option(help="Parallel workers (default: all CPUs).")]
-IterationsOption = Annotated[Optional[int], typer.Option(min=1, help="Reconstruction iterations per sequence "
+WorkersOption = Annotated[int | None, typer.Option(help="Parallel workers (default: all CPUs).")]
+IterationsOption = Annotated[int | None, typer.Option(min=1, help="Reconstruction iterations per sequence "
                                                          "(default: the ReconstructionConfig default).")]
 
 
 @app.callback()
 def _configure(verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log INFO messages.")] = False) -> None:
-    logging.basicConfig(level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=logging.INFO if verbose else logging.WARNING, format="%(levelname)s %(name)s: %(message)s"
+    )
 
 
 def _run_flow(flow_fn, runner: RunnerKind, workers: int | None, **params):
@@ -118,9 +120,17 @@ CaptionerOption = Annotated[str, typer.Option(
 
 @app.command()
 def run(
-    store: Annotated[str, typer.Option(help="Artifact store root: a local directory or an object-store URI.")] = "artifacts",
-    sequences: Annotated[int, typer.Option(min=0, help="Synthetic sequences to generate into the store first "
-                                           "(0: only the logs already there; `make demo` asks for 2).")] = 0,
+    store: Annotated[
+        str, typer.Option(help="Artifact store root: a local directory or an object-store URI.")
+    ] = "artifacts",
+    sequences: Annotated[
+        int,
+        typer.Option(
+            min=0,
+            help="Synthetic sequences to generate into the store first "
+            "(0: only the logs already there; `make demo` asks for 2).",
+        ),
+    ] = 0,
     seed: Annotated[int, typer.Option(help="Seed of the first sequence; sequence i uses seed + i.")] = 0,
     frames: Annotated[int, typer.Option(min=2, help="Frames per sequence (10 Hz).")] = 40,
     width: Annotated[int, typer.Option(min=16)] = 240,
@@ -140,8 +150,11 @@ def run(
 
     alignment = _alignment_config(captioner)
     if sequences == 0 and not list_logs(ArtifactStore(store)):
-        raise typer.BadParameter(f"no driving log in {store}/logs: pass --sequences N to generate synthetic ones, "
-                                 "or ingest real ones first (simsplat ingest av2 / waymo-frame)", param_hint="--sequences")
+        raise typer.BadParameter(
+            f"no driving log in {store}/logs: pass --sequences N to generate synthetic ones, "
+            "or ingest real ones first (simsplat ingest av2 / waymo-frame)",
+            param_hint="--sequences",
+        )
     result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                        config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
                        alignment=alignment, align=align)
@@ -160,8 +173,10 @@ def run(
 
 @app.command("align")
 def align_command(
-    store: Annotated[str, typer.Option(help="Artifact store root holding logs/<seq_id>/ (and scenes of logs with images).")],
-    seq: Annotated[Optional[list[str]], typer.Option(help="Sequence to align (repeatable; default: every log).")] = None,
+    store: Annotated[
+        str, typer.Option(help="Artifact store root holding logs/<seq_id>/ (and scenes of logs with images).")
+    ],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence to align (repeatable; default: every log).")] = None,
     runner: RunnerOption = RunnerKind.threads,
     workers: WorkersOption = None,
     captioner: CaptionerOption = "builtin",
@@ -197,7 +212,9 @@ def _print_language(aligner, scenes) -> None:
 @app.command()
 def reconstruct(
     store: Annotated[str, typer.Option(help="Artifact store root holding logs/<seq_id>/.")],
-    seq: Annotated[Optional[list[str]], typer.Option(help="Sequence to reconstruct (repeatable; default: every log).")] = None,
+    seq: Annotated[
+        list[str] | None, typer.Option(help="Sequence to reconstruct (repeatable; default: every log).")
+    ] = None,
     iterations: IterationsOption = None,
     runner: RunnerOption = RunnerKind.threads,
     workers: WorkersOption = None,
@@ -223,10 +240,12 @@ def render(
     seq: Annotated[str, typer.Option(help="Sequence whose reconstructed scene to render.")],
     frame: Annotated[int, typer.Option(min=0, help="Frame index to render.")],
     out: Annotated[str, typer.Option(help="PNG to write (cameras side by side).")],
-    camera: Annotated[Optional[list[str]], typer.Option(help="Camera to render (repeatable; default: all).")] = None,
-    shift_left: Annotated[float, typer.Option(help="Move the cameras this many metres to the ego's left (negative: right).")] = 0.0,
+    camera: Annotated[list[str] | None, typer.Option(help="Camera to render (repeatable; default: all).")] = None,
+    shift_left: Annotated[
+        float, typer.Option(help="Move the cameras this many metres to the ego's left (negative: right).")
+    ] = 0.0,
     shift_forward: Annotated[float, typer.Option(help="Move the cameras this many metres forward (ego frame).")] = 0.0,
-    scene: Annotated[Optional[str], typer.Option(help="Scene hash (or unique prefix); default: the newest scene.")] = None,
+    scene: Annotated[str | None, typer.Option(help="Scene hash (or unique prefix); default: the newest scene.")] = None,
 ) -> None:
     """Render a stored scene at one frame from the log's cameras, optionally shifted in the ego frame."""
     from simsplat_core.scene import SceneGraph
@@ -253,12 +272,14 @@ def render(
 
 @app.command()
 def query(
-    text: Annotated[str, typer.Argument(help='A free-form description, e.g. "the black car turning left at the intersection".')],
+    text: Annotated[
+        str, typer.Argument(help='A free-form description, e.g. "the black car turning left at the intersection".')
+    ],
     store: Annotated[str, typer.Option(help="Artifact store root holding aligned scenes (alignment/...).")],
     seq: Annotated[str, typer.Option(help="Sequence to search.")],
-    out: Annotated[Optional[str], typer.Option(help="PNG to write: the matched masks over the cameras and the "
+    out: Annotated[str | None, typer.Option(help="PNG to write: the matched masks over the cameras and the "
                                                "relevance maps (default: STORE/queries/<seq>/<query>.png).")] = None,
-    frame: Annotated[Optional[int], typer.Option(min=0, help="Frame shown (default: where the match is largest).")] = None,
+    frame: Annotated[int | None, typer.Option(min=0, help="Frame shown (default: where the match is largest).")] = None,
     top: Annotated[int, typer.Option(min=1, help="Candidates listed.")] = 5,
     as_json: Annotated[bool, typer.Option("--json", help="Print the answer as one JSON object on stdout (for "
                                           "scripts): query, matches, ranking (--top), message, picture.")] = False,
@@ -296,7 +317,7 @@ def query(
 def eval_grounding(
     store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs and aligned scenes.")],
     out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
-    seq: Annotated[Optional[list[str]], typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
 ) -> None:
     """Grounding benchmark (SIMSplat Tables 2 and 3): paraphrased queries from the logs' ground truth,
     accuracy and vIoU per category for the baselines, this method and its feature ablation."""
@@ -356,8 +377,9 @@ def _ingest(source: str, path: Path, out: str, image_scale: float) -> None:
 
     if not path.exists():
         raise typer.BadParameter(f"{path} does not exist", param_hint="PATH")
-    logs = _run_flow(ingest_flow, RunnerKind.threads, 1, store_root=out, source=source, paths=[str(path)],
-                     image_scale=image_scale)
+    logs = _run_flow(
+        ingest_flow, RunnerKind.threads, 1, store_root=out, source=source, paths=[str(path)], image_scale=image_scale
+    )
     _print_logs(logs)
 
 
@@ -365,8 +387,11 @@ def _ingest(source: str, path: Path, out: str, image_scale: float) -> None:
 def ingest_waymo_frame(
     path: Annotated[Path, typer.Argument(help="A Waymo Open Dataset Frame TFRecord file.")],
     out: Annotated[str, typer.Option(help="Artifact store root.")],
-    image_scale: Annotated[float, typer.Option(min=0.01, max=1.0, help="Resize camera images by this factor "
-                                               "(0.5: 960x640; a full-size 200-frame segment needs ~6 GB of RAM).")] = 0.5,
+    image_scale: Annotated[
+        float,
+        typer.Option(min=0.01, max=1.0, help="Resize camera images by this factor "
+                     "(0.5: 960x640; a full-size 200-frame segment needs ~6 GB of RAM)."),
+    ] = 0.5,
 ) -> None:
     """Decode a Waymo Frame TFRecord (all its records, one sequence) into OUT/logs/<seq_id>/."""
     _ingest("waymo-frame", path, out, image_scale)
@@ -384,7 +409,9 @@ def ingest_av2(
 @app.command()
 def inspect(
     log_dir: Annotated[str, typer.Argument(help="A stored log: STORE/logs/<seq_id>.")],
-    sheet: Annotated[Optional[Path], typer.Option(help="Write a contact sheet PNG (all cameras + bird's-eye view).")] = None,
+    sheet: Annotated[
+        Path | None, typer.Option(help="Write a contact sheet PNG (all cameras + bird's-eye view).")
+    ] = None,
     frame: Annotated[int, typer.Option(help="Frame shown on the contact sheet.")] = 0,
 ) -> None:
     """Summarise a stored log and optionally draw its projected 3D boxes on one frame."""

@@ -106,7 +106,15 @@ def _rounded(value: float | None, digits: int = 4) -> float | None:
 
 
 def _publish_scenes_table(scenes: list[StoredScene]) -> None:
-    names = ("psnr_test", "ssim_test", "psnr_test_dynamic", "ssim_test_dynamic", "psnr_train", "num_gaussians", "iterations")
+    names = (
+        "psnr_test",
+        "ssim_test",
+        "psnr_test_dynamic",
+        "ssim_test_dynamic",
+        "psnr_train",
+        "num_gaussians",
+        "iterations",
+    )
     rows = [
         {
             "seq_id": s.seq_id,
@@ -120,7 +128,9 @@ def _publish_scenes_table(scenes: list[StoredScene]) -> None:
     create_table_artifact(rows, key="reconstruction", description="Reconstruction metrics per sequence (test frames)")
 
 
-def reconstruction_config(iterations: int | None = None, base: ReconstructionConfig | None = None) -> ReconstructionConfig:
+def reconstruction_config(
+    iterations: int | None = None, base: ReconstructionConfig | None = None
+) -> ReconstructionConfig:
     """``base`` (default ``ReconstructionConfig()``) with the iteration count overridden when given."""
     base = base or ReconstructionConfig()
     return base if iterations is None else dataclasses.replace(base, iterations=iterations)
@@ -211,7 +221,8 @@ class MainResult:
 
 def _summary_markdown(result: MainResult) -> str:
     lines = [
-        "| sequence | frames | objects | MB | PSNR test (dB) | SSIM test | PSNR dynamic (dB) | Gaussians | reconstruct s |",
+        "| sequence | frames | objects | MB | PSNR test (dB) | SSIM test | PSNR dynamic (dB) | Gaussians "
+        "| reconstruct s |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     scenes = {s.seq_id: s for s in result.scenes}
@@ -227,7 +238,8 @@ def _summary_markdown(result: MainResult) -> str:
         m = scene.metrics
         lines.append(
             row + f"| {m.get('psnr_test', float('nan')):.2f} | {m.get('ssim_test', float('nan')):.3f} "
-            f"| {m.get('psnr_test_dynamic', float('nan')):.2f} | {int(m.get('num_gaussians', 0))} | {scene.seconds:.1f} |"
+            f"| {m.get('psnr_test_dynamic', float('nan')):.2f} | {int(m.get('num_gaussians', 0))} "
+            f"| {scene.seconds:.1f} |"
         )
     return "\n".join(lines)
 

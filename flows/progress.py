@@ -61,7 +61,7 @@ class FlowProgress:
     _owns_bar: bool = False
     _extra: dict[str, Any] = field(default_factory=dict)
 
-    def __enter__(self) -> "FlowProgress":
+    def __enter__(self) -> FlowProgress:
         try:
             self._artifact_id = create_progress_artifact(0.0, description=f"{self.stage}: 0/{self.total}")
         except Exception:  # the API may be unreachable; progress must never break the work
@@ -82,7 +82,9 @@ class FlowProgress:
         logger.info("%s: %d/%d done %s", self.stage, self.done, self.total, label)
         if self._artifact_id is not None:
             try:
-                update_progress_artifact(self._artifact_id, percent, description=f"{self.stage}: {self.done}/{self.total}")
+                update_progress_artifact(
+                    self._artifact_id, percent, description=f"{self.stage}: {self.done}/{self.total}"
+                )
             except Exception:
                 logger.debug("progress artifact update failed", exc_info=True)
         if self._bar is not None:
@@ -110,7 +112,7 @@ class StepBars:
         self._lock = threading.Lock()
         self._listening: Any = None
 
-    def __enter__(self) -> "StepBars":
+    def __enter__(self) -> StepBars:
         global _shared_bar
         if _shared_bar is None and _want_bar():
             self._bar = _shared_bar = _new_bar()

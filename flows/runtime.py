@@ -11,13 +11,13 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
-from enum import Enum
-from typing import Iterator
+from collections.abc import Iterator
+from enum import StrEnum
 
 logger = logging.getLogger(__name__)
 
 
-class RunnerKind(str, Enum):
+class RunnerKind(StrEnum):
     """Where mapped tasks run."""
 
     ray = "ray"  # a local (or addressed) Ray cluster: one worker process per CPU

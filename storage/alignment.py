@@ -73,7 +73,7 @@ def write_aligner_model(
             "format_version": MODEL_FORMAT_VERSION,
             "files": {ALIGNER_FILE: store.size(path)},
             "metrics": {k: float(v) for k, v in (metrics or {}).items()},
-            "written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="microseconds"),
+            "written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds"),
             "provenance": dict(provenance or {}),
         }
         mark_done(store, tmp, model_hash, manifest)

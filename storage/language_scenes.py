@@ -27,7 +27,7 @@ import datetime
 import io
 import json
 import logging
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -114,7 +114,7 @@ def _feature_matrix(nodes, attribute: str, dim: int) -> np.ndarray:
     return out
 
 
-def _language_tables(scene_id: str, scene, scene_nodes: list[Mapping[str, Any]], dim: int
+def _language_tables(scene_id: str, scene, scene_nodes: Sequence[Mapping[str, Any]], dim: int
                      ) -> dict[str, tuple[pa.Table, pa.Schema]]:
     """``nodes`` (every node of the scene, object rows with features) and ``node_language`` (object nodes)."""
     by_id = {n.node_id: n for n in scene.nodes}
@@ -207,7 +207,7 @@ def write_language_scene(
             "metadata": {str(k): str(v) for k, v in scene.metadata.items()},
             "tables": stats,
             "metrics": {k: float(v) for k, v in (metrics or {}).items() if np.isfinite(v)},
-            "written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="microseconds"),
+            "written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds"),
             "provenance": dict(provenance or {}),
         }
         mark_done(store, tmp, language_hash, manifest)

@@ -185,7 +185,7 @@ def write_scene_log(
             "cameras": list(log.cameras),
             "tables": table_stats,
             "images": {"count": len(named), "bytes": image_bytes},
-            "written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+            "written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
             "provenance": dict(provenance or {}),
         }
         mark_done(store, tmp, key, manifest)
@@ -239,7 +239,7 @@ def _tracks_table(log: SceneLog) -> pa.Table:
 
     def cat(attr: str, dtype: type, width: int | None = None) -> np.ndarray:
         shape = (0, width) if width else (0,)
-        parts = [np.asarray(getattr(tr, attr), dtype=dtype) for tr in tracks]
+        parts: list[np.ndarray] = [np.asarray(getattr(tr, attr), dtype=dtype) for tr in tracks]
         return np.concatenate(parts) if parts else np.zeros(shape, dtype)
 
     return pa.table(

@@ -35,7 +35,7 @@ class RunTable:
 
 def new_run_id(prefix: str = "run") -> str:
     """``<prefix>-YYYYmmddTHHMMSSffffffZ`` (UTC; sorts by time)."""
-    return f"{prefix}-{datetime.datetime.now(datetime.timezone.utc).strftime('%Y%m%dT%H%M%S%fZ')}"
+    return f"{prefix}-{datetime.datetime.now(datetime.UTC).strftime('%Y%m%dT%H%M%S%fZ')}"
 
 
 def run_dir(run_id: str) -> str:
@@ -56,7 +56,7 @@ def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, Ru
         store.write_bytes(join_relpath(relpath, "tables", f"{name}.md"),
                           (item.markdown.rstrip("\n") + "\n").encode("utf-8"))
         uris[name] = store.uri(parquet)
-    body = {"written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+    body = {"written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
             "tables": sorted(tables), **dict(manifest or {})}
     store.write_json(join_relpath(relpath, "manifest.json"), body)
     return uris

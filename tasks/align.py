@@ -21,7 +21,15 @@ from simsplat_core.language.motion_training import MotionAligner, MotionAlignerC
 from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import SceneGraph
-from storage import ArtifactStore, canonical, config_settings, content_key, read_log_manifest, read_scene, read_scene_log
+from storage import (
+    ArtifactStore,
+    canonical,
+    config_settings,
+    content_key,
+    read_log_manifest,
+    read_scene,
+    read_scene_log,
+)
 from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
 from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
 

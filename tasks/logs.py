@@ -9,16 +9,16 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.summary import LogSummary, summarize_log
 from simsplat_core.types import SceneLog
-from simsplat_core.world import WORLD_VERSION, WorldConfig, generate_log, default_seq_id
+from simsplat_core.world import WORLD_VERSION, WorldConfig, default_seq_id, generate_log
 from storage import (
     ArtifactStore,
     content_key,
@@ -89,7 +89,9 @@ def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> S
     """Generate the synthetic sequence of ``seed`` into ``<store>/logs/<seq_id>``."""
     seq_id = default_seq_id(seed)
     key = content_key("synthetic-log", WORLD_VERSION, seed, dataclasses.asdict(config))
-    return _store_log(ArtifactStore(store_root), seq_id, key, lambda: generate_log(seed=seed, config=config, seq_id=seq_id))
+    return _store_log(
+        ArtifactStore(store_root), seq_id, key, lambda: generate_log(seed=seed, config=config, seq_id=seq_id)
+    )
 
 
 @task(name="ingest-real-log", retries=0, cache_policy=NO_CACHE)

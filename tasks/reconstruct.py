@@ -62,7 +62,9 @@ RUN_ONLY_FIELDS = ("progress_every", "eval_every", "num_threads")
 def scene_hash(log_key: str, config: ReconstructionConfig) -> str:
     """Content key of a reconstruction: the stored log's content key, the config (less its run-only
     fields, so the same scene is found whatever the core count) and the versions."""
-    return content_key("reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, config_settings(config, RUN_ONLY_FIELDS))
+    return content_key(
+        "reconstruct", SCENE_VERSION, SCENE_FORMAT_VERSION, log_key, config_settings(config, RUN_ONLY_FIELDS)
+    )
 
 
 @task(name="reconstruct-scene", retries=0, cache_policy=NO_CACHE)
@@ -86,9 +88,25 @@ def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig
     started = time.perf_counter()
     log = read_scene_log(store, seq_id)
     result = reconstruct(log, config, progress=StepProgress(f"reconstruct {seq_id}"))
-    provenance = {"log_key": log_manifest["key"], "scene_version": SCENE_VERSION, "config": canonical(dataclasses.asdict(config))}
-    write_scene(store, seq_id, key, result.graph.to_records(scene_id_for(seq_id, key)), result.metrics,
-                result.test_renders, provenance=provenance)
+    provenance = {
+        "log_key": log_manifest["key"],
+        "scene_version": SCENE_VERSION,
+        "config": canonical(dataclasses.asdict(config)),
+    }
+    write_scene(
+        store,
+        seq_id,
+        key,
+        result.graph.to_records(scene_id_for(seq_id, key)),
+        result.metrics,
+        result.test_renders,
+        provenance=provenance,
+    )
     seconds = time.perf_counter() - started
-    logger.info("%s: reconstructed in %.1f s (test PSNR %.2f dB)", seq_id, seconds, result.metrics.get("psnr_test", float("nan")))
+    logger.info(
+        "%s: reconstructed in %.1f s (test PSNR %.2f dB)",
+        seq_id,
+        seconds,
+        result.metrics.get("psnr_test", float("nan")),
+    )
     return StoredScene(seq_id, key, relpath, {k: float(v) for k, v in result.metrics.items()}, round(seconds, 3), False)

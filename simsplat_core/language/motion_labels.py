@@ -129,7 +129,11 @@ def is_stationary(traj: ObjectTrajectory, th: LabelThresholds) -> bool:
 
 def heading_change_deg(traj: ObjectTrajectory, th: LabelThresholds) -> float:
     """Signed heading change, degrees (positive = left), between the first and last ``edge_s`` seconds."""
-    return float(np.rad2deg(_edge_mean(traj.heading, traj.t, th.edge_s, False) - _edge_mean(traj.heading, traj.t, th.edge_s, True)))
+    return float(
+        np.rad2deg(
+            _edge_mean(traj.heading, traj.t, th.edge_s, False) - _edge_mean(traj.heading, traj.t, th.edge_s, True)
+        )
+    )
 
 
 def road_lateral_displacement(
@@ -143,9 +147,10 @@ def road_lateral_displacement(
     + noise_m``: the nearest lane switched). Being position-based it does not drift on curved roads.
     The vehicle *left its lane* when the skipped jumps add up to at least ``MIN_LANE_WIDTH_M`` against
     the direction of motion (passing the line between two lanes: moving left, the offset jumps from
-    about ``+w/2`` to ``-w/2``, possibly over a few frames where connectors overlap) or when it starts or ends at least ``OFF_CENTRE_M`` off a lane centre on
-    that side (a lane change under way when the log starts or ends). Without lanes the displacement is
-    along the left normal of the initial heading and leaving the lane cannot be checked (``True``).
+    about ``+w/2`` to ``-w/2``, possibly over a few frames where connectors overlap) or when it starts or
+    ends at least ``OFF_CENTRE_M`` off a lane centre on that side (a lane change under way when the log
+    starts or ends). Without lanes the displacement is along the left normal of the initial heading and
+    leaving the lane cannot be checked (``True``).
     """
     if traj.facts is None or len(traj) < 2 or np.mean(np.isfinite(traj.facts.lane_offset)) < 0.5:
         h0 = traj.heading[0]
@@ -250,24 +255,21 @@ def location_context(
 ) -> str:
     """Map context of ``traj`` at ``row`` (see the module docstring for the order of the rules)."""
     facts = traj.facts.take(slice(row, row + 1)) if traj.facts is not None else None
-    has_map = facts is not None and map_context is not None
-    if has_map and traj.kind == "pedestrian" and facts.in_crosswalk[0] and not facts.on_sidewalk[0]:
-        return voc.ON_THE_CROSSWALK
-    if has_map and facts.at_intersection[0]:
-        return voc.AT_THE_INTERSECTION
-    if has_map and (
-        facts.on_sidewalk[0]
-        or (
+    if facts is not None and map_context is not None:
+        if traj.kind == "pedestrian" and facts.in_crosswalk[0] and not facts.on_sidewalk[0]:
+            return voc.ON_THE_CROSSWALK
+        if facts.at_intersection[0]:
+            return voc.AT_THE_INTERSECTION
+        if facts.on_sidewalk[0] or (
             traj.kind == "pedestrian"
             and not map_context.has_sidewalks
             and map_context.has_drivable
             and not facts.on_drivable[0]
-        )
-    ):
-        return voc.ON_THE_SIDEWALK
-    if traj.kind == "vehicle":
-        if has_map and vehicle_off_lane(facts, map_context, th)[0]:
+        ):
+            return voc.ON_THE_SIDEWALK
+        if traj.kind == "vehicle" and vehicle_off_lane(facts, map_context, th)[0]:
             return voc.BY_THE_CURB
+    if traj.kind == "vehicle":
         rel = abs(float(np.rad2deg(wrap_angle(traj.heading[row] - ego_yaw(ego_pose)))))
         if rel >= th.oncoming_deg:
             return voc.IN_THE_ONCOMING_LANE
@@ -306,6 +308,7 @@ def label_trajectories(trajectories: Mapping[str, ObjectTrajectory], ego_poses: 
 def label_log(log: SceneLog, thresholds: LabelThresholds | None = None) -> dict[str, MotionLabel]:
     """Auto-labels of every movable object of ``log`` (static objects and signs are skipped)."""
     map_context = MapContext.from_features(log.map_features) if log.map_features else None
-    labels = label_trajectories(log_trajectories(log, map_context, min_frames=1), log.ego_poses, map_context, thresholds)
+    trajectories = log_trajectories(log, map_context, min_frames=1)
+    labels = label_trajectories(trajectories, log.ego_poses, map_context, thresholds)
     logger.debug("%s: labelled %d objects", log.seq_id, len(labels))
     return labels

@@ -30,10 +30,24 @@ MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bleft\b|\bleft\b.*\blane", (voc.CHANGING_LANE_LEFT,)),
     (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bright\b|\bright\b.*\blane", (voc.CHANGING_LANE_RIGHT,)),
     (r"\bslow|decelerat|\bbrak(?!\w* (?:to|until))|losing speed|reducing|easing off", (voc.SLOWING_DOWN,)),
-    (r"speed\w* up|accelerat|picking up speed|gaining speed|pull\w* away|starting to move|moving off|on the gas", (voc.SPEEDING_UP,)),
-    (r"(?:coming|comes|pull\w*|brak\w*) (?:up )?to a (?:stop|halt|standstill)|\bstopping\b|\bstops\b|pull\w* up|until it stands", (voc.STOPPING,)),
-    (r"stationary|not moving|not going anywhere|sitting still|motionless|standstill|standing still(?! in traffic)", (voc.STOPPED, voc.PARKED, voc.STANDING)),
-    (r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b|sitting in (?:the|its) lane|in (?:its|the) lane", (voc.STOPPED, voc.STANDING)),
+    (
+        r"speed\w* up|accelerat|picking up speed|gaining speed|pull\w* away|starting to move|moving off|on the gas",
+        (voc.SPEEDING_UP,),
+    ),
+    (
+        r"(?:coming|comes|pull\w*|brak\w*) (?:up )?to a (?:stop|halt|standstill)"
+        r"|\bstopping\b|\bstops\b|pull\w* up|until it stands",
+        (voc.STOPPING,),
+    ),
+    (
+        r"stationary|not moving|not going anywhere|sitting still|motionless|standstill|standing still(?! in traffic)",
+        (voc.STOPPED, voc.PARKED, voc.STANDING),
+    ),
+    (
+        r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b"
+        r"|sitting in (?:the|its) lane|in (?:its|the) lane",
+        (voc.STOPPED, voc.STANDING),
+    ),
     (r"\bparked\b|parking (?:spot|space|bay)", (voc.PARKED,)),
     (r"revers|\bback(?:ing|s)? (?:up|out)|backwards?", (voc.REVERSING,)),
     (r"cross|across|\bleft\b.*\bright\b|\bright\b.*\bleft\b|(?:to|towards) the (?:left|right)", (voc.CROSSING,)),

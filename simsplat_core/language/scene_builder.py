@@ -135,7 +135,7 @@ class AlignmentConfig:
     backend: str = "auto"
     seed: int = 0
 
-    def validate(self) -> "AlignmentConfig":
+    def validate(self) -> AlignmentConfig:
         """Raises ``AlignmentConfigError`` naming the offending field; returns ``self``."""
         def need(cond: bool, name: str, rule: str) -> None:
             if not cond:
@@ -306,11 +306,11 @@ def build_language_scene(
         # 4. the scene's autoencoder
         t = time.perf_counter()
         if autoencoder is None:
-            rows = [object_feats[o] for o in sorted(object_feats)] + ([bg_text] if bg_text is not None else [])
-            if not rows:
-                rows = [np.zeros(text_encoder.dim, np.float32)]
+            fit_rows = [object_feats[o] for o in sorted(object_feats)] + ([bg_text] if bg_text is not None else [])
+            if not fit_rows:
+                fit_rows = [np.zeros(text_encoder.dim, np.float32)]
             vocabulary = (text_encoder.encode_passages(appearance_vocabulary()) if config.use_vocabulary else None)
-            autoencoder, report = FeatureAutoencoder.fit(np.stack(rows), vocabulary, config.autoencoder_config(),
+            autoencoder, report = FeatureAutoencoder.fit(np.stack(fit_rows), vocabulary, config.autoencoder_config(),
                                                          text_space=text_encoder.name)
             metrics["autoencoder_final_loss"] = report.final_loss
         times["autoencoder"] = time.perf_counter() - t
@@ -319,7 +319,8 @@ def build_language_scene(
         t = time.perf_counter()
         node_of = {o.object_id: o.node_id for o in objects}
         fitted_ids = [oid for oid in sorted(object_feats) if oid in node_of]
-        latents = autoencoder.encode(np.stack([object_feats[o] for o in fitted_ids])) if fitted_ids else None
+        latents = (autoencoder.encode(np.stack([object_feats[o] for o in fitted_ids])) if fitted_ids
+                   else np.zeros((0, config.feature_dim), np.float32))
         node_latents = {node_of[oid]: latents[i] for i, oid in enumerate(fitted_ids)}
         z_bg = (autoencoder.encode(bg_text[None])[0] if bg_text is not None
                 else np.zeros(config.feature_dim, np.float32))

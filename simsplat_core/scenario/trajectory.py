@@ -197,5 +197,7 @@ def log_trajectories(
         track = log.track(obj.object_id)
         if len(track) < min_frames:
             continue
-        out[obj.object_id] = ObjectTrajectory.from_track(track, obj.category, log.timestamps_us, map_context, half_window_s)
+        out[obj.object_id] = ObjectTrajectory.from_track(
+            track, obj.category, log.timestamps_us, map_context, half_window_s
+        )
     return out

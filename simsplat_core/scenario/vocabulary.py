@@ -122,12 +122,20 @@ VEHICLE_MOTION = Vocabulary(
         PhraseClass(
             CHANGING_LANE_LEFT,
             ("a car changing lanes to the left", "a vehicle moving into the left lane", "a car merging left"),
-            ("the car switching to the left lane", "vehicle doing a lane change to the left", "the car cutting left into the next lane"),
+            (
+                "the car switching to the left lane",
+                "vehicle doing a lane change to the left",
+                "the car cutting left into the next lane",
+            ),
         ),
         PhraseClass(
             CHANGING_LANE_RIGHT,
             ("a car changing lanes to the right", "a vehicle moving into the right lane", "a car merging right"),
-            ("the car switching to the right lane", "vehicle doing a lane change to the right", "the car cutting right into the next lane"),
+            (
+                "the car switching to the right lane",
+                "vehicle doing a lane change to the right",
+                "the car cutting right into the next lane",
+            ),
         ),
         PhraseClass(
             SLOWING_DOWN,
@@ -146,7 +154,11 @@ VEHICLE_MOTION = Vocabulary(
         ),
         PhraseClass(
             STOPPED,
-            ("a stopped car waiting in its lane", "a vehicle standing still in traffic", "a car waiting at the stop line"),
+            (
+                "a stopped car waiting in its lane",
+                "a vehicle standing still in traffic",
+                "a car waiting at the stop line",
+            ),
             ("the car that is waiting", "vehicle stopped in the lane", "the stationary car queuing in traffic"),
         ),
         PhraseClass(
@@ -172,7 +184,11 @@ PEDESTRIAN_MOTION = Vocabulary(
                 "a person walking across the road from the left to the right",
                 "a pedestrian crossing in front from left to right",
             ),
-            ("the person crossing from left to right", "pedestrian walking across the road left to right", "someone crossing over to the right side"),
+            (
+                "the person crossing from left to right",
+                "pedestrian walking across the road left to right",
+                "someone crossing over to the right side",
+            ),
         ),
         PhraseClass(
             CROSSING_RIGHT_TO_LEFT,
@@ -181,16 +197,28 @@ PEDESTRIAN_MOTION = Vocabulary(
                 "a person walking across the road from the right to the left",
                 "a pedestrian crossing in front from right to left",
             ),
-            ("the person crossing from right to left", "pedestrian walking across the road right to left", "someone crossing over to the left side"),
+            (
+                "the person crossing from right to left",
+                "pedestrian walking across the road right to left",
+                "someone crossing over to the left side",
+            ),
         ),
         PhraseClass(
             CROSSING,
-            ("a pedestrian crossing the street", "a person walking across the road", "a pedestrian on the way across the street"),
+            (
+                "a pedestrian crossing the street",
+                "a person walking across the road",
+                "a pedestrian on the way across the street",
+            ),
             ("the person crossing the road", "pedestrian going across the street", "someone crossing"),
         ),
         PhraseClass(
             WALKING_ALONG,
-            ("a pedestrian walking along the sidewalk", "a person walking along the street", "a pedestrian strolling on the pavement"),
+            (
+                "a pedestrian walking along the sidewalk",
+                "a person walking along the street",
+                "a pedestrian strolling on the pavement",
+            ),
             ("the person walking down the sidewalk", "pedestrian walking beside the road", "someone strolling along"),
         ),
         PhraseClass(

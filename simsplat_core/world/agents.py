@@ -196,7 +196,7 @@ class Population:
         return Agent(
             "vehicle",
             subtype,
-            tuple(float(v) for v in size),
+            (float(size[0]), float(size[1]), float(size[2])),
             motion,
             self._sample(motion),
             {"color": color},
@@ -331,7 +331,10 @@ def _add_vehicle_lookalikes(pop: Population) -> None:
     best: Agent | None = None
     for _ in range(40):
         recipe = turning[int(rng.integers(len(turning)))]
-        cand = pop.vehicle(pop.vehicle_motion(recipe, size[0]), subtype, color, size, "vehicle_pair")
+        motion = pop.vehicle_motion(recipe, size[0])
+        if motion is None:  # not on these roads (the pair's recipes always are)
+            continue
+        cand = pop.vehicle(motion, subtype, color, size, "vehicle_pair")
         if pop.collides(cand) or not pop.near_cameras(cand):
             continue
         if _heading_change(cand.traj) > 75.0:
@@ -344,7 +347,10 @@ def _add_vehicle_lookalikes(pop: Population) -> None:
     straight = ["oncoming_straight", "lead_straight", "parked"]
     for attempt in range(40):
         recipe = straight[int(rng.integers(len(straight)))] if attempt < 30 else "parked"
-        cand = pop.vehicle(pop.vehicle_motion(recipe, size[0]), subtype, color, size, "vehicle_pair")
+        motion = pop.vehicle_motion(recipe, size[0])
+        if motion is None:
+            continue
+        cand = pop.vehicle(motion, subtype, color, size, "vehicle_pair")
         if _heading_change(cand.traj) < 10.0 and pop.try_add(cand):
             break
 

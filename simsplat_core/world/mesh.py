@@ -54,7 +54,7 @@ class Mesh:
         return int(self.tris.shape[0])
 
     @staticmethod
-    def empty() -> "Mesh":
+    def empty() -> Mesh:
         return Mesh(
             np.zeros((0, 3, 3)),
             np.zeros((0, 3)),
@@ -63,14 +63,14 @@ class Mesh:
             np.zeros(0, np.int32),
         )
 
-    def transformed(self, rotation: np.ndarray, translation: np.ndarray) -> "Mesh":
+    def transformed(self, rotation: np.ndarray, translation: np.ndarray) -> Mesh:
         """The mesh moved by ``p -> rotation @ p + translation`` (texture coordinates unchanged)."""
         return Mesh(
             self.tris @ rotation.T + translation, self.normals @ rotation.T, self.tex, self.color, self.material
         )
 
     @staticmethod
-    def concat(meshes: list["Mesh"]) -> "Mesh":
+    def concat(meshes: list[Mesh]) -> Mesh:
         meshes = [m for m in meshes if len(m)]
         if not meshes:
             return Mesh.empty()
@@ -94,7 +94,7 @@ class Part:
     materials: list[int]
     facade: bool = False
 
-    def moved(self, rotation: np.ndarray, pivot: np.ndarray, offset: np.ndarray | None = None) -> "Part":
+    def moved(self, rotation: np.ndarray, pivot: np.ndarray, offset: np.ndarray | None = None) -> Part:
         """Rotate about ``pivot`` then translate by ``offset``."""
         v = (self.verts - pivot) @ rotation.T + pivot
         if offset is not None:
@@ -125,7 +125,7 @@ def box(
     """Axis-aligned box. Face order: -x, +x, -y, +y, -z, +z (indices for ``face_colors``/``face_mats``)."""
     xs, ys, zs = (x0, x1), (y0, y1), (z0, z1)
     verts = np.array([[xs[i & 1], ys[(i >> 1) & 1], zs[(i >> 2) & 1]] for i in range(8)], dtype=np.float64)
-    faces = [(0, 2, 6, 4), (1, 3, 7, 5), (0, 1, 5, 4), (2, 3, 7, 6), (0, 1, 3, 2), (4, 5, 7, 6)]
+    faces: list[tuple[int, ...]] = [(0, 2, 6, 4), (1, 3, 7, 5), (0, 1, 5, 4), (2, 3, 7, 6), (0, 1, 3, 2), (4, 5, 7, 6)]
     mats = [material] * 6
     for k, m in (face_mats or {}).items():
         mats[k] = m
@@ -159,8 +159,8 @@ def extrude(
     cap = color if cap_color is None else cap_color
     colors = [tuple(cap), tuple(cap)] + [tuple(color)] * p
     mats = [material] * (p + 2)
-    for k, c in (side_colors or {}).items():
-        colors[2 + k] = tuple(c)
+    for k, side_color in (side_colors or {}).items():
+        colors[2 + k] = tuple(side_color)
     for k, m in (side_mats or {}).items():
         mats[2 + k] = m
     return Part(verts, faces, colors, mats)

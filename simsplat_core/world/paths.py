@@ -20,10 +20,10 @@ ROUTE_REACH = 150.0
 def route(layout: RoadLayout, arm: str, lane: int, turn: str) -> Path:
     """Inbound lane of ``arm`` -> connector -> outbound lane, with marks ``stop``, ``junction_in``, ``junction_out``."""
     conn = connector_points(layout, arm, lane, turn)
-    if conn is None:
+    out_lane = target_lane(layout, arm, lane, turn)
+    if conn is None or out_lane is None:
         raise ValueError(f"lane {lane} of arm {arm} cannot turn {turn}")
     out_arm = target_arm(arm, turn)
-    out_lane = target_lane(layout, arm, lane, turn)
     d0, n0 = arm_dir(arm), arm_normal(arm)
     d1, n1 = arm_dir(out_arm), arm_normal(out_arm)
     s_stop = layout.stopline_s(arm)

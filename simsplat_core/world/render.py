@@ -79,7 +79,7 @@ class DrawList:
     instance: np.ndarray
 
     @staticmethod
-    def build(meshes: list[tuple[Mesh, int]], lighting: Lighting) -> "DrawList":
+    def build(meshes: list[tuple[Mesh, int]], lighting: Lighting) -> DrawList:
         """Combine ``(world mesh, instance id)`` pairs, baking the lighting into the colours."""
         meshes = [(m, i) for m, i in meshes if len(m)]
         if not meshes:

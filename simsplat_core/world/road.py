@@ -341,9 +341,9 @@ class RoadLayout:
         for arm in ARMS:
             for turn in ("straight", "left", "right"):
                 for lane in range(self.lanes(arm)):
-                    pts = connector_points(self, arm, lane, turn)
-                    if pts is not None:
-                        add(f"lane_conn_{arm}{lane}_{turn}", "lane", pts)
+                    connector = connector_points(self, arm, lane, turn)
+                    if connector is not None:
+                        add(f"lane_conn_{arm}{lane}_{turn}", "lane", connector)
         # kerbs and sidewalks per quadrant
         sw = self.sidewalk_w
         for su, sv, name in ((1, 1, "NE"), (-1, 1, "NW"), (-1, -1, "SW"), (1, -1, "SE")):
@@ -368,7 +368,7 @@ class RoadLayout:
         return json.dumps(asdict(self), sort_keys=True)
 
     @classmethod
-    def from_json(cls, text: str) -> "RoadLayout":
+    def from_json(cls, text: str) -> RoadLayout:
         data = json.loads(text)
         data["center"] = tuple(data["center"])
         return cls(**data)

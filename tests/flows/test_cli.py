@@ -18,12 +18,31 @@ runner = CliRunner()
 
 
 def _tree_digest(root: Path) -> dict[str, str]:
-    return {str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest() for p in sorted(root.rglob("*")) if p.is_file()}
+    return {
+        str(p.relative_to(root)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(root.rglob("*"))
+        if p.is_file()
+    }
 
 
-@pytest.mark.parametrize("command", [[], ["run"], ["world"], ["ingest"], ["ingest", "waymo-frame"], ["ingest", "av2"], ["inspect"],
-                                     ["reconstruct"], ["render"], ["query"], ["eval"], ["eval", "grounding"],
-                                     ["align"]])
+@pytest.mark.parametrize(
+    "command",
+    [
+        [],
+        ["run"],
+        ["world"],
+        ["ingest"],
+        ["ingest", "waymo-frame"],
+        ["ingest", "av2"],
+        ["inspect"],
+        ["reconstruct"],
+        ["render"],
+        ["query"],
+        ["eval"],
+        ["eval", "grounding"],
+        ["align"],
+    ],
+)
 def test_every_command_has_help(command):
     result = runner.invoke(app, [*command, "--help"])
     assert result.exit_code == 0, result.output
@@ -42,7 +61,9 @@ def test_world_then_inspect_writes_logs_and_contact_sheet(prefect_api_url, tmp_p
     assert list((store / "logs" / "synth-000005" / "images").rglob("*.exr"))
 
     sheet = tmp_path / "sheet.png"
-    result = runner.invoke(app, ["inspect", str(store / "logs" / "synth-000005"), "--sheet", str(sheet), "--frame", "3"])
+    result = runner.invoke(
+        app, ["inspect", str(store / "logs" / "synth-000005"), "--sheet", str(sheet), "--frame", "3"]
+    )
     assert result.exit_code == 0, result.output
     assert "vehicle" in result.output and "front" in result.output
     image = cv2.imread(str(sheet))
@@ -59,7 +80,9 @@ def test_inspect_rejects_a_path_that_is_not_a_log(tmp_path):
 @pytest.mark.shared_data
 def test_ingest_av2_and_corrupt_waymo_leaves_store_unchanged(prefect_api_url, shared_data, tmp_path):
     store = tmp_path / "store"
-    result = runner.invoke(app, ["ingest", "av2", str(shared_data / "av2" / "sensor-log-7fab2350"), "--out", str(store)])
+    result = runner.invoke(
+        app, ["ingest", "av2", str(shared_data / "av2" / "sensor-log-7fab2350"), "--out", str(store)]
+    )
     assert result.exit_code == 0, result.output
     (seq_id,) = list_logs(ArtifactStore(str(store)))
     log = read_scene_log(ArtifactStore(str(store)), seq_id)
@@ -106,12 +129,15 @@ def test_reconstruct_then_render_a_shifted_view(prefect_api_url, tmp_path):
 
 def test_render_names_an_unknown_sequence_or_missing_scene(tmp_path):
     store = tmp_path / "store"
-    result = runner.invoke(app, ["render", "--store", str(store), "--seq", "nope", "--frame", "0", "--out",
-                                 str(tmp_path / "x.png")])
+    result = runner.invoke(
+        app, ["render", "--store", str(store), "--seq", "nope", "--frame", "0", "--out", str(tmp_path / "x.png")]
+    )
     assert result.exit_code != 0
     assert "nope" in result.output
-    write_scene_log(ArtifactStore(str(store)), generate_log(seed=0, config=WorldConfig(num_frames=2, width=32, height=24),
-                                                            seq_id="s0"))
+    write_scene_log(
+        ArtifactStore(str(store)),
+        generate_log(seed=0, config=WorldConfig(num_frames=2, width=32, height=24), seq_id="s0"),
+    )
     result = runner.invoke(app, ["render", "--store", str(store), "--seq", "s0", "--frame", "0", "--out",
                                  str(tmp_path / "x.png")])
     assert result.exit_code != 0
@@ -163,8 +189,8 @@ def test_run_on_an_empty_store_without_sequences_says_how_to_add_logs(tmp_path):
 
 def test_align_names_an_unknown_sequence_before_starting_anything(tmp_path):
     store = tmp_path / "store"
-    write_scene_log(ArtifactStore(str(store)), generate_log(seed=0, config=WorldConfig(num_frames=2, width=32, height=24),
-                                                            seq_id="s0"))
+    log = generate_log(seed=0, config=WorldConfig(num_frames=2, width=32, height=24), seq_id="s0")
+    write_scene_log(ArtifactStore(str(store)), log)
     result = runner.invoke(app, ["align", "--store", str(store), "--seq", "nope"])
     assert result.exit_code != 0 and "nope" in _flat(result.output)
     result = runner.invoke(app, ["align", "--store", str(store)])  # images but no reconstruction yet

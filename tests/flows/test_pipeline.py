@@ -44,7 +44,11 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
         renders = sorted(p for p in store.walk(f"{scene.relpath}/renders"))
         assert renders == sorted(f"{cam}/{f:06d}.exr" for cam in log.cameras for f in (2, 5))
     # language alignment: one aligner trained on both logs, one language scene per reconstructed scene
-    assert first.aligner is not None and not first.aligner.skipped and first.aligner.seq_ids == ("synth-000001", "synth-000002")
+    assert (
+        first.aligner is not None
+        and not first.aligner.skipped
+        and first.aligner.seq_ids == ("synth-000001", "synth-000002")
+    )
     for scene, language in zip(first.scenes, first.language):
         assert (language.seq_id, language.scene_hash, language.model_hash) == (scene.seq_id, scene.scene_hash,
                                                                                first.aligner.model_hash)

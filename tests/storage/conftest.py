@@ -114,7 +114,9 @@ def build_log(
         Track("cone_3", frames[:0], np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros(0), np.zeros(0, bool)),
     )
     objects = (
-        ObjectInfo("veh_1", "vehicle", "rigid", 70_001, "a black sedan turning left", {"color": "black", "sub": "sedan"}),
+        ObjectInfo(
+            "veh_1", "vehicle", "rigid", 70_001, "a black sedan turning left", {"color": "black", "sub": "sedan"}
+        ),
         ObjectInfo("ped_2", "pedestrian", "nonrigid", 2**24, "", {"behavior": "crossing", "note": "äöü ✓"}),
         ObjectInfo("cone_3", "static", "static", 3),
     )

@@ -15,9 +15,9 @@ from storage import (
     is_done,
     list_logs,
     read_exr_header,
+    read_log_manifest,
     read_marker,
     read_scene_log,
-    read_log_manifest,
     scene_log_key,
     write_scene_log,
 )

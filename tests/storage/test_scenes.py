@@ -136,7 +136,13 @@ def test_layout_tables_and_manifest(store: ArtifactStore) -> None:
     write_scene(store, "seq0", HASH_A, make_records(), METRICS, make_renders(), feature_dim=16)
     rel = f"scenes/seq0/{HASH_A}"
     assert store.listdir(rel) == [
-        "_SUCCESS.json", "deform", "gaussians.parquet", "metrics.parquet", "node_poses.parquet", "nodes.parquet", "renders",
+        "_SUCCESS.json",
+        "deform",
+        "gaussians.parquet",
+        "metrics.parquet",
+        "node_poses.parquet",
+        "nodes.parquet",
+        "renders",
     ]
     assert store.walk(f"{rel}/renders") == ["front/000009.exr", "left/000009.exr"]
     poses = store.read_table(f"{rel}/node_poses.parquet", "node_poses")

@@ -282,7 +282,8 @@ def region_colors(
             r = merged[key]
             merged[key] = ColorRegion(name, r.fraction + frac, r.lab, r.lightness, r.confidence, glass)
         else:
-            merged[key] = ColorRegion(name, frac, tuple(float(v) for v in med), lightness, float(conf), glass)
+            lab = (float(med[0]), float(med[1]), float(med[2]))
+            merged[key] = ColorRegion(name, frac, lab, lightness, float(conf), glass)
     return sorted(merged.values(), key=lambda r: -r.fraction)
 
 

@@ -59,7 +59,8 @@ def test_lane_change_is_measured_against_lanes_not_the_initial_heading() -> None
     assert _motion({"follow": follow}, map_features=(curved_lane,)) == {"follow": voc.GOING_STRAIGHT}
     lanes = (lane("l0", 0.0), lane("l1", 3.5))
     labels = _motion(
-        {"lc": ("vehicle", *lane_change(+1.0)), "drift": ("vehicle", *straight((5.0, 1.0), 0.0, 8.0))}, map_features=lanes
+        {"lc": ("vehicle", *lane_change(+1.0)), "drift": ("vehicle", *straight((5.0, 1.0), 0.0, 8.0))},
+        map_features=lanes,
     )
     assert labels == {"lc": voc.CHANGING_LANE_LEFT, "drift": voc.GOING_STRAIGHT}
 
@@ -67,7 +68,10 @@ def test_lane_change_is_measured_against_lanes_not_the_initial_heading() -> None
 def test_parked_versus_stopped_uses_the_lanes() -> None:
     feats = (lane("l0", 0.0), polygon("drivable_area", "road", -50.0, 150.0, -6.0, 6.0))
     labels = _motion(
-        {"in_lane": ("vehicle", *straight((15.0, 0.2), 0.0, 0.0)), "kerb": ("vehicle", *straight((15.0, 4.5), 0.0, 0.0))},
+        {
+            "in_lane": ("vehicle", *straight((15.0, 0.2), 0.0, 0.0)),
+            "kerb": ("vehicle", *straight((15.0, 4.5), 0.0, 0.0)),
+        },
         map_features=feats,
     )
     assert labels == {"in_lane": voc.STOPPED, "kerb": voc.PARKED}
@@ -164,7 +168,9 @@ def test_location_contexts_from_the_map() -> None:
 
 
 def test_static_objects_are_not_labelled() -> None:
-    log = scene({"cone": ("static", *straight((10.0, 2.0), 0.0, 0.0)), "car": ("vehicle", *straight((10.0, -2.0), 0.0, 0.0))})
+    log = scene(
+        {"cone": ("static", *straight((10.0, 2.0), 0.0, 0.0)), "car": ("vehicle", *straight((10.0, -2.0), 0.0, 0.0))}
+    )
     assert set(label_log(log)) == {"car"}
 
 

@@ -16,7 +16,9 @@ def test_oriented_boxes_overlap_by_separating_axes() -> None:
     hit = footprints_overlap(a, np.zeros(3), (4.0, 2.0), b, heading_b, (4.0, 2.0))
     # end to end: touching at x = 2 overlaps; b turned 90 degrees spans x 3..5 (1 m gap); b at (3, 3) is clear
     assert hit.tolist() == [True, False, False]
-    assert footprints_overlap(a[:1], np.zeros(1), (4.0, 2.0), b[1:2], heading_b[1:2], (4.0, 2.0), margin=1.1).tolist() == [True]
+    assert footprints_overlap(
+        a[:1], np.zeros(1), (4.0, 2.0), b[1:2], heading_b[1:2], (4.0, 2.0), margin=1.1
+    ).tolist() == [True]
 
 
 def test_corner_distances_and_offroad() -> None:

@@ -30,7 +30,9 @@ def av2(shared_data: Path) -> tuple[LaneGraph, dict[str, list[str]], list[MapFea
         pytest.skip("AV2 sample absent")
     log = load_av2_log(log_dir)
     doc = json.loads(next((log_dir / "map").glob("log_map_archive*.json")).read_text())
-    explicit = {f"lane_{k}": [f"lane_{s}" for s in (v.get("successors") or [])] for k, v in doc["lane_segments"].items()}
+    explicit = {
+        f"lane_{k}": [f"lane_{s}" for s in (v.get("successors") or [])] for k, v in doc["lane_segments"].items()
+    }
     return LaneGraph.from_features(log.map_features), explicit, list(log.map_features)
 
 
@@ -87,7 +89,9 @@ def test_nearest_lane_of_a_lane_point_is_itself(synthetic) -> None:
     h = float(ln.heading_at(10.0))
     p = np.array([np.interp(10.0, ln.s, ln.points[:, c]) for c in range(2)]) + [-np.sin(h), np.cos(h)]
     m = graph.nearest(p[None], np.array([h]))
-    assert m.lane[0] == graph.index("lane_W_in_1") and m.offset[0] == pytest.approx(1.0) and m.s[0] == pytest.approx(10.0)
+    assert (
+        m.lane[0] == graph.index("lane_W_in_1") and m.offset[0] == pytest.approx(1.0) and m.s[0] == pytest.approx(10.0)
+    )
 
 
 @pytest.mark.shared_data
@@ -101,7 +105,9 @@ def test_av2_inferred_successors_match_the_map(av2) -> None:
     assert len(inferred - listed) <= 0.05 * len(listed)
     _assert_successors_connect(graph, max_gap_m=1.5)
     given = LaneGraph.from_features(features, successors=explicit)
-    assert {(given.lanes[i].lane_id, given.lanes[j].lane_id) for i, s in enumerate(given.successors) for j in s} == listed
+    assert {
+        (given.lanes[i].lane_id, given.lanes[j].lane_id) for i, s in enumerate(given.successors) for j in s
+    } == listed
 
 
 @pytest.mark.shared_data
