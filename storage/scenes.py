@@ -296,7 +296,7 @@ def write_scene(
                 "files": sorted(render_relpath(r.camera, r.frame_idx) for r in renders),
             },
             "metrics": metrics_to_json(metrics),
-            "written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="microseconds"),
+            "written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds"),
             "provenance": dict(provenance or {}),
         }
         mark_done(store, tmp, scene_hash, manifest)

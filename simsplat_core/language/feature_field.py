@@ -100,7 +100,7 @@ class FeatureFitConfig:
     eval_pixel_stride: int = 2
     seed: int = 0
 
-    def validate(self, prefix: str = "FeatureFitConfig") -> "FeatureFitConfig":
+    def validate(self, prefix: str = "FeatureFitConfig") -> FeatureFitConfig:
         """Raises ``ValueError`` naming the offending field."""
         if not isinstance(self.iterations, int) or self.iterations < 0:
             raise ValueError(f"{prefix}.iterations must be an int >= 0, got {self.iterations!r}")

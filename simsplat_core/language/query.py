@@ -146,7 +146,7 @@ class QueryEngine:
         """Texts ``embed`` had to encode."""
         return self._cache.misses
 
-    def with_config(self, config: QueryConfig) -> "QueryEngine":
+    def with_config(self, config: QueryConfig) -> QueryEngine:
         """A new engine with ``config`` sharing this one's encoder, codebooks and embedding cache."""
         other = QueryEngine(self.text_encoder, config, self._codebooks, self._cache.max_entries)
         other._cache = self._cache

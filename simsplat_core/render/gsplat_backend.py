@@ -12,7 +12,6 @@ Differences to keep in mind (the compositing rules are the same):
 from __future__ import annotations
 
 import importlib.util
-from typing import Optional
 
 import torch
 from torch import Tensor
@@ -49,7 +48,7 @@ def rasterize_gsplat(
     near_plane: float,
     far_plane: float,
     render_mode: str,
-    backgrounds: Optional[Tensor],  # [C, D]
+    backgrounds: Tensor | None,  # [C, D]
     tile_size: int,
     eps2d: float,
     radius_clip: float,

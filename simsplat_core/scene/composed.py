@@ -48,7 +48,7 @@ class ComposedGaussians:
         """``[N]`` bool rows of ``node_id``."""
         return self.node_ids == node_id
 
-    def detach(self) -> "ComposedGaussians":
+    def detach(self) -> ComposedGaussians:
         d = lambda t: None if t is None else t.detach()  # noqa: E731
         return ComposedGaussians(self.t, d(self.means), d(self.quats), d(self.scales), d(self.opacities),
                                  d(self.colors), d(self.features), self.node_ids, self.gaussian_ids, self.node_slices)

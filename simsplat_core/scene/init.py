@@ -63,7 +63,7 @@ class PointCloud:
     normals: np.ndarray | None = None
 
     @staticmethod
-    def empty() -> "PointCloud":
+    def empty() -> PointCloud:
         return PointCloud(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)))
 
 

@@ -60,11 +60,11 @@ class SceneNode:
         """Learnable tensors of the node by name (Gaussian rows and node-level parameters)."""
         return dict(self.gaussians.named_tensors())
 
-    def to(self, device: torch.device | str) -> "SceneNode":
+    def to(self, device: torch.device | str) -> SceneNode:
         """A copy of the node on ``device`` (the node itself is not changed)."""
         return dataclasses.replace(self, gaussians=self.gaussians.to(device))
 
-    def detached(self) -> "SceneNode":
+    def detached(self) -> SceneNode:
         """A copy whose learnable tensors are detached (no grad, no optimizer references)."""
         return dataclasses.replace(self, gaussians=self.gaussians.detach())
 
@@ -130,13 +130,13 @@ class ObjectNode(SceneNode):
                 return self.poses.clone()
             return self.poses @ se3_delta(self.pose_deltas)
 
-    def to(self, device: torch.device | str) -> "ObjectNode":
+    def to(self, device: torch.device | str) -> ObjectNode:
         return dataclasses.replace(
             self, gaussians=self.gaussians.to(device), poses=self.poses.to(device), present=self.present.to(device),
             pose_deltas=None if self.pose_deltas is None else self.pose_deltas.detach().to(device),
             track=None if self.track is None else self.track.to(device))
 
-    def detached(self) -> "ObjectNode":
+    def detached(self) -> ObjectNode:
         return dataclasses.replace(
             self, gaussians=self.gaussians.detach(),
             pose_deltas=None if self.pose_deltas is None else self.pose_deltas.detach())

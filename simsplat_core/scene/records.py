@@ -61,7 +61,7 @@ class SceneRecords:
     def num_gaussians(self) -> int:
         return int(self.gaussians["node_id"].shape[0])
 
-    def validate(self) -> "SceneRecords":
+    def validate(self) -> SceneRecords:
         """Check column presence, dtypes' widths and cross references; raises ``ValueError``."""
         n = self.num_gaussians
         widths = {"mean": 3, "log_scale": 3, "quat": 4, "color": 3}

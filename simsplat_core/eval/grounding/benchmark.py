@@ -51,15 +51,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.geometry import wrap_angle
-from simsplat_core.language.map_context import MapContext
-from simsplat_core.language.motion_labels import (
-    LabelThresholds,
-    MotionLabel,
-    label_trajectories,
-    location_context,
-    vehicle_off_lane,
-)
 from simsplat_core.eval.grounding.paraphrases import (
     BROADER_TERMS,
     DESCRIBABLE_CONTEXTS,
@@ -70,6 +61,15 @@ from simsplat_core.eval.grounding.paraphrases import (
     Wording,
     realise,
     realise_group,
+)
+from simsplat_core.geometry import wrap_angle
+from simsplat_core.language.map_context import MapContext
+from simsplat_core.language.motion_labels import (
+    LabelThresholds,
+    MotionLabel,
+    label_trajectories,
+    location_context,
+    vehicle_off_lane,
 )
 from simsplat_core.language.trajectory import ObjectTrajectory, ego_yaw, log_trajectories, to_ego_frame
 from simsplat_core.language.vocabulary import LOCATION_SECTOR, MOTION_VOCABULARIES
@@ -361,7 +361,7 @@ class SceneGroundTruth:
     instance_ids: dict[str, int]
 
     @classmethod
-    def from_log(cls, log: SceneLog) -> "SceneGroundTruth":
+    def from_log(cls, log: SceneLog) -> SceneGroundTruth:
         """From a log whose images carry instance masks (all frames, the log's camera order).
 
         Raises:
@@ -380,7 +380,7 @@ class SceneGroundTruth:
             maps[img.frame_idx, cam_index[img.camera]] = img.instance
         return cls(log.seq_id, frames, tuple(cams), maps, {o.object_id: o.instance_id for o in log.objects})
 
-    def aligned_to(self, frame_indices: np.ndarray, cameras: Sequence[str]) -> "SceneGroundTruth":
+    def aligned_to(self, frame_indices: np.ndarray, cameras: Sequence[str]) -> SceneGroundTruth:
         """The ground truth on a scene's frames and cameras (in that order).
 
         Raises:

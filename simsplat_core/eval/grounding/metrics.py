@@ -112,7 +112,7 @@ class OverlapCounts:
     counts: np.ndarray
 
     @classmethod
-    def build(cls, node_id_maps: np.ndarray, truth: SceneGroundTruth) -> "OverlapCounts":
+    def build(cls, node_id_maps: np.ndarray, truth: SceneGroundTruth) -> OverlapCounts:
         """From ``[F, C, H, W]`` int node-id maps and the ground truth over the same frames and cameras."""
         node_id_maps = np.asarray(node_id_maps)
         labels = truth.instance_maps

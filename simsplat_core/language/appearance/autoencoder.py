@@ -101,7 +101,7 @@ class AutoencoderState:
         return out
 
     @staticmethod
-    def from_arrays(arrays: dict[str, np.ndarray]) -> "AutoencoderState":
+    def from_arrays(arrays: dict[str, np.ndarray]) -> AutoencoderState:
         dims = [int(v) for v in np.asarray(arrays["dims"])]
         n = 2 * (len(dims) - 1)
         return AutoencoderState(
@@ -188,7 +188,7 @@ class FeatureAutoencoder:
         vocabulary: np.ndarray | None = None,
         config: AutoencoderConfig = AutoencoderConfig(),
         text_space: str = "",
-    ) -> tuple["FeatureAutoencoder", TrainReport]:
+    ) -> tuple[FeatureAutoencoder, TrainReport]:
         """Train on a scene's features (and optionally vocabulary embeddings).
 
         Args:
