@@ -380,7 +380,7 @@ def main() -> None:
     logs = {s: generate_log(s, world) for s in [*args.calib_seeds, *args.bench_seeds]}
     scenes: dict[str, LanguageScene] = {}
     scene_info: dict[str, dict] = {}
-    for seed, log in logs.items():
+    for log in logs.values():
         scene, info = reconstructed_scene(log, args.iterations, encoder, aligner, args.cache, f"-tr{args.train_seeds}",
                                           args.reuse_scenes)
         scenes[log.seq_id] = scene

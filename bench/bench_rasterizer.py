@@ -268,7 +268,7 @@ def _profile_cpu(n: int, setup: str, reps: int) -> dict[str, Any]:
         t = lap("3 compositing fwd (pack + numba kernel)", t)
         marks: dict[str, float] = {}
 
-        def mark(grad: torch.Tensor) -> None:
+        def mark(grad: torch.Tensor, marks: dict[str, float] = marks) -> None:
             marks.setdefault("means2d", time.perf_counter())
 
         proj.means2d.register_hook(mark)

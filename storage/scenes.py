@@ -498,7 +498,7 @@ def read_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None = None)
 
 def _records_class() -> type:
     """``simsplat_core.scene.SceneRecords``, imported on first use (the scene package imports torch)."""
-    from simsplat_core.scene import SceneRecords
+    from simsplat_core.scene import SceneRecords  # noqa: PLC0415  # slow (torch), see docstring
 
     return SceneRecords
 

@@ -99,6 +99,9 @@ from simsplat_core.language.text import QUERY, EmbeddingCache, TextEncoder, l2_n
 
 logger = logging.getLogger(__name__)
 
+#: The default configuration (frozen, so one instance serves every query engine).
+DEFAULT_QUERY_CONFIG = QueryConfig()
+
 
 @dataclass(frozen=True)
 class _QueryVectors:
@@ -123,7 +126,7 @@ class QueryEngine:
     def __init__(
         self,
         text_encoder: TextEncoder,
-        config: QueryConfig = QueryConfig(),
+        config: QueryConfig = DEFAULT_QUERY_CONFIG,
         codebooks: MotionCodebooks | None = None,
         cache_size: int = 4096,
     ) -> None:

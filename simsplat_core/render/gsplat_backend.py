@@ -54,7 +54,7 @@ def rasterize_gsplat(
     radius_clip: float,
 ) -> tuple[Tensor, Tensor, RasterMeta]:
     """``gsplat.rasterization`` in non-packed "classic" mode -> ``(colors [C, H, W, X], alphas, meta)``."""
-    import gsplat  # optional dependency, imported on use
+    import gsplat  # noqa: PLC0415  # optional (CUDA) dependency, imported on use
 
     render, alphas, info = gsplat.rasterization(
         means, quats, scales, opacities, colors, viewmats, Ks, width, height,

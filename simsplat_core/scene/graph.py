@@ -28,7 +28,6 @@ import hashlib
 import logging
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -37,11 +36,9 @@ from torch import Tensor
 from simsplat_core.scene.composed import ComposedGaussians
 from simsplat_core.scene.nodes import BACKGROUND_ID, BackgroundNode, NonRigidNode, ObjectNode, SceneNode
 from simsplat_core.scene.pose_track import Extrapolation, FrameTime, PoseTrack, locate
+from simsplat_core.scene.records import SceneRecords, graph_to_records, nodes_from_records
 from simsplat_core.scene.render import DEFAULT_EPS2D, SceneRender, render_composed
 from simsplat_core.scene.transforms import interpolate_transforms, quat_multiply, rotmat_to_quat, se3_delta
-
-if TYPE_CHECKING:
-    from simsplat_core.scene.records import SceneRecords
 
 logger = logging.getLogger(__name__)
 
@@ -369,8 +366,6 @@ class SceneGraph:
     # ------------------------------------------------------------------ persistence
     def to_records(self, scene_id: str) -> SceneRecords:
         """Plain numpy/python records of the graph (see :mod:`simsplat_core.scene.records`)."""
-        from simsplat_core.scene.records import graph_to_records
-
         beyond = [n.node_id for n in self.object_nodes if n.track is not None
                   and (n.track.start < self.frame_indices[0] or n.track.end > self.frame_indices[-1])]
         if beyond:
@@ -386,8 +381,6 @@ class SceneGraph:
     @classmethod
     def from_records(cls, records: SceneRecords, device: torch.device | str = "cpu") -> SceneGraph:
         """Inverse of :meth:`to_records` (learned pose refinements come back baked into the poses)."""
-        from simsplat_core.scene.records import nodes_from_records
-
         frame_indices, nodes, metadata = nodes_from_records(records, device)
         eps2d = float(metadata.pop(EPS2D_KEY, DEFAULT_EPS2D))
         revision = metadata.pop(REVISION_KEY, "")

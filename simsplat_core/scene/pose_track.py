@@ -28,14 +28,14 @@ from torch import Tensor
 from simsplat_core.scene.transforms import interpolate_transforms
 
 
-class Extrapolation(str, enum.Enum):
+class Extrapolation(enum.StrEnum):
     """What a pose track gives outside its time range."""
 
     HOLD = "hold"  #: the first (before) / last (after) sample, pose and presence
     ABSENT = "absent"  #: the node does not exist there
 
 
-class OffsetExtrapolation(str, enum.Enum):
+class OffsetExtrapolation(enum.StrEnum):
     """What a non-rigid node's deformation gives outside its trained frames."""
 
     HOLD = "hold"  #: the offsets of the first / last trained frame

@@ -579,7 +579,13 @@ _CONTEXTS_BY_CATEGORY = {
 
 def _alternatives(slot: str, f: ObjectFacts) -> list[str]:
     """Values of ``slot`` other than ``f``'s own that make sense for its category."""
-    from simsplat_core.world.palette import LOWER_COLORS, NAMED_COLORS, UPPER_COLORS, VEHICLE_KINDS
+    # simsplat_core.world loads the world generator and numba: imported only where distractors are drawn
+    from simsplat_core.world.palette import (  # noqa: PLC0415
+        LOWER_COLORS,
+        NAMED_COLORS,
+        UPPER_COLORS,
+        VEHICLE_KINDS,
+    )
 
     if slot in ("color", "upper", "lower"):
         pool = {"color": tuple(NAMED_COLORS), "upper": UPPER_COLORS, "lower": LOWER_COLORS}[slot]
