@@ -394,7 +394,8 @@ def main() -> None:
             lines.append(f"profile {setup}: {prof['error']}")
             continue
         total = sum(prof["stages_s"].values())
-        lines.append(f"profile cpu backend, N={max(args.sizes):,}, {setup} (min over reps; total {total * 1e3:.0f} ms):")
+        lines.append(f"profile cpu backend, N={max(args.sizes):,}, {setup} "
+                     f"(min over reps; total {total * 1e3:.0f} ms):")
         for name, sec in prof["stages_s"].items():
             lines.append(f"  {name:<52} {sec * 1e3:7.1f} ms  {100 * sec / total:5.1f} %")
         for name, sec in prof["kernels_s"].items():

@@ -266,7 +266,8 @@ class _ViewRenderer:
             if self.backend == "cpu":  # keep the projection and tile binning; each render only composites
                 self.means2d, self.conics = meta.means2d.detach(), meta.conics.detach()
                 self.opacities = meta.opacities.detach()
-                self.tile_size, self.isect_offsets, self.flatten_ids = meta.tile_size, meta.isect_offsets, meta.flatten_ids
+                self.tile_size = meta.tile_size
+                self.isect_offsets, self.flatten_ids = meta.isect_offsets, meta.flatten_ids
                 self.composed = None
             else:
                 self.composed = composed
@@ -315,7 +316,8 @@ def render_features(
         c2w = torch.as_tensor(cam_to_world, dtype=torch.float32, device=device)
         out, _, _ = rasterization(c.means, c.quats, c.scales, c.opacities, feats[c.gaussian_ids], world_to_camera(c2w),
                                   torch.as_tensor(Ks, dtype=torch.float32, device=device), width, height,
-                                  render_mode="RGB", backgrounds=bg.to(feats.device).reshape(1, -1).expand(c2w.shape[0], -1),
+                                  render_mode="RGB",
+                                  backgrounds=bg.to(feats.device).reshape(1, -1).expand(c2w.shape[0], -1),
                                   backend=backend, eps2d=graph.eps2d)
     return out
 
@@ -516,7 +518,8 @@ def _evaluate(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], 
             sums["obj_right"] += float(targets.look_alike[targets.candidate_of[row[obj]], nearest].sum())
     ratio = lambda a, b: sums[a] / sums[b] if sums[b] else float("nan")  # noqa: E731
     return {"latent_mse": ratio("sq", "px"), "object_latent_mse": ratio("obj_sq", "obj_sq_px"),
-            "cosine": ratio("cos", "text_px"), "object_cosine": ratio("obj_cos", "obj_px"), "object_accuracy": ratio("obj_right", "obj_px")}
+            "cosine": ratio("cos", "text_px"), "object_cosine": ratio("obj_cos", "obj_px"),
+            "object_accuracy": ratio("obj_right", "obj_px")}
 
 
 def _rendered_node_means(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], features: Tensor,

@@ -153,7 +153,8 @@ def test_plausible_readings_widen_matching() -> None:
     # a description that fits one object by its labels but another one by a plausible reading is not unique
     other = dataclasses.replace(stopping, object_id="t", motion="going_straight", motions=frozenset({"going_straight"}))
     assert unambiguous_targets(straight, [stopping, other]) is None
-    assert [f.object_id for f in unambiguous_targets(Description("vehicle", motion="stopping"), [stopping, other])] == ["s"]
+    targets = unambiguous_targets(Description("vehicle", motion="stopping"), [stopping, other])
+    assert [f.object_id for f in targets] == ["s"]
 
 
 def test_readings_of_a_real_log_contain_the_labels(logs: list[SceneLog], facts) -> None:
