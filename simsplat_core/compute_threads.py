@@ -53,7 +53,8 @@ def set_compute_threads(count: int) -> ComputeThreads:
         raise ValueError(f"set_compute_threads: count must be a positive int, got {count!r}")
     previous = compute_threads()
     torch.set_num_threads(count)
-    numba.set_num_threads(min(count, numba.config.NUMBA_NUM_THREADS))
+    # numba.config sets its options at import time: its stubs do not declare them
+    numba.set_num_threads(min(count, numba.config.NUMBA_NUM_THREADS))  # type: ignore[attr-defined]
     logger.debug("compute threads: torch %d -> %d, numba %d -> %d", previous.torch, count, previous.numba,
                  numba.get_num_threads())
     return previous

@@ -359,6 +359,7 @@ def nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int,
     zeros = vectors_to_arrow(np.zeros((n, dim), np.float32), dim)
     centers = np.array([np.asarray(nd.get("center", (0.0, 0.0, 0.0)), np.float32).reshape(3)
                         for nd in nodes]).reshape(n, 3)
+    given = features or {}
     table = pa.table(
         {
             "scene_id": _strings(scene_id, n),
@@ -368,8 +369,8 @@ def nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int,
             "category": pa.array([str(nd["category"]) for nd in nodes], pa.string()),
             "scale": pa.array([float(nd.get("scale", 1.0)) for nd in nodes], pa.float32()),
             "center": vectors_to_arrow(centers, 3),
-            **{name: zeros if name not in (features or {}) else vectors_to_arrow(
-                np.asarray(features[name], np.float32).reshape(n, dim), dim) for name in ("f_app", "f_mot", "f_loc")},
+            **{name: zeros if name not in given else vectors_to_arrow(
+                np.asarray(given[name], np.float32).reshape(n, dim), dim) for name in ("f_app", "f_mot", "f_loc")},
         }
     )
     return table, nodes_schema(dim)

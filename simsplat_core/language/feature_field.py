@@ -266,6 +266,8 @@ class _ViewRenderer:
             if self.backend == "cpu":  # keep the projection and tile binning; each render only composites
                 self.means2d, self.conics = meta.means2d.detach(), meta.conics.detach()
                 self.opacities = meta.opacities.detach()
+                if meta.isect_offsets is None or meta.flatten_ids is None:
+                    raise FeatureFieldError(f"backend {self.backend!r} returned no tile binning to reuse")
                 self.tile_size = meta.tile_size
                 self.isect_offsets, self.flatten_ids = meta.isect_offsets, meta.flatten_ids
                 self.composed = None
@@ -489,7 +491,6 @@ def _evaluate(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], 
               targets: _Targets, autoencoder: FeatureAutoencoder | None, stride: int) -> dict[str, float]:
     sums = {"sq": 0.0, "px": 0, "obj_sq": 0.0, "obj_sq_px": 0, "cos": 0.0, "text_px": 0, "obj_cos": 0.0,
             "obj_px": 0, "obj_right": 0.0}
-    decoded = autoencoder is not None and targets.text is not None
     with torch.no_grad():
         for renderer, view in zip(renderers, views):
             out = renderer.render(features, bg)[:, ::stride, ::stride]  # [C, h, w, d]
@@ -502,7 +503,7 @@ def _evaluate(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], 
             sums["px"] += int(row.shape[0])
             sums["obj_sq"] += float(sq[on_object].sum())
             sums["obj_sq_px"] += int(on_object.sum())
-            if not decoded:
+            if autoencoder is None or targets.text is None:  # nothing decoded to compare with the text targets
                 continue
             row = row.cpu()
             has = targets.text_valid[row]

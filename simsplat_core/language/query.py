@@ -195,15 +195,16 @@ class QueryEngine:
         emb = self.embed(texts)
         app_text, mot_text, sec_text, ctx_text = texts
         motion = motion_distribution(parsed, emb[mot_text], self.codebooks, cfg) if mot_text else None
-        books = self.codebooks if (sec_text or ctx_text) else None
         sector = context = None
         if sec_text:
+            books = self.codebooks
             sector = group_distribution(
                 emb[sec_text], books.sector.classes, books.sector.prototypes, books.location_centre,
                 cfg.location_temperature, keyword_prior(sec_text, SECTOR_KEYWORDS, books.sector.classes),
                 cfg.lexicon_weight,
             )
         if ctx_text:
+            books = self.codebooks
             context = group_distribution(
                 emb[ctx_text], books.context.classes, books.context.prototypes, books.location_centre,
                 cfg.location_temperature,
@@ -228,7 +229,8 @@ class QueryEngine:
         if not nodes:
             return ()
         use_app = cfg.use_appearance and parsed.has_appearance
-        use_mot = cfg.use_motion and vectors.motion is not None
+        motion = vectors.motion if cfg.use_motion else None
+        use_mot = motion is not None
         use_loc = cfg.use_location and (vectors.sector is not None or vectors.context is not None)
 
         nan = float("nan")
@@ -247,8 +249,8 @@ class QueryEngine:
             attrs = np.array([attribute_fit(parsed, n, cfg) if n.caption is not None else 1.0 for n in nodes])
             p_app = np.where(has_caption | has_feature, g * attrs, cfg.missing_appearance)
         p_mot = np.full(len(nodes), nan)
-        if use_mot:
-            p_mot = np.array([motion_score(parsed, vectors.motion, n, cfg) for n in nodes])
+        if motion is not None:
+            p_mot = np.array([motion_score(parsed, motion, n, cfg) for n in nodes])
         p_loc = np.full(len(nodes), nan)
         if use_loc:
             books = self.codebooks

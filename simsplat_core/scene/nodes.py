@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TypedDict
 
 import numpy as np
 import torch
@@ -36,6 +37,23 @@ from simsplat_core.scene.transforms import se3_delta
 NODE_TYPES: tuple[str, ...] = ("background", "rigid", "nonrigid", "static")
 BACKGROUND_ID = 0
 OFFSETS = "offsets"
+
+
+class NodeFields(TypedDict):
+    """Keyword arguments of the fields every node has (``SceneNode``), for building nodes of any type."""
+
+    node_id: int
+    gaussians: GaussianSet
+    object_id: str
+    category: str
+    scale: float
+
+
+class PoseFields(TypedDict):
+    """Keyword arguments of an object node's poses on the frame axis (``ObjectNode.poses`` / ``present``)."""
+
+    poses: Tensor
+    present: Tensor
 
 
 @dataclass
@@ -223,5 +241,5 @@ class NonRigidNode(ObjectNode):
         return (1.0 - w) * offsets[:, j0] + w * offsets[:, j1]
 
 
-__all__ = ["BACKGROUND_ID", "NODE_TYPES", "OFFSETS", "BackgroundNode", "NonRigidNode", "ObjectNode", "RigidNode",
-           "SceneNode"]
+__all__ = ["BACKGROUND_ID", "NODE_TYPES", "OFFSETS", "BackgroundNode", "NodeFields", "NonRigidNode", "ObjectNode",
+           "PoseFields", "RigidNode", "SceneNode"]

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from numpy.typing import DTypeLike
 from torch import Tensor
 
 from simsplat_core.types import CameraImage, SceneLog
@@ -54,11 +55,11 @@ class ViewBatch:
 
     def to(self, device: torch.device | str) -> ViewBatch:
         mv = lambda t: None if t is None else t.to(device)  # noqa: E731
-        return ViewBatch(self.frame_idx, self.split, self.cameras, mv(self.cam_to_world), mv(self.Ks), self.width,
-                         self.height, mv(self.rgb), mv(self.depth), mv(self.instance))
+        return ViewBatch(self.frame_idx, self.split, self.cameras, self.cam_to_world.to(device), self.Ks.to(device),
+                         self.width, self.height, mv(self.rgb), mv(self.depth), mv(self.instance))
 
 
-def _stack(images: list[CameraImage], attr: str, dtype: np.dtype) -> Tensor | None:
+def _stack(images: list[CameraImage], attr: str, dtype: DTypeLike) -> Tensor | None:
     arrays = [getattr(img, attr) for img in images]
     if any(a is None for a in arrays):
         return None

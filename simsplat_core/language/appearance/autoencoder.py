@@ -252,9 +252,9 @@ class FeatureAutoencoder:
     # ------------------------------------------------------------------ inference
     def encode(self, x: np.ndarray) -> np.ndarray:
         """``[N, D]`` features -> ``[N, d]`` float32 latents."""
-        x = torch.from_numpy(_as_rows(x, self.input_dim, "encode"))
+        rows = torch.from_numpy(_as_rows(x, self.input_dim, "encode"))
         with torch.no_grad():
-            return self.encoder(x - self.mean).numpy()
+            return self.encoder(rows - self.mean).numpy()
 
     def decode_torch(self, z: torch.Tensor) -> torch.Tensor:
         """Differentiable ``[..., d]`` -> ``[..., D]`` unit features."""
@@ -262,9 +262,9 @@ class FeatureAutoencoder:
 
     def decode(self, z: np.ndarray) -> np.ndarray:
         """``[N, d]`` latents -> ``[N, D]`` float32 unit features."""
-        z = torch.from_numpy(_as_rows(z, self.latent_dim, "decode"))
+        rows = torch.from_numpy(_as_rows(z, self.latent_dim, "decode"))
         with torch.no_grad():
-            return self.decode_torch(z).numpy()
+            return self.decode_torch(rows).numpy()
 
     def state(self) -> AutoencoderState:
         """The weights as plain arrays."""
