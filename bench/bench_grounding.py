@@ -10,11 +10,12 @@ Pipeline (seeds of the three roles are disjoint):
    ``0..N-1``).
 2. **Scenes**: every calibration and benchmark seed is generated (``WorldConfig()``: 40 frames, three
    240x160 cameras), reconstructed with the pipeline's default ``ReconstructionConfig`` (``--iterations``
-   shortens the schedule) and aligned (``build_language_scene``): node-id maps rendered from the Gaussians give every mask, the
-   captioner sees the log's pixels under the *projected* node masks, ``f_app`` is decoded from the
-   fitted per-Gaussian features. Reconstructions are cached under ``--cache`` (graph records keyed by
-   seed and a hash of the reconstruction config), built scenes too (keyed also by a hash of the scene builder's sources);
-   ``--reuse-scenes`` takes cached scenes of any builder version, for a quick re-evaluation.
+   shortens the schedule) and aligned (``build_language_scene``): node-id maps rendered from the
+   Gaussians give every mask, the captioner sees the log's pixels under the *projected* node masks,
+   ``f_app`` is decoded from the fitted per-Gaussian features. Reconstructions are cached under
+   ``--cache`` (graph records keyed by seed and a hash of the reconstruction config), built scenes too
+   (keyed also by a hash of the scene builder's sources); ``--reuse-scenes`` takes cached scenes of any
+   builder version, for a quick re-evaluation.
 3. **Benchmark**: ``build_benchmark`` on the benchmark logs (``BenchmarkConfig(seed=0)``); calibration
    queries from the calibration logs (``seed=1``).
 4. **Methods**: LangSplat-like and 4D-LangSplat-like baselines (``eval.grounding.baselines``), the
@@ -252,7 +253,8 @@ def failure_class(o: QueryOutcome, facts: dict[str, ObjectFacts], scene: Languag
     return "single: other"
 
 
-def engine_trace(grounder: EngineGrounder, scene: LanguageScene, o: QueryOutcome, facts: dict[str, ObjectFacts]) -> dict:
+def engine_trace(grounder: EngineGrounder, scene: LanguageScene, o: QueryOutcome,
+                 facts: dict[str, ObjectFacts]) -> dict:
     """What the engine made of a failed query: parsed parts, message, and the involved objects' facts."""
     g = grounder.engine.ground(scene, o.query.text)
     p = g.parsed
@@ -296,7 +298,8 @@ def size_breakdown(results: GroundingResults, method: str, facts: dict[str, dict
 def summary_json(results: GroundingResults) -> dict:
     out = {}
     for method, per in results.summary().items():
-        out[method] = {c: {"acc": round(s.accuracy, 4), "viou": round(s.viou, 4), "queries": s.queries} for c, s in per.items()}
+        out[method] = {c: {"acc": round(s.accuracy, 4), "viou": round(s.viou, 4), "queries": s.queries}
+                       for c, s in per.items()}
     return out
 
 
@@ -343,7 +346,8 @@ def av2_motion(aligner, train_logs, encoder, path: Path) -> dict:
         "log": path.name,
         "zero_shot_trained_on_synthetic": r(zero),
         "held_out_half_trained_with_other_half": r(held),
-        "per_class_held_out_half": {k: [n, round(a, 3), round(o, 3)] for k, (n, a, o) in sorted(held.per_class.items())},
+        "per_class_held_out_half": {k: [n, round(a, 3), round(o, 3)]
+                                    for k, (n, a, o) in sorted(held.per_class.items())},
     }
 
 
@@ -365,7 +369,8 @@ def main() -> None:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     for noisy in ("simsplat_core.scene.trainer", "simsplat_core.language.feature_field"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
-    if set(args.bench_seeds) & set(args.calib_seeds) or (set(args.bench_seeds) | set(args.calib_seeds)) & set(range(args.train_seeds)):
+    bench_and_calib = set(args.bench_seeds) | set(args.calib_seeds)
+    if set(args.bench_seeds) & set(args.calib_seeds) or bench_and_calib & set(range(args.train_seeds)):
         raise SystemExit("benchmark, calibration and training seeds must be disjoint")
     t_start = time.perf_counter()
     result: dict = {"machine": {"cpu": platform.processor() or platform.machine(), "python": platform.python_version()}}
@@ -380,7 +385,7 @@ def main() -> None:
     logs = {s: generate_log(s, world) for s in [*args.calib_seeds, *args.bench_seeds]}
     scenes: dict[str, LanguageScene] = {}
     scene_info: dict[str, dict] = {}
-    for seed, log in logs.items():
+    for log in logs.values():
         scene, info = reconstructed_scene(log, args.iterations, encoder, aligner, args.cache, f"-tr{args.train_seeds}",
                                           args.reuse_scenes)
         scenes[log.seq_id] = scene
@@ -418,7 +423,8 @@ def main() -> None:
         gt_scenes = [language_scene_from_log(log, encoder, "captioner", aligner=aligner) for log in bench_logs]
         gt_results = evaluate_grounding(gt_scenes, bench, {"ours@gt-scene": engines["All"]})
         summary.update(gt_results.summary())
-        result["ours_at_gt_scene"] = {"summary": summary_json(gt_results), "breakdown": breakdowns(gt_results, "ours@gt-scene")}
+        result["ours_at_gt_scene"] = {"summary": summary_json(gt_results),
+                                      "breakdown": breakdowns(gt_results, "ours@gt-scene")}
 
     table2 = grounding_table(summary, {"LangSplat-like": "LangSplat-like", "4D-LangSplat-like": "4D-LangSplat-like",
                                        "Ours": "All"})
@@ -462,13 +468,14 @@ def main() -> None:
 
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "grounding.json").write_text(json.dumps(result, indent=2) + "\n")
+    thresholds = (f"thresholds calibrated on seeds {args.calib_seeds}" if args.calib_seeds
+                  else "default engine thresholds")
     md = [
         "# Grounding benchmark",
         "",
         f"{len(bench.queries)} queries on {len(bench_logs)} reconstructed synthetic scenes "
         f"(seeds {args.bench_seeds}, {args.iterations} reconstruction iterations, "
-        f"{'thresholds calibrated on seeds ' + str(args.calib_seeds) if args.calib_seeds else 'default engine thresholds'}"
-        f"); counts {bench.counts()}.",
+        f"{thresholds}); counts {bench.counts()}.",
         "",
         "## Table 2: methods",
         "",

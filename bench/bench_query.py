@@ -121,7 +121,8 @@ def run(seed: int, repeats: int) -> dict:
                 "message": g.message,
             }
         )
-        logger.info("%-80s cold %7.1f ms  warm %6.2f ms  -> %s", text, rows[-1]["cold_ms"], rows[-1]["warm_ms"], g.message)
+        logger.info("%-80s cold %7.1f ms  warm %6.2f ms  -> %s", text, rows[-1]["cold_ms"], rows[-1]["warm_ms"],
+                    g.message)
 
     def summary(key: str) -> dict[str, float]:
         values = sorted(r[key] for r in rows)

@@ -39,8 +39,9 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import torch
@@ -267,7 +268,7 @@ def _profile_cpu(n: int, setup: str, reps: int) -> dict[str, Any]:
         t = lap("3 compositing fwd (pack + numba kernel)", t)
         marks: dict[str, float] = {}
 
-        def mark(grad: torch.Tensor) -> None:
+        def mark(grad: torch.Tensor, marks: dict[str, float] = marks) -> None:
             marks.setdefault("means2d", time.perf_counter())
 
         proj.means2d.register_hook(mark)
@@ -393,7 +394,8 @@ def main() -> None:
             lines.append(f"profile {setup}: {prof['error']}")
             continue
         total = sum(prof["stages_s"].values())
-        lines.append(f"profile cpu backend, N={max(args.sizes):,}, {setup} (min over reps; total {total * 1e3:.0f} ms):")
+        lines.append(f"profile cpu backend, N={max(args.sizes):,}, {setup} "
+                     f"(min over reps; total {total * 1e3:.0f} ms):")
         for name, sec in prof["stages_s"].items():
             lines.append(f"  {name:<52} {sec * 1e3:7.1f} ms  {100 * sec / total:5.1f} %")
         for name, sec in prof["kernels_s"].items():

@@ -32,7 +32,7 @@ class ComputeThreads:
 
 def compute_threads() -> ComputeThreads:
     """The current thread counts."""
-    import numba
+    import numba  # noqa: PLC0415  # slow (JIT runtime): imported on use
 
     return ComputeThreads(torch=torch.get_num_threads(), numba=numba.get_num_threads())
 
@@ -47,13 +47,14 @@ def set_compute_threads(count: int) -> ComputeThreads:
     Raises:
         ValueError: ``count`` is not a positive int.
     """
-    import numba
+    import numba  # noqa: PLC0415  # slow (JIT runtime): imported on use
 
     if not isinstance(count, int) or count < 1:
         raise ValueError(f"set_compute_threads: count must be a positive int, got {count!r}")
     previous = compute_threads()
     torch.set_num_threads(count)
-    numba.set_num_threads(min(count, numba.config.NUMBA_NUM_THREADS))
+    # numba.config sets its options at import time: its stubs do not declare them
+    numba.set_num_threads(min(count, numba.config.NUMBA_NUM_THREADS))  # type: ignore[attr-defined]
     logger.debug("compute threads: torch %d -> %d, numba %d -> %d", previous.torch, count, previous.numba,
                  numba.get_num_threads())
     return previous
@@ -77,7 +78,7 @@ def compute_threads_limited(count: int | None) -> Iterator[ComputeThreads]:
     try:
         yield compute_threads()
     finally:
-        import numba
+        import numba  # noqa: PLC0415  # slow (JIT runtime): imported on use
 
         torch.set_num_threads(previous.torch)
         numba.set_num_threads(previous.numba)

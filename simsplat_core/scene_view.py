@@ -91,7 +91,7 @@ def render_views(graph: Any, frame_idx: int, views: Sequence[CameraView]) -> lis
     Views of equal size are rendered in one batch. Returns one ``[H, W, 3]`` float32 RGB per view,
     in order.
     """
-    import torch
+    import torch  # noqa: PLC0415  # slow: the module is torch-free except for rendering
 
     out: list[np.ndarray | None] = [None] * len(views)
     sizes = dict.fromkeys((v.width, v.height) for v in views)

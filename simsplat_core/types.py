@@ -15,8 +15,8 @@ Everything here is frozen; arrays are treated as read-only by convention.
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 
@@ -259,7 +259,7 @@ class SceneLog:
     def images_at(self, frame_idx: int) -> tuple[CameraImage, ...]:
         return tuple(img for img in self.images if img.frame_idx == frame_idx)
 
-    def validate(self) -> "SceneLog":
+    def validate(self) -> SceneLog:
         """Check every invariant; raise ``LogValidationError`` naming the offending field. Returns self."""
         f = self.num_frames
         _require_shape(f"{self.seq_id}: ego_poses", self.ego_poses, (f, 4, 4))

@@ -218,7 +218,8 @@ def scene_bytes(manifest: Mapping[str, Any]) -> int:
     """Total bytes of a scene's files, from its manifest."""
     tables = manifest.get("tables", {})
     groups = ("deformations", "renders")
-    return int(sum(t.get("bytes", 0) for t in tables.values()) + sum(manifest.get(g, {}).get("bytes", 0) for g in groups))
+    return int(sum(t.get("bytes", 0) for t in tables.values())
+               + sum(manifest.get(g, {}).get("bytes", 0) for g in groups))
 
 
 def write_scene(
@@ -269,7 +270,8 @@ def write_scene(
         for name, (table, schema) in tables.items():
             path = join_relpath(tmp, f"{name}.parquet")
             store.write_table(path, table, schema)
-            table_stats[name] = {"rows": table.num_rows, "bytes": store.size(path), "schema_version": schema_version(schema)}
+            table_stats[name] = {"rows": table.num_rows, "bytes": store.size(path),
+                                 "schema_version": schema_version(schema)}
         deform_bytes = 0
         for node_id, (frames, offsets) in deformations.items():
             path = join_relpath(tmp, deform_relpath(node_id))
@@ -296,7 +298,7 @@ def write_scene(
                 "files": sorted(render_relpath(r.camera, r.frame_idx) for r in renders),
             },
             "metrics": metrics_to_json(metrics),
-            "written_at": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="microseconds"),
+            "written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds"),
             "provenance": dict(provenance or {}),
         }
         mark_done(store, tmp, scene_hash, manifest)
@@ -355,7 +357,9 @@ def nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int,
                              f"(the nodes table holds {list(NODE_KEYS + NODE_GEOMETRY_KEYS)})")
     n = len(nodes)
     zeros = vectors_to_arrow(np.zeros((n, dim), np.float32), dim)
-    centers = np.array([np.asarray(nd.get("center", (0.0, 0.0, 0.0)), np.float32).reshape(3) for nd in nodes]).reshape(n, 3)
+    centers = np.array([np.asarray(nd.get("center", (0.0, 0.0, 0.0)), np.float32).reshape(3)
+                        for nd in nodes]).reshape(n, 3)
+    given = features or {}
     table = pa.table(
         {
             "scene_id": _strings(scene_id, n),
@@ -365,8 +369,8 @@ def nodes_table(scene_id: str, nodes: Sequence[Mapping[str, Any]], dim: int,
             "category": pa.array([str(nd["category"]) for nd in nodes], pa.string()),
             "scale": pa.array([float(nd.get("scale", 1.0)) for nd in nodes], pa.float32()),
             "center": vectors_to_arrow(centers, 3),
-            **{name: zeros if name not in (features or {}) else vectors_to_arrow(
-                np.asarray(features[name], np.float32).reshape(n, dim), dim) for name in ("f_app", "f_mot", "f_loc")},
+            **{name: zeros if name not in given else vectors_to_arrow(
+                np.asarray(given[name], np.float32).reshape(n, dim), dim) for name in ("f_app", "f_mot", "f_loc")},
         }
     )
     return table, nodes_schema(dim)
@@ -498,7 +502,7 @@ def read_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None = None)
 
 def _records_class() -> type:
     """``simsplat_core.scene.SceneRecords``, imported on first use (the scene package imports torch)."""
-    from simsplat_core.scene import SceneRecords
+    from simsplat_core.scene import SceneRecords  # noqa: PLC0415  # slow (torch), see docstring
 
     return SceneRecords
 
@@ -547,7 +551,8 @@ def _read_deformations(
         column = table.column("offsets").combine_chunks()
         counts = set(np.diff(column.offsets.to_numpy()).tolist())
         if len(counts) > 1:
-            raise CorruptArtifactError(f"{store.uri(path)}: column 'offsets' has rows of different lengths {sorted(counts)}")
+            raise CorruptArtifactError(f"{store.uri(path)}: column 'offsets' has rows of different lengths "
+                                       f"{sorted(counts)}")
         n_h = counts.pop() if counts else 0
         values = arrow_to_vectors(column.values) if len(column) else np.zeros((0, 3), np.float32)
         offsets[node_id] = values.reshape(len(column), n_h, 3)
@@ -555,6 +560,7 @@ def _read_deformations(
     return offsets, frames
 
 
-def read_scene_render(store: ArtifactStore, seq_id: str, scene_hash: str, camera: str, frame_idx: int) -> dict[str, np.ndarray]:
+def read_scene_render(store: ArtifactStore, seq_id: str, scene_hash: str, camera: str,
+                      frame_idx: int) -> dict[str, np.ndarray]:
     """The EXR channels (``R,G,B,A,Z,id``) of one stored test-frame render."""
     return read_exr(store, join_relpath(scene_dir(seq_id, scene_hash), render_relpath(camera, frame_idx)))

@@ -61,7 +61,7 @@ class Tally:
         if got != want:
             self.confusions[f"{want}->{got}"] += 1
 
-    def merge(self, other: "Tally") -> None:
+    def merge(self, other: Tally) -> None:
         self.n += other.n
         self.decided += other.decided
         self.color_ok += other.color_ok
@@ -103,7 +103,7 @@ class CaptionAccuracy:
     views: dict[str, Tally] = field(default_factory=lambda: defaultdict(Tally))
     objects: dict[str, Tally] = field(default_factory=lambda: defaultdict(Tally))
 
-    def merge(self, other: "CaptionAccuracy") -> None:
+    def merge(self, other: CaptionAccuracy) -> None:
         for mine, theirs in ((self.views, other.views), (self.objects, other.objects)):
             for cat, tally in theirs.items():
                 mine[cat].merge(tally)

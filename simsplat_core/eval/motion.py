@@ -86,7 +86,10 @@ WORLD_CONTEXT: dict[str, str] = {
     "": voc.ON_THE_ROAD,
 }
 #: Query subjects per agent kind for location queries.
-SUBJECTS: dict[str, tuple[str, ...]] = {"vehicle": ("the car", "the vehicle"), "pedestrian": ("the pedestrian", "the person")}
+SUBJECTS: dict[str, tuple[str, ...]] = {
+    "vehicle": ("the car", "the vehicle"),
+    "pedestrian": ("the pedestrian", "the person"),
+}
 
 
 def parse_world_location(caption: str) -> tuple[str, str]:
@@ -227,7 +230,8 @@ def _top1_is_positive(features: np.ndarray, query: np.ndarray, positive: np.ndar
 def grounding_accuracy(aligner: MotionAligner, logs: Sequence[SceneLog], encoder: TextEncoder) -> GroundingReport:
     """Top-1 accuracy of picking an object of the queried class (module docstring) over ``logs``."""
     if encoder.name != aligner.codebooks.encoder_name:
-        raise ValueError(f"queries from {encoder.name!r} cannot be compared with {aligner.codebooks.encoder_name!r} features")
+        raise ValueError(f"queries from {encoder.name!r} cannot be compared with "
+                         f"{aligner.codebooks.encoder_name!r} features")
     tallies = {"motion": _Tally(), "location": _Tally()}
     books = aligner.codebooks
     location_protos = dict(zip(books.location_classes, books.location_prototypes))
@@ -240,7 +244,8 @@ def grounding_accuracy(aligner: MotionAligner, logs: Sequence[SceneLog], encoder
             motion_protos = dict(zip(books.motion(kind).classes, books.motion(kind).prototypes))
             oracle = {
                 "motion": np.stack([motion_protos[f.labels.motion] for f in cands]),
-                "location": np.stack([0.5 * (location_protos[f.labels.sector] + location_protos[f.labels.context]) for f in cands]),
+                "location": np.stack([0.5 * (location_protos[f.labels.sector] + location_protos[f.labels.context])
+                                      for f in cands]),
             }
             learned = {"motion": np.stack([f.f_mot for f in cands]), "location": np.stack([f.f_loc for f in cands])}
             plan = _query_plan(kind)

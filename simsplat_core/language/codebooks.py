@@ -100,7 +100,7 @@ class MotionCodebooks:
     context: Codebook
 
     @classmethod
-    def build(cls, encoder: TextEncoder) -> "MotionCodebooks":
+    def build(cls, encoder: TextEncoder) -> MotionCodebooks:
         vocabularies = (VEHICLE_MOTION, PEDESTRIAN_MOTION, LOCATION_SECTOR, LOCATION_CONTEXT)
         # one batch for every phrase (the encoder's cache then serves the per-class lookups)
         encoder.encode_passages([p for v in vocabularies for c in v.classes for p in c.prototypes])
@@ -140,7 +140,8 @@ class MotionCodebooks:
         return {cb.name: cb.prototypes for cb in (self.vehicle, self.pedestrian, self.sector, self.context)}
 
     @classmethod
-    def from_arrays(cls, encoder_name: str, classes: dict[str, tuple[str, ...]], arrays: dict[str, np.ndarray]) -> "MotionCodebooks":
+    def from_arrays(cls, encoder_name: str, classes: dict[str, tuple[str, ...]],
+                    arrays: dict[str, np.ndarray]) -> MotionCodebooks:
         """Inverse of ``arrays`` (``classes`` maps codebook name to class names)."""
         books = {
             name: Codebook(name, tuple(classes[name]), np.asarray(arrays[name], dtype=np.float32))

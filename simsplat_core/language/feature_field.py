@@ -100,7 +100,7 @@ class FeatureFitConfig:
     eval_pixel_stride: int = 2
     seed: int = 0
 
-    def validate(self, prefix: str = "FeatureFitConfig") -> "FeatureFitConfig":
+    def validate(self, prefix: str = "FeatureFitConfig") -> FeatureFitConfig:
         """Raises ``ValueError`` naming the offending field."""
         if not isinstance(self.iterations, int) or self.iterations < 0:
             raise ValueError(f"{prefix}.iterations must be an int >= 0, got {self.iterations!r}")
@@ -266,7 +266,10 @@ class _ViewRenderer:
             if self.backend == "cpu":  # keep the projection and tile binning; each render only composites
                 self.means2d, self.conics = meta.means2d.detach(), meta.conics.detach()
                 self.opacities = meta.opacities.detach()
-                self.tile_size, self.isect_offsets, self.flatten_ids = meta.tile_size, meta.isect_offsets, meta.flatten_ids
+                if meta.isect_offsets is None or meta.flatten_ids is None:
+                    raise FeatureFieldError(f"backend {self.backend!r} returned no tile binning to reuse")
+                self.tile_size = meta.tile_size
+                self.isect_offsets, self.flatten_ids = meta.isect_offsets, meta.flatten_ids
                 self.composed = None
             else:
                 self.composed = composed
@@ -315,7 +318,8 @@ def render_features(
         c2w = torch.as_tensor(cam_to_world, dtype=torch.float32, device=device)
         out, _, _ = rasterization(c.means, c.quats, c.scales, c.opacities, feats[c.gaussian_ids], world_to_camera(c2w),
                                   torch.as_tensor(Ks, dtype=torch.float32, device=device), width, height,
-                                  render_mode="RGB", backgrounds=bg.to(feats.device).reshape(1, -1).expand(c2w.shape[0], -1),
+                                  render_mode="RGB",
+                                  backgrounds=bg.to(feats.device).reshape(1, -1).expand(c2w.shape[0], -1),
                                   backend=backend, eps2d=graph.eps2d)
     return out
 
@@ -487,7 +491,6 @@ def _evaluate(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], 
               targets: _Targets, autoencoder: FeatureAutoencoder | None, stride: int) -> dict[str, float]:
     sums = {"sq": 0.0, "px": 0, "obj_sq": 0.0, "obj_sq_px": 0, "cos": 0.0, "text_px": 0, "obj_cos": 0.0,
             "obj_px": 0, "obj_right": 0.0}
-    decoded = autoencoder is not None and targets.text is not None
     with torch.no_grad():
         for renderer, view in zip(renderers, views):
             out = renderer.render(features, bg)[:, ::stride, ::stride]  # [C, h, w, d]
@@ -500,7 +503,7 @@ def _evaluate(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], 
             sums["px"] += int(row.shape[0])
             sums["obj_sq"] += float(sq[on_object].sum())
             sums["obj_sq_px"] += int(on_object.sum())
-            if not decoded:
+            if autoencoder is None or targets.text is None:  # nothing decoded to compare with the text targets
                 continue
             row = row.cpu()
             has = targets.text_valid[row]
@@ -516,7 +519,8 @@ def _evaluate(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], 
             sums["obj_right"] += float(targets.look_alike[targets.candidate_of[row[obj]], nearest].sum())
     ratio = lambda a, b: sums[a] / sums[b] if sums[b] else float("nan")  # noqa: E731
     return {"latent_mse": ratio("sq", "px"), "object_latent_mse": ratio("obj_sq", "obj_sq_px"),
-            "cosine": ratio("cos", "text_px"), "object_cosine": ratio("obj_cos", "obj_px"), "object_accuracy": ratio("obj_right", "obj_px")}
+            "cosine": ratio("cos", "text_px"), "object_cosine": ratio("obj_cos", "obj_px"),
+            "object_accuracy": ratio("obj_right", "obj_px")}
 
 
 def _rendered_node_means(renderers: Sequence[_ViewRenderer], views: Sequence[FeatureView], features: Tensor,

@@ -111,7 +111,8 @@ def trajectory_inputs(
     h0 = traj.heading[0]
     c0, s0 = np.cos(h0), np.sin(h0)
     rel = traj.xy - traj.xy[0]
-    obj_xy = np.clip(np.stack([c0 * rel[:, 0] + s0 * rel[:, 1], -s0 * rel[:, 0] + c0 * rel[:, 1]], axis=1) / pos_s, -4.0, 4.0)
+    obj_xy = np.clip(np.stack([c0 * rel[:, 0] + s0 * rel[:, 1], -s0 * rel[:, 0] + c0 * rel[:, 1]], axis=1) / pos_s,
+                     -4.0, 4.0)
     obj_h = traj.heading - h0
     ch, sh = np.cos(traj.heading), np.sin(traj.heading)
     v_fwd = (traj.velocity[:, 0] * ch + traj.velocity[:, 1] * sh) / v_s

@@ -145,6 +145,8 @@ def render_node_ids(
     viewmats = world_to_camera(cam_to_world)
     nodes = torch.as_tensor(sorted(composed.included_nodes), dtype=torch.long, device=device)
     best_id, alpha = node_weight_argmax(composed, nodes, viewmats, Ks, width, height, backend, id_chunk, graph.eps2d)
+    if alpha is None:  # only when no node is included, which a non-empty composition rules out
+        raise RuntimeError(f"no node of the graph at t={t} has Gaussians to render")
     return torch.where(alpha[..., 0] >= NODE_ID_MIN_ALPHA, best_id, torch.full_like(best_id, NO_NODE))
 
 
@@ -227,7 +229,9 @@ def crops_from_node_map(
         if obj is None or count < min_area:
             continue
         track = tracks.get(obj.object_id)
-        row = None if track is None else track.index_of(frame_idx)
+        if track is None:
+            continue
+        row = track.index_of(frame_idx)
         if row is None:
             continue
         cut = crop_object(image, node_map == node_id, margin)

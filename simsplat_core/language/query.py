@@ -105,6 +105,9 @@ from simsplat_core.scenario import vocabulary as voc
 
 logger = logging.getLogger(__name__)
 
+#: The default configuration (frozen, so one instance serves every query engine).
+DEFAULT_QUERY_CONFIG = QueryConfig()
+
 
 @dataclass(frozen=True)
 class _QueryVectors:
@@ -129,7 +132,7 @@ class QueryEngine:
     def __init__(
         self,
         text_encoder: TextEncoder,
-        config: QueryConfig = QueryConfig(),
+        config: QueryConfig = DEFAULT_QUERY_CONFIG,
         codebooks: MotionCodebooks | None = None,
         cache_size: int = 4096,
     ) -> None:
@@ -152,7 +155,7 @@ class QueryEngine:
         """Texts ``embed`` had to encode."""
         return self._cache.misses
 
-    def with_config(self, config: QueryConfig) -> "QueryEngine":
+    def with_config(self, config: QueryConfig) -> QueryEngine:
         """A new engine with ``config`` sharing this one's encoder, codebooks and embedding cache."""
         other = QueryEngine(self.text_encoder, config, self._codebooks, self._cache.max_entries)
         other._cache = self._cache
@@ -198,15 +201,16 @@ class QueryEngine:
         emb = self.embed(texts)
         app_text, mot_text, sec_text, ctx_text = texts
         motion = motion_distribution(parsed, emb[mot_text], self.codebooks, cfg) if mot_text else None
-        books = self.codebooks if (sec_text or ctx_text) else None
         sector = context = None
         if sec_text:
+            books = self.codebooks
             sector = group_distribution(
                 emb[sec_text], books.sector.classes, books.sector.prototypes, books.location_centre,
                 cfg.location_temperature, keyword_prior(sec_text, SECTOR_KEYWORDS, books.sector.classes),
                 cfg.lexicon_weight,
             )
         if ctx_text:
+            books = self.codebooks
             context = group_distribution(
                 emb[ctx_text], books.context.classes, books.context.prototypes, books.location_centre,
                 cfg.location_temperature,
@@ -231,7 +235,8 @@ class QueryEngine:
         if not nodes:
             return ()
         use_app = cfg.use_appearance and parsed.has_appearance
-        use_mot = cfg.use_motion and vectors.motion is not None
+        motion = vectors.motion if cfg.use_motion else None
+        use_mot = motion is not None
         use_loc = cfg.use_location and (vectors.sector is not None or vectors.context is not None)
 
         nan = float("nan")
@@ -251,8 +256,8 @@ class QueryEngine:
             missing = cfg.missing_appearance if scene_has_appearance(scene) else 1.0  # no images: neutral
             p_app = np.where(has_caption | has_feature, g * attrs, missing)
         p_mot = np.full(len(nodes), nan)
-        if use_mot:
-            p_mot = np.array([motion_score(parsed, vectors.motion, n, cfg) for n in nodes])
+        if motion is not None:
+            p_mot = np.array([motion_score(parsed, motion, n, cfg) for n in nodes])
         p_loc = np.full(len(nodes), nan)
         if use_loc:
             books = self.codebooks

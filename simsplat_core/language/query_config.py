@@ -65,7 +65,7 @@ class QueryConfig:
     ambiguity_margin: float = 0.02
     label_weight: float = 0.5
 
-    def validate(self) -> "QueryConfig":
+    def validate(self) -> QueryConfig:
         """Check every field; returns ``self``.
 
         Raises:

@@ -21,7 +21,8 @@ def grounding_message(
     runner-up scores within ``config.ambiguity_margin``), or why nothing matches ("no pedestrian in this
     scene is crossing"; "nothing to compare" when the query has no part ``config`` scores)."""
     if not config.scored_parts(parsed):
-        switches = (("appearance", config.use_appearance), ("motion", config.use_motion), ("location", config.use_location))
+        switches = (("appearance", config.use_appearance), ("motion", config.use_motion),
+                    ("location", config.use_location))
         enabled = [name for name, on in switches if on]
         return f"nothing to compare: the query has no {' / '.join(enabled)} part that the engine recognised"
     if matches:

@@ -192,7 +192,8 @@ _SIDE = r"(left|right)"
 _DIR = r"(?:the )?(left|right)(?:[- ]hand)?(?: side)?"
 _EGO_ALT = r"me|us|ego|the ego(?: vehicle| car)?|our (?:car|vehicle)|my (?:car|vehicle)|the camera"
 _EGO = r"(?:" + _EGO_ALT + r")"
-_ING_CROSS = r"(?:crossing|crosses|cross|walking across|walks across|going across|goes across|heading across|moving across|running across|jogging across)"
+_ING_CROSS = (r"(?:crossing|crosses|cross|walking across|walks across|going across|goes across|heading across"
+              r"|moving across|running across|jogging across)")
 _CROSS_OBJ = r"(?: over)?(?: (?:the|a) (?:street|road|crosswalk|zebra crossing|lane|lanes))?"
 
 #: ``(kind, priority, regex)``; lower priority wins overlaps, then longer matches. Kinds: ``motion``,
@@ -207,42 +208,68 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("direction", 0, _ING_CROSS + _CROSS_OBJ + r" (?:over )?(?:to|towards|toward|onto) " + _DIR),
     ("direction", 0, r"from " + _DIR + r" (?:to|towards|toward|over to|into) " + _DIR),
     ("direction", 0, r"\b" + _SIDE + r"[- ]to[- ]" + _SIDE),
-    ("direction", 0, r"(?:walking|walks|moving|moves|heading|heads|going|goes|running|runs)(?: over)? (?:to|towards|toward) " + _DIR),
+    ("direction", 0, r"(?:walking|walks|moving|moves|heading|heads|going|goes|running|runs)(?: over)? "
+                     r"(?:to|towards|toward) " + _DIR),
     # turns and lane changes (directional vehicle motion)
-    ("motion", 0, r"(?:turning|turns|turn|making|makes|doing|does|taking|takes|hanging|hangs|swinging|swings|veering|veers|bearing|bears|about to turn)(?: a| an)? (?:to the )?" + _SIDE + r"(?! of\b)(?: turn)?"),
-    ("motion", 0, _SIDE + r"(?:-turning| turning(?= (?:car|cars|vehicle|vehicles|truck|trucks|bus|buses|van|vans|suv|suvs|sedan|sedans|hatchback|hatchbacks|pickup|pickups)\b))"),
+    ("motion", 0, r"(?:turning|turns|turn|making|makes|doing|does|taking|takes|hanging|hangs|swinging|swings"
+                  r"|veering|veers|bearing|bears|about to turn)(?: a| an)? (?:to the )?"
+                  + _SIDE + r"(?! of\b)(?: turn)?"),
+    ("motion", 0, _SIDE + r"(?:-turning| turning(?= (?:car|cars|vehicle|vehicles|truck|trucks|bus|buses|van|vans"
+                          r"|suv|suvs|sedan|sedans|hatchback|hatchbacks|pickup|pickups)\b))"),
     ("motion", 0, r"(?:in the middle of |doing |making |taking )?(?:a |an )?" + _SIDE + r"[- ]hand turn"),
     ("motion", 0, r"(?:a |the )?" + _SIDE + r" turn"),
-    ("motion", 0, r"(?<!not )(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts|moving|moves|pulling|pulls|shifting|shifts|hopping|hops)(?: over)?(?: lanes?)?(?: (?:to|into|towards|toward|over to|in to)(?: the)?)? " + _SIDE + r"(?:(?: into)?(?: the)? (?:next |adjacent )?lane)?"),
-    ("motion", 0, r"(?<!not )(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts|moving|moves|hopping|hops)(?: over)? (?:into|to|over to)(?: the)? (?:next |adjacent |other )?lane(?: (?:to|on) (?:the|its) " + _SIDE + r")?"),
+    ("motion", 0, r"(?<!not )(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts"
+                  r"|moving|moves|pulling|pulls|shifting|shifts|hopping|hops)(?: over)?(?: lanes?)?"
+                  r"(?: (?:to|into|towards|toward|over to|in to)(?: the)?)? "
+                  + _SIDE + r"(?:(?: into)?(?: the)? (?:next |adjacent )?lane)?"),
+    ("motion", 0, r"(?<!not )(?:changing|changes|change|switching|switches|switch|merging|merges|merge|cutting|cuts"
+                  r"|moving|moves|hopping|hops)(?: over)? (?:into|to|over to)(?: the)? (?:next |adjacent |other )?lane"
+                  r"(?: (?:to|on) (?:the|its) " + _SIDE + r")?"),
     ("motion", 0, r"(?:a |doing a |making a )?lane[- ]change(?:s)?(?: (?:to|towards) the " + _SIDE + r")?"),
     ("motion", 0, r"lane[- ]changing(?: (?:to|towards) the " + _SIDE + r")?"),
     # places (before undirected motion: "on the pedestrian crossing" is a place)
-    ("context", 1, r"(?:(?:on|at|in|near|using|across|along) )?(?:the |a )?(?:crosswalk|zebra(?: crossing)?|pedestrian crossing)"),
-    ("context", 1, r"(?:(?:at|in|inside|within|near|by|next to|around|through|into|entering|approaching|in the middle of) )?(?:the |an |a )?(?:middle of the )?(?:intersection|junction|crossroads?)"),
-    ("context", 1, r"(?:(?:on|along|up on|at|near|by|onto) )?(?:the |a )?(?:sidewalk|pavement|footpath|walkway|footway)"),
-    ("context", 1, r"(?:(?:by|at|next to|near|along|beside|against|on|to) )?(?:the )?(?:curb|kerb|curbside|kerbside|roadside|side of the road|edge of the road|shoulder)"),
+    ("context", 1, r"(?:(?:on|at|in|near|using|across|along) )?(?:the |a )?"
+                   r"(?:crosswalk|zebra(?: crossing)?|pedestrian crossing)"),
+    ("context", 1, r"(?:(?:at|in|inside|within|near|by|next to|around|through|into|entering|approaching"
+                   r"|in the middle of) )?(?:the |an |a )?(?:middle of the )?(?:intersection|junction|crossroads?)"),
+    ("context", 1, r"(?:(?:on|along|up on|at|near|by|onto) )?(?:the |a )?"
+                   r"(?:sidewalk|pavement|footpath|walkway|footway)"),
+    ("context", 1, r"(?:(?:by|at|next to|near|along|beside|against|on|to) )?(?:the )?"
+                   r"(?:curb|kerb|curbside|kerbside|roadside|side of the road|edge of the road|shoulder)"),
     ("context", 1, r"(?:in|into|on) (?:the |a )?parking (?:lane|strip|spot|space|bay|lot)"),
     ("context", 1, r"(?:(?:in|from) the )?(?:oncoming|opposite|opposing)(?: direction)?(?: lane| traffic)?"),
-    ("context", 1, r"(?:in (?:the|a) lane )?(?:driving|coming|heading|moving|going|travelling|traveling|approaching) towards? (?:us|me|ego|our car)"),
+    ("context", 1, r"(?:in (?:the|a) lane )?(?:driving|coming|heading|moving|going|travelling|traveling|approaching)"
+                   r" towards? (?:us|me|ego|our car)"),
     ("context", 1, r"(?:approaching )?from the opposite direction"),
     ("context", 1, r"(?:on|in|out on|along|down) (?:the |a )?(?:road|street|travel lane|lane|roadway|carriageway)"),
-    ("sector", 1, r"(?:(?:on|to|at|off|in) (?:the |my |our |your )?)" + _SIDE + r"(?:[- ]hand)?(?: side)?(?: lane)?(?: of (?:" + _EGO_ALT + r"|the (?:road|street)))?"),
+    ("sector", 1, r"(?:(?:on|to|at|off|in) (?:the |my |our |your )?)" + _SIDE
+                  + r"(?:[- ]hand)?(?: side)?(?: lane)?(?: of (?:" + _EGO_ALT + r"|the (?:road|street)))?"),
     ("sector", 1, _SIDE + r" of " + _EGO),
-    ("sector", 1, r"(?:(?:right|directly|straight|just|up) )?(?:in front(?: of " + _EGO + r")?|ahead(?: of " + _EGO + r")?|in the front)"),
+    ("sector", 1, r"(?:(?:right|directly|straight|just|up) )?(?:in front(?: of " + _EGO + r")?"
+                  r"|ahead(?: of " + _EGO + r")?|in the front)"),
     ("sector", 1, r"at (?:our|my|the) (?:back|rear)"),
-    ("sector", 1, r"(?:(?:right|directly|just) )?(?:behind(?: " + _EGO + r")?|at the (?:back|rear)(?: of " + _EGO + r")?|to the rear|following(?: behind)? " + _EGO + r")"),
+    ("sector", 1, r"(?:(?:right|directly|just) )?(?:behind(?: " + _EGO + r")?|at the (?:back|rear)(?: of " + _EGO
+                  + r")?|to the rear|following(?: behind)? " + _EGO + r")"),
     # undirected motion
     ("motion", 1, _ING_CROSS + _CROSS_OBJ),
-    ("motion", 0, r"(?:going|driving|continuing|heading|moving|goes|drives|continues|heads|moves|travelling|traveling|cruising|carrying on) straight(?: ahead(?! of)| on(?! (?:the|my|our|your|its)\b))?"),
+    ("motion", 0, r"(?:going|driving|continuing|heading|moving|goes|drives|continues|heads|moves|travelling|traveling"
+                  r"|cruising|carrying on) straight(?: ahead(?! of)| on(?! (?:the|my|our|your|its)\b))?"),
     ("motion", 1, r"(?:cruising|driving|going|travelling|traveling)(?: (?:down|along) the (?:road|street))?"),
-    ("motion", 1, r"(?:slowing|slows|slow)(?: down| up)?|easing off|eases off|decelerating|decelerates|braking|brakes|hitting the brakes|losing speed|reducing (?:its )?speed"),
-    ("motion", 1, r"speeding up|speeds up|accelerating|accelerates|picking up speed|gaining speed|pulling away|pulls away|starting to move(?: off)?|moving off|stepping on the gas|putting its foot down"),
-    ("motion", 1, r"(?:coming|comes|came|pulling|pulls|braking) (?:to a |up to a )?(?:stop|halt)|stopping|stops|pulling up|pulls up|(?:braking|slowing) until it stands still|braking to a standstill"),
-    ("motion", 1, r"(?:(?:just |stuck )?(?:stopped|halted|idling|queuing|queueing|stationary|at a standstill|not moving|not going anywhere|standing still|sitting still|motionless|sitting|waiting)(?: around)?(?: to cross| at the (?:light|lights|red light|signal|stop line)| in (?:the |its )?(?:lane|traffic|line|queue))?)"),
+    ("motion", 1, r"(?:slowing|slows|slow)(?: down| up)?|easing off|eases off|decelerating|decelerates|braking|brakes"
+                  r"|hitting the brakes|losing speed|reducing (?:its )?speed"),
+    ("motion", 1, r"speeding up|speeds up|accelerating|accelerates|picking up speed|gaining speed|pulling away"
+                  r"|pulls away|starting to move(?: off)?|moving off|stepping on the gas|putting its foot down"),
+    ("motion", 1, r"(?:coming|comes|came|pulling|pulls|braking) (?:to a |up to a )?(?:stop|halt)|stopping|stops"
+                  r"|pulling up|pulls up|(?:braking|slowing) until it stands still|braking to a standstill"),
+    ("motion", 1, r"(?:(?:just |stuck )?(?:stopped|halted|idling|queuing|queueing|stationary|at a standstill"
+                  r"|not moving|not going anywhere|standing still|sitting still|motionless|sitting|waiting)(?: around)?"
+                  r"(?: to cross| at the (?:light|lights|red light|signal|stop line)"
+                  r"| in (?:the |its )?(?:lane|traffic|line|queue))?)"),
     ("motion", 1, r"(?:sitting )?parked(?: up)?|sitting in a parking (?:spot|space|bay)"),
-    ("motion", 1, r"reversing|reverses|backing (?:up|out)|backs (?:up|out)|in reverse(?: gear)?|(?:driving|going|moving) backwards?"),
-    ("motion", 1, r"(?:walking|walks|strolling|strolls|jogging|jogs|running|runs|wandering|pacing)(?: (?:along|down|beside|on|by|up) (?:the )?(?:sidewalk|pavement|street|road|footpath|walkway))?"),
+    ("motion", 1, r"reversing|reverses|backing (?:up|out)|backs (?:up|out)|in reverse(?: gear)?"
+                  r"|(?:driving|going|moving) backwards?"),
+    ("motion", 1, r"(?:walking|walks|strolling|strolls|jogging|jogs|running|runs|wandering|pacing)"
+                  r"(?: (?:along|down|beside|on|by|up) (?:the )?(?:sidewalk|pavement|street|road|footpath|walkway))?"),
     ("motion", 1, r"(?:just )?(?:standing|stands|loitering|lingering)(?: still| there| around| by| waiting)?"),
     ("motion", 1, r"making (?:their|his|her|its|a|the) way across(?: (?:the|a) (?:street|road))?"),
     ("motion", 1, r"(?:making|taking|doing) a (?:turn|u-turn)|turning (?:a corner|off)"),
@@ -378,7 +405,8 @@ def crossing_direction(phrase: str) -> str | None:
     sides = re.findall(r"\b(left|right)\b", phrase)
     if not sides:
         return None
-    if len(sides) >= 2 and re.search(r"\bfrom\b|\bto\b", phrase) and re.search(r"(left|right)\W+(?:\w+\W+){0,3}?(?:to|towards|toward|into)\b", phrase):
+    if (len(sides) >= 2 and re.search(r"\bfrom\b|\bto\b", phrase)
+            and re.search(r"(left|right)\W+(?:\w+\W+){0,3}?(?:to|towards|toward|into)\b", phrase)):
         target = sides[1]
     else:
         target = sides[-1]
@@ -397,7 +425,9 @@ _NOUN_RX = re.compile(r"(?<![\w-])(" + "|".join(sorted(map(re.escape, NOUNS), ke
 _COLOR_ALTERNATIVES = "|".join(sorted(map(re.escape, COLOR_SYNONYMS), key=len, reverse=True))
 _COLOR_RX = re.compile(r"(?<![\w-])(" + _COLOR_ALTERNATIVES + r")(?![\w-])")
 _GARMENT_RX = re.compile(
-    r"(?<![\w-])(" + "|".join(sorted(map(re.escape, UPPER_GARMENTS + LOWER_GARMENTS), key=len, reverse=True)) + r")(?![\w-])"
+    r"(?<![\w-])("
+    + "|".join(sorted(map(re.escape, UPPER_GARMENTS + LOWER_GARMENTS), key=len, reverse=True))
+    + r")(?![\w-])"
 )
 
 
@@ -481,7 +511,9 @@ def parse_query(text: str) -> ParsedQuery:
             direction = crossing_direction(span.text)
     motion = " ".join(s.text for s in motion_spans)
     if direction and not re.search(r"cross", motion):
-        motion = f"crossing {motion}" if not re.match(r"(walking|walks|moving|moves|heading|heads|going|goes|running|runs)\b", motion) else motion
+        motion = (f"crossing {motion}"
+                  if not re.match(r"(walking|walks|moving|moves|heading|heads|going|goes|running|runs)\b", motion)
+                  else motion)
     sector = " ".join(s.text for s in spans if s.kind == "sector")
     context = " ".join(s.text for s in spans if s.kind == "context")
 

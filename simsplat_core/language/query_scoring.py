@@ -123,7 +123,7 @@ def motion_distribution(
     prior = _uniform(list(dict.fromkeys(hits)), merged_classes)
     centred = l2_normalise(prototypes - books.motion_centre) @ l2_normalise((query - books.motion_centre)[None])[0]
     probs = _softmax(centred, config.motion_temperature)
-    merged = collections.defaultdict(float)
+    merged: collections.defaultdict[str, float] = collections.defaultdict(float)
     for name, p in zip(classes, probs):
         merged[voc.CROSSING if name in CROSSING_CLASSES else name] += float(p)
     probs = np.array([merged[c] for c in merged_classes])
@@ -160,6 +160,7 @@ def attribute_fit(parsed: ParsedQuery, node: NodeLanguage, config: QueryConfig) 
     if cap is None:
         return 1.0
     factor = 1.0
+    shown: tuple[str | None, ...]  # the caption's colours an excluded colour contradicts
     if cap.category == "pedestrian" or node.category == "pedestrian":
         upper, lower = cap.upper_color, cap.lower_color
         if upper is None and lower is None and cap.colors:

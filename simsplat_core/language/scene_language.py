@@ -19,8 +19,8 @@ tells whether a scene belongs to a given graph.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping
 
 import numpy as np
 
@@ -112,7 +112,7 @@ class LanguageScene:
                                   f"derive it with LanguageScene.for_graph(graph, log)")
 
     def for_graph(self, graph: SceneGraph, log: SceneLog | None = None, *,
-                  new_nodes: Mapping[int, NodeLanguage] | None = None, backend: str = "auto") -> "LanguageScene":
+                  new_nodes: Mapping[int, NodeLanguage] | None = None, backend: str = "auto") -> LanguageScene:
         """The scene of ``graph``, an edit of the graph this scene describes (this scene is not changed).
 
         Nodes the graph no longer has are dropped; its object nodes the scene does not know get

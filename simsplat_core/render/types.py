@@ -7,7 +7,7 @@ Constants here fix the compositing rules every backend follows (gsplat 1.x "clas
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Optional
+from typing import Literal
 
 from torch import Tensor
 
@@ -107,9 +107,9 @@ class RasterMeta:
     tile_height: int
     backend: str
     render_mode: str
-    tiles_per_gauss: Optional[Tensor] = None
-    isect_offsets: Optional[Tensor] = None
-    flatten_ids: Optional[Tensor] = None
+    tiles_per_gauss: Tensor | None = None
+    isect_offsets: Tensor | None = None
+    flatten_ids: Tensor | None = None
 
     @property
     def n_isects(self) -> int:

@@ -48,10 +48,11 @@ class ComposedGaussians:
         """``[N]`` bool rows of ``node_id``."""
         return self.node_ids == node_id
 
-    def detach(self) -> "ComposedGaussians":
-        d = lambda t: None if t is None else t.detach()  # noqa: E731
-        return ComposedGaussians(self.t, d(self.means), d(self.quats), d(self.scales), d(self.opacities),
-                                 d(self.colors), d(self.features), self.node_ids, self.gaussian_ids, self.node_slices)
+    def detach(self) -> ComposedGaussians:
+        features = None if self.features is None else self.features.detach()
+        return ComposedGaussians(self.t, self.means.detach(), self.quats.detach(), self.scales.detach(),
+                                 self.opacities.detach(), self.colors.detach(), features, self.node_ids,
+                                 self.gaussian_ids, self.node_slices)
 
     @property
     def device(self) -> torch.device:

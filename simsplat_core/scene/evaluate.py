@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from simsplat_core.scene.image_metrics import masked_psnr, masked_ssim, psnr, ssim
 from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.scene.image_metrics import masked_psnr, masked_ssim, psnr, ssim
 from simsplat_core.scene.views import ViewBatch
 from simsplat_core.types import ObjectInfo
 

@@ -16,8 +16,8 @@ The row operations (:meth:`index`, :meth:`cat`, :meth:`map_rows`) are what densi
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
-from typing import Callable, Iterator
 
 import torch
 from torch import Tensor
@@ -61,7 +61,7 @@ class GaussianSet:
     @classmethod
     def create(cls, means: Tensor, scales: Tensor, rgb: Tensor, opacity: float | Tensor = 0.1,
                quats: Tensor | None = None, features: Tensor | None = None,
-               extras: dict[str, Tensor] | None = None) -> "GaussianSet":
+               extras: dict[str, Tensor] | None = None) -> GaussianSet:
         """From activated values: ``means [N, 3]``, ``scales [N, 3]`` (or ``[N]``, isotropic) metres,
         ``rgb [N, 3]`` in ``[0, 1]``, ``opacity`` scalar or ``[N]``; identity rotations unless given."""
         n = means.shape[0]
@@ -77,7 +77,7 @@ class GaussianSet:
 
     @classmethod
     def empty(cls, dtype: torch.dtype = torch.float32, device: torch.device | str = "cpu",
-              extras_shapes: dict[str, tuple[int, ...]] | None = None) -> "GaussianSet":
+              extras_shapes: dict[str, tuple[int, ...]] | None = None) -> GaussianSet:
         """A set with no Gaussians; ``extras_shapes`` gives the trailing shape of each extra tensor."""
         z = lambda *s: torch.zeros(s, dtype=dtype, device=device)  # noqa: E731
         extras = {k: z(0, *shape) for k, shape in (extras_shapes or {}).items()}
@@ -130,7 +130,7 @@ class GaussianSet:
         return self.extras[name]
 
     # ------------------------------------------------------------------ row operations
-    def map_rows(self, fn: Callable[[str, Tensor], Tensor]) -> "GaussianSet":
+    def map_rows(self, fn: Callable[[str, Tensor], Tensor]) -> GaussianSet:
         """A new set whose every row tensor is ``fn(name, tensor)`` (which must keep rows aligned)."""
         out = {name: fn(name, tensor) for name, tensor in self.named_tensors()}
         return GaussianSet(
@@ -139,29 +139,29 @@ class GaussianSet:
             extras={k: out[k] for k in self.extras},
         )
 
-    def index(self, rows: Tensor) -> "GaussianSet":
+    def index(self, rows: Tensor) -> GaussianSet:
         """Rows selected by an index ``[M]`` (int64) or a mask ``[N]`` (bool)."""
         return self.map_rows(lambda _, t: t[rows])
 
     select = index
 
-    def detach(self) -> "GaussianSet":
+    def detach(self) -> GaussianSet:
         return self.map_rows(lambda _, t: t.detach())
 
-    def clone(self) -> "GaussianSet":
+    def clone(self) -> GaussianSet:
         return self.map_rows(lambda _, t: t.detach().clone())
 
-    def to(self, device: torch.device | str | None = None, dtype: torch.dtype | None = None) -> "GaussianSet":
+    def to(self, device: torch.device | str | None = None, dtype: torch.dtype | None = None) -> GaussianSet:
         return self.map_rows(lambda _, t: t.to(device=device, dtype=dtype if t.is_floating_point() else None))
 
-    def requires_grad_(self, flag: bool = True) -> "GaussianSet":
+    def requires_grad_(self, flag: bool = True) -> GaussianSet:
         """Make every row tensor a leaf requiring grad (in place on the tensors); returns self."""
         for _, tensor in self.named_tensors():
             tensor.requires_grad_(flag)
         return self
 
     @staticmethod
-    def cat(sets: list["GaussianSet"]) -> "GaussianSet":
+    def cat(sets: list[GaussianSet]) -> GaussianSet:
         """Concatenate sets with the same optional tensors along the Gaussian axis."""
         if not sets:
             raise ValueError("GaussianSet.cat needs at least one set")

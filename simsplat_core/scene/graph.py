@@ -26,8 +26,8 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import logging
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
 import torch
@@ -36,11 +36,9 @@ from torch import Tensor
 from simsplat_core.scene.composed import ComposedGaussians
 from simsplat_core.scene.nodes import BACKGROUND_ID, BackgroundNode, NonRigidNode, ObjectNode, SceneNode
 from simsplat_core.scene.pose_track import Extrapolation, FrameTime, PoseTrack, locate
+from simsplat_core.scene.records import SceneRecords, graph_to_records, nodes_from_records
 from simsplat_core.scene.render import DEFAULT_EPS2D, SceneRender, render_composed
 from simsplat_core.scene.transforms import interpolate_transforms, quat_multiply, rotmat_to_quat, se3_delta
-
-if TYPE_CHECKING:
-    from simsplat_core.scene.records import SceneRecords
 
 logger = logging.getLogger(__name__)
 
@@ -124,19 +122,19 @@ class SceneGraph:
         return out
 
     # ------------------------------------------------------------------ derived graphs (by value)
-    def to(self, device: torch.device | str) -> "SceneGraph":
+    def to(self, device: torch.device | str) -> SceneGraph:
         """A copy of the graph on ``device`` (this graph is not changed)."""
         return dataclasses.replace(self, nodes=tuple(n.to(device) for n in self.nodes))
 
-    def detached(self) -> "SceneGraph":
+    def detached(self) -> SceneGraph:
         """A graph whose learnable tensors are detached (no grad, no optimizer references)."""
         return dataclasses.replace(self, nodes=tuple(n.detached() for n in self.nodes))
 
-    def with_metadata(self, **facts: str) -> "SceneGraph":
+    def with_metadata(self, **facts: str) -> SceneGraph:
         """A graph whose metadata has ``facts`` added (or replaced)."""
         return dataclasses.replace(self, metadata={**self.metadata, **{k: str(v) for k, v in facts.items()}})
 
-    def with_eps2d(self, eps2d: float) -> "SceneGraph":
+    def with_eps2d(self, eps2d: float) -> SceneGraph:
         """A graph rendered with another screen-space low-pass."""
         return dataclasses.replace(self, eps2d=float(eps2d))
 
@@ -150,11 +148,11 @@ class SceneGraph:
                 raise ValueError(f"SceneGraph.{what}: node {nid} is the background, which has no poses")
         return ids
 
-    def _derived(self, nodes: Iterable[SceneNode], *change: object) -> "SceneGraph":
+    def _derived(self, nodes: Iterable[SceneNode], *change: object) -> SceneGraph:
         digest = hashlib.sha1(repr((self.revision, *change)).encode()).hexdigest()[:16]
         return dataclasses.replace(self, nodes=tuple(sorted(nodes, key=lambda n: n.node_id)), revision=digest)
 
-    def without(self, node_ids: Iterable[int]) -> "SceneGraph":
+    def without(self, node_ids: Iterable[int]) -> SceneGraph:
         """The graph without the nodes ``node_ids`` (the others are shared, unchanged).
 
         Raises:
@@ -188,7 +186,7 @@ class SceneGraph:
         return None, axis_poses, mask
 
     def with_node(self, node: ObjectNode, poses: PoseTrack | Tensor | np.ndarray | None = None,
-                  present: Tensor | np.ndarray | None = None) -> "SceneGraph":
+                  present: Tensor | np.ndarray | None = None) -> SceneGraph:
         """The graph with ``node`` added (this graph is not changed).
 
         Args:
@@ -217,7 +215,7 @@ class SceneGraph:
                              _track_digest(track))
 
     def with_poses(self, node_id: int, poses: PoseTrack | Tensor | np.ndarray,
-                   present: Tensor | np.ndarray | None = None) -> "SceneGraph":
+                   present: Tensor | np.ndarray | None = None) -> SceneGraph:
         """The graph with node ``node_id``'s pose track replaced (``poses`` as in :meth:`with_node`; the
         learned pose refinement is dropped: the new poses are final).
 
@@ -366,10 +364,8 @@ class SceneGraph:
                                with_node_ids=with_node_ids, backend=backend, background=background, eps2d=self.eps2d)
 
     # ------------------------------------------------------------------ persistence
-    def to_records(self, scene_id: str) -> "SceneRecords":
+    def to_records(self, scene_id: str) -> SceneRecords:
         """Plain numpy/python records of the graph (see :mod:`simsplat_core.scene.records`)."""
-        from simsplat_core.scene.records import graph_to_records
-
         beyond = [n.node_id for n in self.object_nodes if n.track is not None
                   and (n.track.start < self.frame_indices[0] or n.track.end > self.frame_indices[-1])]
         if beyond:
@@ -383,10 +379,8 @@ class SceneGraph:
         return records
 
     @classmethod
-    def from_records(cls, records: "SceneRecords", device: torch.device | str = "cpu") -> "SceneGraph":
+    def from_records(cls, records: SceneRecords, device: torch.device | str = "cpu") -> SceneGraph:
         """Inverse of :meth:`to_records` (learned pose refinements come back baked into the poses)."""
-        from simsplat_core.scene.records import nodes_from_records
-
         frame_indices, nodes, metadata = nodes_from_records(records, device)
         eps2d = float(metadata.pop(EPS2D_KEY, DEFAULT_EPS2D))
         revision = metadata.pop(REVISION_KEY, "")

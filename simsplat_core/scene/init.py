@@ -37,7 +37,15 @@ from simsplat_core.scene.config import InitConfig
 from simsplat_core.scene.gaussians import GaussianSet
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.knn import knn_scale
-from simsplat_core.scene.nodes import OFFSETS, BackgroundNode, NonRigidNode, RigidNode, SceneNode
+from simsplat_core.scene.nodes import (
+    OFFSETS,
+    BackgroundNode,
+    NodeFields,
+    NonRigidNode,
+    PoseFields,
+    RigidNode,
+    SceneNode,
+)
 from simsplat_core.scene.transforms import poses_from_boxes
 from simsplat_core.types import CameraImage, ObjectInfo, SceneLog
 
@@ -63,7 +71,7 @@ class PointCloud:
     normals: np.ndarray | None = None
 
     @staticmethod
-    def empty() -> "PointCloud":
+    def empty() -> PointCloud:
         return PointCloud(np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0), np.zeros((0, 3)))
 
 
@@ -107,6 +115,8 @@ def normal_map(img: CameraImage) -> np.ndarray:
     """``[H, W, 3]`` world-space surface normals from the depth map (central differences of the
     back-projected points, oriented towards the camera); zero where a neighbour is missing or across a
     depth discontinuity (relative jump above 5 %)."""
+    if img.depth is None:
+        raise ValueError(f"normal_map: frame {img.frame_idx} camera {img.camera!r} has no depth")
     _, dirs = _pixel_rays(img, 1)
     d = np.where(np.isfinite(img.depth), img.depth, 0.0).astype(np.float64)
     pts = (img.cam_to_world[:3, 3] + dirs * d.reshape(-1, 1)).reshape(img.height, img.width, 3)
@@ -204,6 +214,8 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
     bg_pts, bg_rgb, bg_nrm, sky_dirs, sky_rgb = [], [], [], [], []
     obj_parts: dict[str, list[tuple[np.ndarray, ...]]] = {o.object_id: [] for o in objects}
     for img in train_images:
+        if img.depth is None or img.image is None:
+            raise ValueError(f"depth_clouds: frame {img.frame_idx} camera {img.camera!r} needs pixels and depth")
         ij, dirs = _pixel_rays(img, cfg.pixel_stride)
         depth = img.depth[ij[:, 0], ij[:, 1]].astype(np.float64)
         rgb = img.image[ij[:, 0], ij[:, 1]].astype(np.float64)
@@ -363,7 +375,7 @@ def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: 
                              _gaussians(sky, cfg, device, cfg.sky_radius * math.radians(4 * cfg.sky_step_deg))]) \
         if sky.points.shape[0] else _gaussians(background, cfg, device, cfg.background_voxel_max)
     nodes: list[SceneNode] = [BackgroundNode(node_id=0, gaussians=bg_gs, scale=scene_scale,
-                                             center=tuple(float(c) for c in center))]
+                                             center=(float(center[0]), float(center[1]), float(center[2])))]
     for node_id, obj in enumerate(objects, start=1):
         track = log.track(obj.object_id)
         size = track.size[0] if len(track) else np.ones(3)
@@ -373,15 +385,16 @@ def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: 
             local = (rng.random((cfg.random_object_points, 3)) - 0.5) * size
             cloud = PointCloud(local, np.full((local.shape[0], 3), 0.5), np.zeros(local.shape[0]))
         gs = _gaussians(cloud, cfg, device, half_diag)
-        common = dict(node_id=node_id, gaussians=gs, object_id=obj.object_id, category=obj.category,
-                      scale=half_diag, poses=torch.as_tensor(poses[obj.object_id], dtype=torch.float32, device=device),
-                      present=torch.as_tensor(present[obj.object_id], device=device))
+        common = NodeFields(node_id=node_id, gaussians=gs, object_id=obj.object_id, category=obj.category,
+                            scale=half_diag)
+        pose_kw = PoseFields(poses=torch.as_tensor(poses[obj.object_id], dtype=torch.float32, device=device),
+                             present=torch.as_tensor(present[obj.object_id], device=device))
         if obj.node_type == "nonrigid":
             track_frames = frames[present[obj.object_id]]
             deform = np.array([f for f in track_frames if int(f) in train_frames] or track_frames, dtype=np.int64)
             gs.extras[OFFSETS] = torch.zeros((len(gs), deform.size, 3), device=device)
-            nodes.append(NonRigidNode(**common, deform_frames=deform))
+            nodes.append(NonRigidNode(**common, **pose_kw, deform_frames=deform))
         else:
-            nodes.append(RigidNode(**common, static=obj.node_type == "static"))
+            nodes.append(RigidNode(**common, **pose_kw, static=obj.node_type == "static"))
     metadata = {"seq_id": log.seq_id, "source": log.source, "init": "depth" if has_depth else "random"}
     return SceneGraph(frame_indices=frames, nodes=nodes, metadata=metadata)

@@ -28,7 +28,7 @@ def knn_sq_distances(points: np.ndarray, k: int = 3) -> np.ndarray:
         d2 = torch.cdist(t, t).square()
         vals = torch.topk(d2, kk, dim=1, largest=False).values.numpy()
     else:
-        index = cv2.flann_Index(pts, dict(algorithm=_FLANN_KDTREE, trees=4))
+        index = cv2.flann.Index(pts, dict(algorithm=_FLANN_KDTREE, trees=4))
         _, vals = index.knnSearch(pts, kk, params=dict(checks=32))
     vals = np.asarray(vals, dtype=np.float32)[:, 1:]  # drop the point itself
     if vals.shape[1] < k:

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from typing import TypedDict
 
 import numpy as np
 import torch
@@ -36,6 +37,23 @@ from simsplat_core.scene.transforms import se3_delta
 NODE_TYPES: tuple[str, ...] = ("background", "rigid", "nonrigid", "static")
 BACKGROUND_ID = 0
 OFFSETS = "offsets"
+
+
+class NodeFields(TypedDict):
+    """Keyword arguments of the fields every node has (``SceneNode``), for building nodes of any type."""
+
+    node_id: int
+    gaussians: GaussianSet
+    object_id: str
+    category: str
+    scale: float
+
+
+class PoseFields(TypedDict):
+    """Keyword arguments of an object node's poses on the frame axis (``ObjectNode.poses`` / ``present``)."""
+
+    poses: Tensor
+    present: Tensor
 
 
 @dataclass
@@ -60,11 +78,11 @@ class SceneNode:
         """Learnable tensors of the node by name (Gaussian rows and node-level parameters)."""
         return dict(self.gaussians.named_tensors())
 
-    def to(self, device: torch.device | str) -> "SceneNode":
+    def to(self, device: torch.device | str) -> SceneNode:
         """A copy of the node on ``device`` (the node itself is not changed)."""
         return dataclasses.replace(self, gaussians=self.gaussians.to(device))
 
-    def detached(self) -> "SceneNode":
+    def detached(self) -> SceneNode:
         """A copy whose learnable tensors are detached (no grad, no optimizer references)."""
         return dataclasses.replace(self, gaussians=self.gaussians.detach())
 
@@ -130,13 +148,13 @@ class ObjectNode(SceneNode):
                 return self.poses.clone()
             return self.poses @ se3_delta(self.pose_deltas)
 
-    def to(self, device: torch.device | str) -> "ObjectNode":
+    def to(self, device: torch.device | str) -> ObjectNode:
         return dataclasses.replace(
             self, gaussians=self.gaussians.to(device), poses=self.poses.to(device), present=self.present.to(device),
             pose_deltas=None if self.pose_deltas is None else self.pose_deltas.detach().to(device),
             track=None if self.track is None else self.track.to(device))
 
-    def detached(self) -> "ObjectNode":
+    def detached(self) -> ObjectNode:
         return dataclasses.replace(
             self, gaussians=self.gaussians.detach(),
             pose_deltas=None if self.pose_deltas is None else self.pose_deltas.detach())
@@ -223,5 +241,5 @@ class NonRigidNode(ObjectNode):
         return (1.0 - w) * offsets[:, j0] + w * offsets[:, j1]
 
 
-__all__ = ["BACKGROUND_ID", "NODE_TYPES", "OFFSETS", "BackgroundNode", "NonRigidNode", "ObjectNode", "RigidNode",
-           "SceneNode"]
+__all__ = ["BACKGROUND_ID", "NODE_TYPES", "OFFSETS", "BackgroundNode", "NodeFields", "NonRigidNode", "ObjectNode",
+           "PoseFields", "RigidNode", "SceneNode"]

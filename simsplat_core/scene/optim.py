@@ -9,7 +9,7 @@ while keeping Adam's moments aligned. Learning rates come from ``LearningRates.f
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import torch
 from torch import Tensor

@@ -28,14 +28,14 @@ from torch import Tensor
 from simsplat_core.scene.transforms import interpolate_transforms
 
 
-class Extrapolation(str, enum.Enum):
+class Extrapolation(enum.StrEnum):
     """What a pose track gives outside its time range."""
 
     HOLD = "hold"  #: the first (before) / last (after) sample, pose and presence
     ABSENT = "absent"  #: the node does not exist there
 
 
-class OffsetExtrapolation(str, enum.Enum):
+class OffsetExtrapolation(enum.StrEnum):
     """What a non-rigid node's deformation gives outside its trained frames."""
 
     HOLD = "hold"  #: the offsets of the first / last trained frame
@@ -161,17 +161,17 @@ class PoseTrack:
         poses = torch.where(exact[:, None, None], a, interpolate_transforms(a, b, w)) if len(located) else a
         return poses, present
 
-    def resampled(self, times: np.ndarray) -> "PoseTrack":
+    def resampled(self, times: np.ndarray) -> PoseTrack:
         """The track sampled at ``times [M]`` (same policies)."""
         times = check_times(times, "PoseTrack.resampled")
         poses, present = self.sample_many(times)
         return PoseTrack(times, poses, present, self.before, self.after)
 
-    def with_policy(self, before: Extrapolation | None = None, after: Extrapolation | None = None) -> "PoseTrack":
+    def with_policy(self, before: Extrapolation | None = None, after: Extrapolation | None = None) -> PoseTrack:
         """The same samples with other extrapolation policies (``None`` keeps one)."""
         return PoseTrack(self.times, self.poses, self.mask, before or self.before, after or self.after)
 
-    def to(self, device: torch.device | str) -> "PoseTrack":
+    def to(self, device: torch.device | str) -> PoseTrack:
         return PoseTrack(self.times, self.poses.to(device), self.mask.to(device), self.before, self.after)
 
 

@@ -34,8 +34,10 @@ from simsplat_core.scene.nodes import (
     NODE_TYPES,
     OFFSETS,
     BackgroundNode,
+    NodeFields,
     NonRigidNode,
     ObjectNode,
+    PoseFields,
     RigidNode,
     SceneNode,
 )
@@ -61,7 +63,7 @@ class SceneRecords:
     def num_gaussians(self) -> int:
         return int(self.gaussians["node_id"].shape[0])
 
-    def validate(self) -> "SceneRecords":
+    def validate(self) -> SceneRecords:
         """Check column presence, dtypes' widths and cross references; raises ``ValueError``."""
         n = self.num_gaussians
         widths = {"mean": 3, "log_scale": 3, "quat": 4, "color": 3}
@@ -140,7 +142,7 @@ def graph_to_records(graph: Any, scene_id: str) -> SceneRecords:
         d = widths.pop()
         gaussians["feature"] = np.concatenate([
             f if f is not None else np.zeros((c.shape[0], d), np.float32) for f, c in zip(feats, cols["node_id"])])
-    node_poses = {
+    node_poses: dict[str, np.ndarray] = {
         "node_id": np.concatenate(pose_ids) if pose_ids else np.zeros(0, np.int32),
         "frame_idx": np.concatenate(pose_frames).astype(np.int64) if pose_frames else np.zeros(0, np.int64),
         "transform": np.concatenate(pose_tf) if pose_tf else np.zeros((0, 16), np.float32),
@@ -173,13 +175,15 @@ def nodes_from_records(records: SceneRecords, device: torch.device | str = "cpu"
             opacity_logits=t(records.gaussians["opacity_logit"][rows]),
             features=None if feature is None else t(feature[rows]), extras=extras,
         )
-        common = dict(node_id=nid, gaussians=gs, object_id=str(info.get("object_id", "")),
-                      category=str(info.get("category", "")), scale=float(info.get("scale", 1.0)))
+        common = NodeFields(node_id=nid, gaussians=gs, object_id=str(info.get("object_id", "")),
+                            category=str(info.get("category", "")), scale=float(info.get("scale", 1.0)))
         if kind == "background":
             if nid != BACKGROUND_ID:
                 raise ValueError(f"SceneRecords.nodes: background node must have id {BACKGROUND_ID}, got {nid}")
-            center = tuple(float(c) for c in info.get("center", (0.0, 0.0, 0.0)))
-            nodes.append(BackgroundNode(**common, center=center))
+            center = [float(c) for c in info.get("center", (0.0, 0.0, 0.0))]
+            if len(center) != 3:
+                raise ValueError(f"SceneRecords.nodes: background center must have 3 values, got {center}")
+            nodes.append(BackgroundNode(**common, center=(center[0], center[1], center[2])))
             continue
         prow = p_ids == nid
         pose_frames = records.node_poses["frame_idx"][prow]
@@ -190,7 +194,7 @@ def nodes_from_records(records: SceneRecords, device: torch.device | str = "cpu"
         poses[pos] = records.node_poses["transform"][prow].reshape(-1, 4, 4)
         present = np.zeros(n_frames, dtype=bool)
         present[pos] = True
-        pose_kw = dict(poses=t(poses), present=torch.as_tensor(present, device=device))
+        pose_kw = PoseFields(poses=t(poses), present=torch.as_tensor(present, device=device))
         if kind == "nonrigid":
             nodes.append(NonRigidNode(**common, **pose_kw, deform_frames=records.deformation_frames[nid]))
         else:

@@ -13,8 +13,8 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable
 
 import numpy as np
 import torch
@@ -92,6 +92,8 @@ def image_loss(render: SceneRender, batch: ViewBatch, config: ReconstructionConf
     weighted L1 + D-SSIM on colour, object-coverage L1 (``render.extra``) against ``instance > 0``,
     inverse-depth L1 where the ground-truth depth is finite."""
     rgb, gt, instance, w = render.rgb, batch.rgb, batch.instance, config.loss
+    if gt is None:
+        raise ValueError(f"image_loss: the view batch of frame {batch.frame_idx} has no pixels to compare with")
     lam = w.dssim
     err = (rgb - gt).abs()
     objects = None if instance is None else (instance > 0).to(err.dtype)  # [C, H, W]

@@ -10,6 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import torch
+from numpy.typing import DTypeLike
 from torch import Tensor
 
 from simsplat_core.types import CameraImage, SceneLog
@@ -45,20 +46,20 @@ class ViewBatch:
     def num_cameras(self) -> int:
         return len(self.cameras)
 
-    def subset(self, index: list[int]) -> "ViewBatch":
+    def subset(self, index: list[int]) -> ViewBatch:
         """The cameras at positions ``index``."""
         pick = lambda t: None if t is None else t[index]  # noqa: E731
         return ViewBatch(self.frame_idx, self.split, tuple(self.cameras[i] for i in index), self.cam_to_world[index],
                          self.Ks[index], self.width, self.height, pick(self.rgb), pick(self.depth),
                          pick(self.instance))
 
-    def to(self, device: torch.device | str) -> "ViewBatch":
+    def to(self, device: torch.device | str) -> ViewBatch:
         mv = lambda t: None if t is None else t.to(device)  # noqa: E731
-        return ViewBatch(self.frame_idx, self.split, self.cameras, mv(self.cam_to_world), mv(self.Ks), self.width,
-                         self.height, mv(self.rgb), mv(self.depth), mv(self.instance))
+        return ViewBatch(self.frame_idx, self.split, self.cameras, self.cam_to_world.to(device), self.Ks.to(device),
+                         self.width, self.height, mv(self.rgb), mv(self.depth), mv(self.instance))
 
 
-def _stack(images: list[CameraImage], attr: str, dtype: np.dtype) -> Tensor | None:
+def _stack(images: list[CameraImage], attr: str, dtype: DTypeLike) -> Tensor | None:
     arrays = [getattr(img, attr) for img in images]
     if any(a is None for a in arrays):
         return None

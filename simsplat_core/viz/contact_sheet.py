@@ -41,8 +41,8 @@ _NEAR = 0.05
 def _to_uint8(image: np.ndarray | None, width: int, height: int) -> np.ndarray:
     if image is None:
         canvas = np.full((height, width, 3), 48, np.uint8)
-        cv2.putText(canvas, "no pixels in this log", (10, height // 2), cv2.FONT_HERSHEY_SIMPLEX, max(width / 1200, 0.4),
-                    (160, 160, 160), 1, cv2.LINE_AA)
+        cv2.putText(canvas, "no pixels in this log", (10, height // 2), cv2.FONT_HERSHEY_SIMPLEX,
+                    max(width / 1200, 0.4), (160, 160, 160), 1, cv2.LINE_AA)
         return canvas
     return to_uint8(image)
 
@@ -67,7 +67,8 @@ def camera_panel(log: SceneLog, image: CameraImage, scale: float = 1.0) -> np.nd
     """One camera image (or a grey canvas) with every present object's 3D box drawn, ``[h, w, 3]`` uint8."""
     canvas = _to_uint8(image.image, image.width, image.height)
     if scale != 1.0:
-        canvas = cv2.resize(canvas, (round(image.width * scale), round(image.height * scale)), interpolation=cv2.INTER_AREA)
+        canvas = cv2.resize(canvas, (round(image.width * scale), round(image.height * scale)),
+                            interpolation=cv2.INTER_AREA)
     K = np.asarray(image.K, dtype=np.float64).copy()
     K[:2] *= scale
     world_to_cam = invert_transform(np.asarray(image.cam_to_world, dtype=np.float64))
@@ -129,7 +130,8 @@ def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 
         footprint = to_px(box_corners(track.center[row], track.size[row], track.heading[row])[:4])
         color = CATEGORY_COLORS.get(categories.get(track.object_id, "other"), CATEGORY_COLORS["other"])
         cv2.polylines(canvas, [footprint], True, color, 1, cv2.LINE_AA)
-        cv2.line(canvas, tuple(int(v) for v in footprint[0]), tuple(int(v) for v in footprint[3]), (255, 255, 255), 1)  # front edge
+        # front edge
+        cv2.line(canvas, tuple(int(v) for v in footprint[0]), tuple(int(v) for v in footprint[3]), (255, 255, 255), 1)
     ego_box = to_px(box_corners(log.ego_poses[frame_idx][:3, 3] + [0, 0, 0.8], np.array([4.6, 1.9, 1.6]),
                                 math.atan2(log.ego_poses[frame_idx][1, 0], log.ego_poses[frame_idx][0, 0]))[:4])
     cv2.fillPoly(canvas, [ego_box], (255, 255, 0))

@@ -81,7 +81,7 @@ class OpenAIChatConfig:
         return self.base_url.rstrip("/") + "/chat/completions"
 
     @classmethod
-    def from_env(cls, **overrides: Any) -> "OpenAIChatConfig":
+    def from_env(cls, **overrides: Any) -> OpenAIChatConfig:
         """From ``SIMSPLAT_VLM_URL`` and ``SIMSPLAT_VLM_MODEL`` (the key stays in ``SIMSPLAT_VLM_API_KEY``).
 
         Raises:

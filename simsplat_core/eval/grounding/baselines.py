@@ -165,7 +165,8 @@ class FrameCaptionGrounder:
             ids = list(captions)
             texts = [c for nid in ids for c in captions[nid]]
             owner = np.array([i for i, nid in enumerate(ids) for _ in captions[nid]], dtype=np.int64)
-            emb = self.text_encoder.encode_passages(texts) if texts else np.zeros((0, self.text_encoder.dim), np.float32)
+            emb = (self.text_encoder.encode_passages(texts) if texts
+                   else np.zeros((0, self.text_encoder.dim), np.float32))
             self._cache[key] = (ids, emb, owner)
         return self._cache[key]
 

@@ -21,9 +21,10 @@ Queries, per log:
   label implies ("coming to a stop" is also "slowing down" and "going straight") and every sector and
   map context it occupies near the reference frame (``plausible_readings``: 10 degrees of slack at
   sector boundaries, +-1 s around the reference frame, all map predicates rather than the labeller's
-  first), so no query hinges on the labeller's tie-breaking. Combinations are drawn from families (appearance only, appearance + motion,
-  appearance + location, appearance + motion + location, motion and/or location with a bare noun) with
-  ``BenchmarkConfig.family_weights``, without repeating a family while others remain. A target that no
+  first), so no query hinges on the labeller's tie-breaking. Combinations are drawn from families
+  (appearance only, appearance + motion, appearance + location, appearance + motion + location, motion
+  and/or location with a bare noun) with ``BenchmarkConfig.family_weights``, without repeating a family
+  while others remain. A target that no
   combination singles out (identical look-alikes doing the same thing in the same place) gets one
   group query over every object matching its full description.
 * **group**: ``group_per_log`` descriptions with one or two constraints ("all parked cars", "every
@@ -32,8 +33,9 @@ Queries, per log:
   reading would extend to more objects, is skipped: whether that object belongs to the answer would be
   a coin toss).
 * **none**: ``none_per_log`` descriptions that fit no object under any plausible reading: a
-  well-visible object's description with one constraint changed (colour, body style, clothing, motion or location) -- near misses that a
-  method choosing the best appearance match without checking the rest gets wrong.
+  well-visible object's description with one constraint changed (colour, body style, clothing, motion
+  or location) -- near misses that a method choosing the best appearance match without checking the
+  rest gets wrong.
 
 Ground truth of a query is its target object set and, per frame, the targets' pixels in the instance
 masks (``SceneGroundTruth.masks``); scenes map the objects to their node ids (``object_id``).
@@ -189,7 +191,8 @@ def plausible_readings(
     return frozenset(motions), frozenset(sectors), frozenset(contexts)
 
 
-def object_facts(log: SceneLog, labels: dict[str, MotionLabel] | None = None, min_frame_pixels: int = 30) -> dict[str, ObjectFacts]:
+def object_facts(log: SceneLog, labels: dict[str, MotionLabel] | None = None,
+                 min_frame_pixels: int = 30) -> dict[str, ObjectFacts]:
     """``object_id -> ObjectFacts`` of every object of a log with ground-truth instance masks."""
     map_context = MapContext.from_features(log.map_features) if log.map_features else None
     trajectories = log_trajectories(log, map_context, min_frames=1)
@@ -296,7 +299,8 @@ class Description:
     def wording(self, matched: Sequence[ObjectFacts] = ()) -> Wording:
         """What the paraphraser needs: these constraints and the body styles of the objects a generic noun
         has to fit."""
-        return Wording(**dataclasses.asdict(self), generic_subtypes=tuple(sorted({f.subtype for f in matched if f.subtype})))
+        generic_subtypes = tuple(sorted({f.subtype for f in matched if f.subtype}))
+        return Wording(**dataclasses.asdict(self), generic_subtypes=generic_subtypes)
 
 
 def matching(desc: Description, facts: Iterable[ObjectFacts], lenient: bool = False) -> list[ObjectFacts]:
@@ -362,7 +366,7 @@ class SceneGroundTruth:
     instance_ids: dict[str, int]
 
     @classmethod
-    def from_log(cls, log: SceneLog) -> "SceneGroundTruth":
+    def from_log(cls, log: SceneLog) -> SceneGroundTruth:
         """From a log whose images carry instance masks (all frames, the log's camera order).
 
         Raises:
@@ -381,7 +385,7 @@ class SceneGroundTruth:
             maps[img.frame_idx, cam_index[img.camera]] = img.instance
         return cls(log.seq_id, frames, tuple(cams), maps, {o.object_id: o.instance_id for o in log.objects})
 
-    def aligned_to(self, frame_indices: np.ndarray, cameras: Sequence[str]) -> "SceneGroundTruth":
+    def aligned_to(self, frame_indices: np.ndarray, cameras: Sequence[str]) -> SceneGroundTruth:
         """The ground truth on a scene's frames and cameras (in that order).
 
         Raises:
@@ -562,7 +566,8 @@ def _group_candidates(facts: list[ObjectFacts], config: BenchmarkConfig) -> list
                 continue
             seen.add(desc)
             group = unambiguous_targets(desc, facts)
-            if group is not None and 2 <= len(group) <= config.group_max and all(_well_visible(g, config) for g in group):
+            if (group is not None and 2 <= len(group) <= config.group_max
+                    and all(_well_visible(g, config) for g in group)):
                 out.append((desc, group))
     return out
 
@@ -580,7 +585,13 @@ _CONTEXTS_BY_CATEGORY = {
 
 def _alternatives(slot: str, f: ObjectFacts) -> list[str]:
     """Values of ``slot`` other than ``f``'s own that make sense for its category."""
-    from simsplat_core.world.palette import LOWER_COLORS, NAMED_COLORS, UPPER_COLORS, VEHICLE_KINDS
+    # simsplat_core.world loads the world generator and numba: imported only where distractors are drawn
+    from simsplat_core.world.palette import (  # noqa: PLC0415
+        LOWER_COLORS,
+        NAMED_COLORS,
+        UPPER_COLORS,
+        VEHICLE_KINDS,
+    )
 
     if slot in ("color", "upper", "lower"):
         pool = {"color": tuple(NAMED_COLORS), "upper": UPPER_COLORS, "lower": LOWER_COLORS}[slot]

@@ -99,7 +99,9 @@ def label_motion_features(
     return out
 
 
-def node_id_maps_from_log(log: SceneLog, node_ids: Mapping[str, int]) -> tuple[np.ndarray, tuple[str, ...], np.ndarray] | None:
+def node_id_maps_from_log(
+    log: SceneLog, node_ids: Mapping[str, int]
+) -> tuple[np.ndarray, tuple[str, ...], np.ndarray] | None:
     """``(frame_indices [F], cameras, node_id_maps [F, C, H, W] int32)`` from the ground-truth instance masks.
 
     Instance ids become node ids; background (instance 0) becomes node 0. ``None`` when the log has

@@ -112,7 +112,7 @@ class OverlapCounts:
     counts: np.ndarray
 
     @classmethod
-    def build(cls, node_id_maps: np.ndarray, truth: SceneGroundTruth) -> "OverlapCounts":
+    def build(cls, node_id_maps: np.ndarray, truth: SceneGroundTruth) -> OverlapCounts:
         """From ``[F, C, H, W]`` int node-id maps and the ground truth over the same frames and cameras."""
         node_id_maps = np.asarray(node_id_maps)
         labels = truth.instance_maps
@@ -261,7 +261,8 @@ def evaluate_grounding(
     by_seq = {s.seq_id: s for s in scenes}
     missing = sorted({q.seq_id for q in benchmark.queries} - set(by_seq))
     if missing:
-        logger.warning("no scene for %d sequences of the benchmark (%s); their queries are skipped", len(missing), missing)
+        logger.warning("no scene for %d sequences of the benchmark (%s); their queries are skipped",
+                       len(missing), missing)
     results = GroundingResults()
     for seq_id, scene in by_seq.items():
         queries = [q for q in benchmark.queries if q.seq_id == seq_id]

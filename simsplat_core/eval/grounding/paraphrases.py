@@ -118,11 +118,19 @@ _MOTION: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "stationary_vehicle": (("not moving", "stationary", "standing still"), ("not going anywhere", "sitting still")),
     voc.REVERSING: ((voc.REVERSING, "backing up", "driving backwards"), ("backing out", "going in reverse")),
     voc.CROSSING_LEFT_TO_RIGHT: (
-        ("crossing the street from left to right", "walking across the road from left to right", "crossing from the left to the right"),
+        (
+            "crossing the street from left to right",
+            "walking across the road from left to right",
+            "crossing from the left to the right",
+        ),
         ("heading across the road left to right", "crossing over left to right"),
     ),
     voc.CROSSING_RIGHT_TO_LEFT: (
-        ("crossing the street from right to left", "walking across the road from right to left", "crossing from the right to the left"),
+        (
+            "crossing the street from right to left",
+            "walking across the road from right to left",
+            "crossing from the right to the left",
+        ),
         ("heading across the road right to left", "crossing over right to left"),
     ),
     "crossing_any": (
@@ -133,7 +141,10 @@ _MOTION: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
         ("walking along the sidewalk", "walking down the pavement", "walking beside the road"),
         ("strolling along the sidewalk", "wandering down the pavement"),
     ),
-    voc.STANDING: (("standing still", "standing and waiting", "not moving"), ("just standing around", "waiting around")),
+    voc.STANDING: (
+        ("standing still", "standing and waiting", "not moving"),
+        ("just standing around", "waiting around"),
+    ),
 }
 
 _SECTOR: dict[str, tuple[str, ...]] = {
@@ -301,7 +312,8 @@ def _indefinite(np_: str) -> str:
 
 
 def _rel(w: Wording, rng: np.random.Generator) -> str:
-    return _pick(rng, ("who is", "who's", "that is") if w.category == "pedestrian" else ("that is", "that's", "which is"))
+    return _pick(rng, ("who is", "who's", "that is") if w.category == "pedestrian"
+                 else ("that is", "that's", "which is"))
 
 
 def realise(w: Wording, style: str, rng: np.random.Generator) -> str:
@@ -325,13 +337,15 @@ def realise(w: Wording, style: str, rng: np.random.Generator) -> str:
     if style == "polite":
         lead = _pick(
             rng,
-            ("Could you please show me", "Would you mind pointing out", "Can you please find", "Please highlight", "Please select"),
+            ("Could you please show me", "Would you mind pointing out", "Can you please find", "Please highlight",
+             "Please select"),
         )
         end = "?" if lead.split()[0] in ("Could", "Would", "Can") else "."
         return _join(lead, _definite(np_), mot_loc) + end
     if style == "imperative":
         lead = _pick(rng, ("Find", "Select", "Segment", "Show me", "Locate", "Highlight", "Mark"))
-        body = _join(_definite(np_), _rel(w, rng), mot_loc) if mot and rng.random() < 0.5 else _join(_definite(np_), mot_loc)
+        body = (_join(_definite(np_), _rel(w, rng), mot_loc) if mot and rng.random() < 0.5
+                else _join(_definite(np_), mot_loc))
         return f"{lead} {body}."
     if style == "question":
         lead = _pick(rng, ("Where is", "Can you spot", "Do you see", "Which one is"))

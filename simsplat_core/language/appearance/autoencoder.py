@@ -101,7 +101,7 @@ class AutoencoderState:
         return out
 
     @staticmethod
-    def from_arrays(arrays: dict[str, np.ndarray]) -> "AutoencoderState":
+    def from_arrays(arrays: dict[str, np.ndarray]) -> AutoencoderState:
         dims = [int(v) for v in np.asarray(arrays["dims"])]
         n = 2 * (len(dims) - 1)
         return AutoencoderState(
@@ -188,7 +188,7 @@ class FeatureAutoencoder:
         vocabulary: np.ndarray | None = None,
         config: AutoencoderConfig = AutoencoderConfig(),
         text_space: str = "",
-    ) -> tuple["FeatureAutoencoder", TrainReport]:
+    ) -> tuple[FeatureAutoencoder, TrainReport]:
         """Train on a scene's features (and optionally vocabulary embeddings).
 
         Args:
@@ -252,9 +252,9 @@ class FeatureAutoencoder:
     # ------------------------------------------------------------------ inference
     def encode(self, x: np.ndarray) -> np.ndarray:
         """``[N, D]`` features -> ``[N, d]`` float32 latents."""
-        x = torch.from_numpy(_as_rows(x, self.input_dim, "encode"))
+        rows = torch.from_numpy(_as_rows(x, self.input_dim, "encode"))
         with torch.no_grad():
-            return self.encoder(x - self.mean).numpy()
+            return self.encoder(rows - self.mean).numpy()
 
     def decode_torch(self, z: torch.Tensor) -> torch.Tensor:
         """Differentiable ``[..., d]`` -> ``[..., D]`` unit features."""
@@ -262,9 +262,9 @@ class FeatureAutoencoder:
 
     def decode(self, z: np.ndarray) -> np.ndarray:
         """``[N, d]`` latents -> ``[N, D]`` float32 unit features."""
-        z = torch.from_numpy(_as_rows(z, self.latent_dim, "decode"))
+        rows = torch.from_numpy(_as_rows(z, self.latent_dim, "decode"))
         with torch.no_grad():
-            return self.decode_torch(z).numpy()
+            return self.decode_torch(rows).numpy()
 
     def state(self) -> AutoencoderState:
         """The weights as plain arrays."""

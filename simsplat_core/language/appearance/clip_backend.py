@@ -119,7 +119,7 @@ class OpenClipEmbedder:
             self.name = f"clip-ts:{path.name}"
         else:
             try:
-                import open_clip
+                import open_clip  # noqa: PLC0415  # optional CLIP backend
             except ImportError as exc:
                 raise AppearanceBackendUnavailable(
                     f"loading the CLIP checkpoint {str(path)!r} needs the open_clip package: "

@@ -148,8 +148,9 @@ def appearance_embedder(captioner: str, text_encoder: TextEncoder) -> CaptionEmb
     if captioner == "builtin":
         return CaptionEmbedder(text_encoder)
     if captioner == "vlm":
-        from simsplat_core.language.appearance.vlm_captioner import VlmCaptioner
-        from simsplat_core.vlm import OpenAIChatClient, OpenAIChatConfig
+        # import cycle at module level: vlm_captioner -> query_parse -> language.appearance -> embedders
+        from simsplat_core.language.appearance.vlm_captioner import VlmCaptioner  # noqa: PLC0415
+        from simsplat_core.vlm import OpenAIChatClient, OpenAIChatConfig  # noqa: PLC0415
 
         return CaptionEmbedder(text_encoder, VlmCaptioner(OpenAIChatClient(OpenAIChatConfig.from_env())),
                                per_view=False)

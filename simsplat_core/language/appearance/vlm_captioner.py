@@ -37,7 +37,8 @@ PROMPTS: dict[str, str] = {
     "pedestrian": "Describe the person in the image as one short noun phrase with the colours of their top "
                   "and trousers, like 'a pedestrian in a red top and blue trousers'.",
 }
-DEFAULT_PROMPT = "Describe the object in the image as one short noun phrase with its colour, like 'an orange traffic cone'."
+DEFAULT_PROMPT = ("Describe the object in the image as one short noun phrase with its colour, "
+                  "like 'an orange traffic cone'.")
 #: Grey that replaces pixels outside the object's mask.
 MASK_GREY = 0.5
 

@@ -18,7 +18,7 @@ TINY_SEED = 0
 TINY_WORLD = WorldConfig(num_frames=4, width=96, height=64, test_every=4)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _tiny() -> tuple[SceneLog, SceneGraph]:
     log = generate_log(TINY_SEED, TINY_WORLD)
     config = ReconstructionConfig()

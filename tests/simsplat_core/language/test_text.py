@@ -90,7 +90,9 @@ def test_registry_builds_registered_encoders_and_names_unknown_ones() -> None:
         make_text_encoder("no-such-encoder")
 
 
-@pytest.mark.parametrize(("name", "module"), [("clip", "open_clip"), ("sentence-transformers", "sentence_transformers")])
+@pytest.mark.parametrize(
+    ("name", "module"), [("clip", "open_clip"), ("sentence-transformers", "sentence_transformers")]
+)
 def test_optional_encoders_explain_what_is_missing(name: str, module: str) -> None:
     if importlib.util.find_spec(module) is not None:
         pytest.skip(f"{module} is installed")

@@ -25,7 +25,7 @@ class Scene:
         return (self.means, self.quats, self.scales, self.opacities, self.colors, self.viewmats, self.Ks,
                 self.width, self.height)
 
-    def with_grad(self) -> "Scene":
+    def with_grad(self) -> Scene:
         """Copy whose Gaussian parameters are fresh leaves requiring grad."""
         leaf = lambda t: t.detach().clone().requires_grad_(True)  # noqa: E731
         return replace(self, means=leaf(self.means), quats=leaf(self.quats), scales=leaf(self.scales),

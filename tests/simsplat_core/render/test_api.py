@@ -10,8 +10,7 @@ import types
 import pytest
 import torch
 
-from simsplat_core.render import RasterMeta, rasterization, select_backend
-from simsplat_core.render import gsplat_backend
+from simsplat_core.render import RasterMeta, gsplat_backend, rasterization, select_backend
 
 from .scenes import random_scene
 

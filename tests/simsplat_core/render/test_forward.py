@@ -63,7 +63,8 @@ def test_expected_depth_channel_is_consistent() -> None:
     covered = alpha[..., 0] > 0.5
     assert covered.any()
     z = scene.means[:, 2]
-    assert bool((depth[..., 0][covered] >= z.min() - 1.0).all()) and bool((depth[..., 0][covered] <= z.max() + 1.0).all())
+    assert bool((depth[..., 0][covered] >= z.min() - 1.0).all())
+    assert bool((depth[..., 0][covered] <= z.max() + 1.0).all())
     assert bool((depth[alpha == 0] == 0).all())  # empty pixels: 0 expected depth, background ignored
 
 

@@ -99,7 +99,7 @@ def test_prune_and_reset_opacity() -> None:
     prune(node, opt, mask)
     _check_consistent(node, opt)
     after = _snapshot(node, opt)
-    for name, (value, m1, m2) in before.items():
+    for name, (value, _m1, m2) in before.items():
         torch.testing.assert_close(after[name][0], value[~mask])
         torch.testing.assert_close(after[name][2], m2[~mask])
     reset_opacity(node, opt, 0.01)

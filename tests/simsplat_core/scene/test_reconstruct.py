@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 import torch
 
-from simsplat_core.scene.image_metrics import psnr
 from simsplat_core.scene import (
     DensifyConfig,
     NonRigidNode,
@@ -18,6 +17,7 @@ from simsplat_core.scene import (
     reconstruct,
 )
 from simsplat_core.scene.evaluate import render_views, summarise
+from simsplat_core.scene.image_metrics import psnr
 from simsplat_core.scene.init import initial_graph
 from simsplat_core.scene.views import view_batches
 from simsplat_core.types import SceneLog

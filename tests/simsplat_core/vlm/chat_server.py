@@ -47,7 +47,7 @@ class ChatServer:
     reply: Reply = field(default_factory=lambda: text_reply("a red car"))
     requests: list[dict[str, Any]] = field(default_factory=list)
 
-    def start(self) -> "ChatServer":
+    def start(self) -> ChatServer:
         server = self
 
         class Handler(BaseHTTPRequestHandler):

@@ -9,7 +9,15 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from simsplat_core.vlm import ENV_API_KEY, ENV_MODEL, ENV_URL, OpenAIChatClient, OpenAIChatConfig, VLMError, user_message
+from simsplat_core.vlm import (
+    ENV_API_KEY,
+    ENV_MODEL,
+    ENV_URL,
+    OpenAIChatClient,
+    OpenAIChatConfig,
+    VLMError,
+    user_message,
+)
 from tests.simsplat_core.vlm.chat_server import ChatServer, images_of, text_reply
 
 SECRET = "sk-test-0123456789-do-not-log"

@@ -142,19 +142,34 @@ def test_candidates_cover_appearance_motion_location() -> None:
 
 
 def test_plausible_readings_widen_matching() -> None:
-    stopping = ObjectFacts("s", "vehicle", 1, "sedan", "red", None, None, voc.STOPPING, voc.IN_FRONT_OF_EGO,
-                           voc.AT_THE_INTERSECTION, motions=frozenset({voc.STOPPING, voc.SLOWING_DOWN, voc.GOING_STRAIGHT}),
-                           sectors=frozenset({voc.IN_FRONT_OF_EGO, voc.LEFT_OF_EGO}),
-                           contexts=frozenset({voc.AT_THE_INTERSECTION, voc.IN_THE_ONCOMING_LANE}))
+    stopping = ObjectFacts(
+        "s",
+        "vehicle",
+        1,
+        "sedan",
+        "red",
+        None,
+        None,
+        voc.STOPPING,
+        voc.IN_FRONT_OF_EGO,
+        voc.AT_THE_INTERSECTION,
+        motions=frozenset({voc.STOPPING, voc.SLOWING_DOWN, voc.GOING_STRAIGHT}),
+        sectors=frozenset({voc.IN_FRONT_OF_EGO, voc.LEFT_OF_EGO}),
+        contexts=frozenset({voc.AT_THE_INTERSECTION, voc.IN_THE_ONCOMING_LANE}),
+    )
     straight = Description("vehicle", color="red", motion=voc.GOING_STRAIGHT)
     assert not straight.matches(stopping) and straight.matches(stopping, lenient=True)
     left = Description("vehicle", sector=voc.LEFT_OF_EGO)
     assert not left.matches(stopping) and left.matches(stopping, lenient=True)
     assert not Description("vehicle", context=voc.BY_THE_CURB).matches(stopping, lenient=True)
     # a description that fits one object by its labels but another one by a plausible reading is not unique
-    other = dataclasses.replace(stopping, object_id="t", motion=voc.GOING_STRAIGHT, motions=frozenset({voc.GOING_STRAIGHT}))
+    other = dataclasses.replace(
+        stopping, object_id="t", motion=voc.GOING_STRAIGHT, motions=frozenset({voc.GOING_STRAIGHT})
+    )
     assert unambiguous_targets(straight, [stopping, other]) is None
-    assert [f.object_id for f in unambiguous_targets(Description("vehicle", motion=voc.STOPPING), [stopping, other])] == ["s"]
+    assert [
+        f.object_id for f in unambiguous_targets(Description("vehicle", motion=voc.STOPPING), [stopping, other])
+    ] == ["s"]
 
 
 def test_readings_of_a_real_log_contain_the_labels(logs: list[SceneLog], facts) -> None:

@@ -68,7 +68,9 @@ def test_caption_from_reply_fills_the_captioners_fields() -> None:
     car = caption_from_reply("A dark grey SUV.", "vehicle")
     assert (car.text, car.subtype, car.colors, car.upper_color) == ("a dark grey SUV", "SUV", ("gray",), None)
     person = caption_from_reply("a pedestrian in a red shirt and blue jeans", "pedestrian")
-    assert (person.upper_color, person.lower_color, person.colors, person.subtype) == ("red", "blue", ("red", "blue"), "adult")
+    assert (person.upper_color, person.lower_color, person.colors, person.subtype) == (
+        "red", "blue", ("red", "blue"), "adult"
+    )
     assert caption_from_reply("a small child in a yellow top", "pedestrian").subtype == "child"
     with pytest.raises(ValueError, match="no caption"):
         caption_from_reply("''", "vehicle")
@@ -88,7 +90,9 @@ def test_track_caption_asks_once_with_the_largest_views(server: ChatServer) -> N
     assert isinstance(captioner, AppearanceCaptioner) and "stand-in" in captioner.name
     crops = _crops("suv", "red")
     caption = captioner.describe_track(crops[::-1])
-    assert (caption.text, caption.colors, caption.subtype, caption.category) == ("a red SUV", ("red",), "SUV", "vehicle")
+    assert (caption.text, caption.colors, caption.subtype, caption.category) == (
+        "a red SUV", ("red",), "SUV", "vehicle"
+    )
     (request,) = server.requests
     images = images_of(request["body"])
     assert len(images) == 2 and images[0].shape[0] > images[1].shape[0]  # the two largest, largest first
