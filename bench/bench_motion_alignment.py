@@ -56,7 +56,10 @@ def e5_latency(repeats: int = 5) -> dict[str, float]:
         t0 = time.perf_counter()
         encoder.encode_passages(texts)
         batch.append(time.perf_counter() - t0)
-    return {"single_query_s": round(statistics.median(single), 4), "batch64_passages_s": round(statistics.median(batch), 4)}
+    return {
+        "single_query_s": round(statistics.median(single), 4),
+        "batch64_passages_s": round(statistics.median(batch), 4),
+    }
 
 
 def synthetic_logs(seeds: range) -> list:
@@ -100,7 +103,11 @@ def main() -> None:
     }
     logger.info("labeller agreement: %s", result["labeller_agreement"])
 
-    train = agreement_logs[: args.train_seeds] if args.train_seeds <= args.agreement_seeds else synthetic_logs(range(args.train_seeds))
+    train = (
+        agreement_logs[: args.train_seeds]
+        if args.train_seeds <= args.agreement_seeds
+        else synthetic_logs(range(args.train_seeds))
+    )
     test = synthetic_logs(range(1000, 1000 + args.test_seeds))
     encoder = default_text_encoder()
     config = MotionAlignerConfig()
@@ -143,8 +150,14 @@ def main() -> None:
         result["grounding_av2"] = {
             "log": args.av2.name,
             "zero_shot_trained_on_synthetic": rounded(zero_shot.summary()),
-            "in_store_trained_with_av2": {**rounded(in_store.summary()), "fit_s": round(in_store_aligner.train_seconds, 2)},
-            "held_out_half_trained_with_other_half": {**rounded(held_out.summary()), "fit_s": round(with_av2.train_seconds, 2)},
+            "in_store_trained_with_av2": {
+                **rounded(in_store.summary()),
+                "fit_s": round(in_store_aligner.train_seconds, 2),
+            },
+            "held_out_half_trained_with_other_half": {
+                **rounded(held_out.summary()),
+                "fit_s": round(with_av2.train_seconds, 2),
+            },
             "per_class_zero_shot": per_class(zero_shot),
             "per_class_in_store": per_class(in_store),
             "per_class_held_out_half": per_class(held_out),

@@ -64,6 +64,9 @@ class RealismConfig:
         position_noise_m: std of the per-frame jitter of box centres (x, y), metres.
         heading_noise_rad: std of the per-frame jitter of box headings, radians.
         drop_rate: share of a track's interior frames dropped (annotation gaps).
+        lateral_offset_m: std of a per-track sideways offset of the box centres (along the normal of the
+            box heading, frame by frame): real drivers are not centred on the map's lane centre lines
+            (synthetic ones are, exactly), so without it a car off the centre line looks parked.
     """
 
     copies: int = 1
@@ -71,6 +74,7 @@ class RealismConfig:
     position_noise_m: float = 0.05
     heading_noise_rad: float = 0.02
     drop_rate: float = 0.1
+    lateral_offset_m: float = 0.0
 
 
 def realistic_log(log: SceneLog, config: RealismConfig, rng: np.random.Generator, copy: int = 0) -> SceneLog:
@@ -86,8 +90,11 @@ def realistic_log(log: SceneLog, config: RealismConfig, rng: np.random.Generator
         if n > 4 and config.drop_rate > 0:
             keep[1:-1] = rng.random(n - 2) >= config.drop_rate
         center = np.array(tr.center, dtype=np.float64)
+        heading = np.asarray(tr.heading, dtype=np.float64)
+        offset = rng.normal(0.0, config.lateral_offset_m) if config.lateral_offset_m > 0 else 0.0
+        center[:, :2] += offset * np.stack([-np.sin(heading), np.cos(heading)], axis=1)  # [n, 2] left normal
         center[:, :2] += rng.normal(0.0, config.position_noise_m, size=(n, 2))
-        heading = np.asarray(tr.heading, dtype=np.float64) + rng.normal(0.0, config.heading_noise_rad, size=n)
+        heading = heading + rng.normal(0.0, config.heading_noise_rad, size=n)
         tracks.append(dataclasses.replace(
             tr, frame_idx=tr.frame_idx[keep], center=center[keep], size=tr.size[keep], heading=heading[keep],
             speed=tr.speed[keep] / stretch, visible=tr.visible[keep]))

@@ -50,6 +50,7 @@ import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import torch
@@ -102,7 +103,7 @@ class MotionAlignerConfig:
         return json.dumps(dataclasses.asdict(self), sort_keys=True)
 
     @classmethod
-    def from_json(cls, text: str) -> "MotionAlignerConfig":
+    def from_json(cls, text: str) -> MotionAlignerConfig:
         data = json.loads(text)
         samples = data.pop("samples")
         realism = samples.pop("realism", None)
@@ -171,14 +172,15 @@ class MotionAlignerState:
             "encoder_name": self.encoder_name,
             "classes": {k: list(v) for k, v in self.classes.items()},
         }
-        arrays = {f"prototypes/{k}": v for k, v in self.prototypes.items()}
+        arrays: dict[str, Any] = {"meta": np.array(json.dumps(meta))}
+        arrays.update({f"prototypes/{k}": v for k, v in self.prototypes.items()})
         arrays.update({f"weights/{k}": v for k, v in self.weights.items()})
         buffer = io.BytesIO()
-        np.savez(buffer, meta=np.array(json.dumps(meta)), **arrays)
+        np.savez(buffer, **arrays)
         Path(path).write_bytes(buffer.getvalue())
 
     @classmethod
-    def load(cls, path: str | Path) -> "MotionAlignerState":
+    def load(cls, path: str | Path) -> MotionAlignerState:
         with np.load(Path(path), allow_pickle=False) as data:
             meta = json.loads(str(data["meta"]))
             if meta["version"] != STATE_VERSION:
@@ -281,7 +283,9 @@ def alignment_loss(
 
 
 def _tensors(samples: TrainingSamples) -> dict[str, torch.Tensor]:
-    return {name: torch.as_tensor(getattr(samples, name)) for name in ("seq", "glob", "kind", "motion", "sector", "context")}
+    return {
+        name: torch.as_tensor(getattr(samples, name)) for name in ("seq", "glob", "kind", "motion", "sector", "context")
+    }
 
 
 class MotionAligner:
@@ -312,7 +316,7 @@ class MotionAligner:
         logs: Sequence[SceneLog],
         config: MotionAlignerConfig | None = None,
         encoder: TextEncoder | None = None,
-    ) -> "MotionAligner":
+    ) -> MotionAligner:
         """Auto-label ``logs``, build samples and train; deterministic for a given ``config.seed``."""
         config = config or MotionAlignerConfig()
         encoder = encoder or default_text_encoder()
@@ -448,7 +452,7 @@ class MotionAligner:
         )
 
     @classmethod
-    def from_state(cls, state: MotionAlignerState) -> "MotionAligner":
+    def from_state(cls, state: MotionAlignerState) -> MotionAligner:
         config = MotionAlignerConfig.from_json(state.config_json)
         codebooks = MotionCodebooks.from_arrays(state.encoder_name, state.classes, state.prototypes)
         network = cls._new_network(config, codebooks)
@@ -459,5 +463,5 @@ class MotionAligner:
         self.state().save(path)
 
     @classmethod
-    def load(cls, path: str | Path) -> "MotionAligner":
+    def load(cls, path: str | Path) -> MotionAligner:
         return cls.from_state(MotionAlignerState.load(path))

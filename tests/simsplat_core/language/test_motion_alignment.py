@@ -54,7 +54,9 @@ def test_training_reduces_the_loss(aligner: MotionAligner, held_out_log) -> None
     first, last = aligner.history[0], aligner.history[-1]
     assert last["total"] < 0.3 * first["total"]
     assert last["mot"] < first["mot"] and last["loc"] < first["loc"]
-    untrained = MotionAligner(aligner.config, aligner.codebooks, MotionAligner._new_network(aligner.config, aligner.codebooks))
+    untrained = MotionAligner(
+        aligner.config, aligner.codebooks, MotionAligner._new_network(aligner.config, aligner.codebooks)
+    )
     assert aligner.evaluate_loss([held_out_log])["total"] < 0.5 * untrained.evaluate_loss([held_out_log])["total"]
 
 
