@@ -33,6 +33,7 @@ from storage.logs import (
     manifest_bytes,
     read_log_manifest,
     read_scene_log,
+    require_log_manifest,
     scene_log_key,
     write_scene_log,
 )
@@ -116,6 +117,7 @@ __all__ = [
     "read_exr_header",
     "read_marker",
     "read_scene_log",
+    "require_log_manifest",
     "render_channels",
     "scene_log_key",
     "schema_from_metadata",

@@ -125,6 +125,20 @@ def read_log_manifest(store: ArtifactStore, seq_id: str) -> dict | None:
     return read_marker(store, log_dir(seq_id))
 
 
+def require_log_manifest(store: ArtifactStore, seq_id: str, purpose: str = "") -> dict:
+    """``read_log_manifest`` of a log that must be there.
+
+    Raises:
+        FileNotFoundError: no complete log ``seq_id`` (naming its place and, when given, ``purpose``:
+            "to reconstruct", "to align", ...).
+    """
+    manifest = read_log_manifest(store, seq_id)
+    if manifest is None:
+        why = f" {purpose}" if purpose else ""
+        raise FileNotFoundError(f"{store.uri(log_dir(seq_id))}: no complete scene log{why}")
+    return manifest
+
+
 def write_scene_log(
     store: ArtifactStore, log: SceneLog, *, overwrite: bool = False, provenance: dict | None = None
 ) -> WrittenLog:

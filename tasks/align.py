@@ -26,9 +26,9 @@ from storage import (
     canonical,
     config_settings,
     content_key,
-    read_log_manifest,
     read_scene,
     read_scene_log,
+    require_log_manifest,
 )
 from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
 from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
@@ -82,10 +82,7 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
     store = ArtifactStore(store_root)
     keys = []
     for seq_id in seq_ids:
-        manifest = read_log_manifest(store, seq_id)
-        if manifest is None:
-            raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log to train the aligner on")
-        keys.append(manifest["key"])
+        keys.append(require_log_manifest(store, seq_id, "to train the aligner on")["key"])
     encoder = default_text_encoder()
     key = aligner_hash(keys, config, encoder.name)
     existing = read_aligner_manifest(store, key)
@@ -148,10 +145,7 @@ def language_hash(model_hash: str, scene_hash: str, config: AlignmentConfig, enc
 
 
 def _log_key(store: ArtifactStore, seq_id: str) -> str:
-    manifest = read_log_manifest(store, seq_id)
-    if manifest is None:
-        raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log to align")
-    return str(manifest["key"])
+    return str(require_log_manifest(store, seq_id, "to align")["key"])
 
 
 @task(name="align-scene", retries=0, cache_policy=NO_CACHE)

@@ -25,6 +25,7 @@ from storage import (
     manifest_bytes,
     read_log_manifest,
     read_scene_log,
+    require_log_manifest,
     write_scene_log,
 )
 
@@ -76,9 +77,7 @@ def stored_log(store_root: str, seq_id: str) -> StoredLog:
         FileNotFoundError: no complete log ``seq_id`` in the store (named).
     """
     store = ArtifactStore(store_root)
-    manifest = read_log_manifest(store, seq_id)
-    if manifest is None:
-        raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log")
+    manifest = require_log_manifest(store, seq_id)
     recorded = manifest.get("provenance", {}).get("summary")
     summary = LogSummary(**recorded) if recorded else summarize_log(read_scene_log(store, seq_id, load_images=False))
     return StoredLog(summary, f"logs/{seq_id}", manifest_bytes(manifest), 0.0, True)

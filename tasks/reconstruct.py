@@ -17,7 +17,7 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.scene import ReconstructionConfig, reconstruct
-from storage import ArtifactStore, canonical, config_settings, content_key, read_log_manifest, read_scene_log
+from storage import ArtifactStore, canonical, config_settings, content_key, read_scene_log, require_log_manifest
 from storage.scenes import (
     SCENE_FORMAT_VERSION,
     metrics_from_json,
@@ -75,9 +75,7 @@ def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig
         FileNotFoundError: the store holds no complete log ``seq_id``.
     """
     store = ArtifactStore(store_root)
-    log_manifest = read_log_manifest(store, seq_id)
-    if log_manifest is None:
-        raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log to reconstruct")
+    log_manifest = require_log_manifest(store, seq_id, "to reconstruct")
     key = scene_hash(log_manifest["key"], config)
     relpath = scene_dir(seq_id, key)
     existing = read_scene_manifest(store, seq_id, key)

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from storage import ArtifactStore, read_log_manifest
+from storage import ArtifactStore, require_log_manifest
 
 #: The log source whose ground truth the grounding benchmark is built from.
 SYNTHETIC_SOURCE = "synthetic"
@@ -71,9 +71,7 @@ def plan_stages(store_root: str, seq_ids: list[str]) -> list[LogStages]:
     store = ArtifactStore(store_root)
     plans = []
     for seq_id in seq_ids:
-        manifest = read_log_manifest(store, seq_id)
-        if manifest is None:
-            raise FileNotFoundError(f"{store.uri(f'logs/{seq_id}')}: no complete scene log")
+        manifest = require_log_manifest(store, seq_id)
         images = int(manifest.get("images", {}).get("count", 0))
         plans.append(decide_stages(seq_id, str(manifest.get("source", "")), images))
     return plans

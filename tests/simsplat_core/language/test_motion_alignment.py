@@ -154,6 +154,24 @@ def test_realistic_copy_stretches_time_jitters_and_thins_tracks(train_logs) -> N
         assert np.allclose(b.speed, a.speed[rows] / 2.0)
 
 
+def test_realistic_copy_moves_each_track_sideways_off_its_lane_centre(train_logs) -> None:
+    log = train_logs[0]
+    config = RealismConfig(time_stretch=(1.0, 1.0), position_noise_m=0.0, heading_noise_rad=0.0, drop_rate=0.0,
+                           lateral_offset_m=0.8)
+    real = realistic_log(log, config, np.random.default_rng(3))
+    offsets = []
+    for a, b in zip(log.tracks, real.tracks):
+        left = np.stack([-np.sin(a.heading), np.cos(a.heading)], axis=1)  # [T, 2] left normal of the box
+        shift = b.center[:, :2] - a.center[:, :2]  # [T, 2]
+        along = np.einsum("ij,ij->i", shift, np.stack([np.cos(a.heading), np.sin(a.heading)], axis=1))
+        assert np.allclose(along, 0.0, atol=1e-9)  # sideways only...
+        sideways = np.einsum("ij,ij->i", shift, left)
+        assert np.allclose(sideways, sideways[0], atol=1e-9)  # ...by one offset per track
+        offsets.append(sideways[0])
+    assert len(set(np.round(offsets, 6))) == len(offsets)  # drawn per track
+    assert 0.3 < np.std(offsets) < 1.6
+
+
 def test_realism_adds_samples_for_synthetic_logs_only(train_logs, encoder) -> None:
     books = MotionCodebooks.build(encoder)
     config = MotionAlignerConfig()
