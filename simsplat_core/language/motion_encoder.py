@@ -29,7 +29,13 @@ import torch
 from torch import nn
 
 from simsplat_core.scenario.map_context import MapContext
-from simsplat_core.scenario.trajectory import ObjectTrajectory, ego_yaw, rotate_to_ego, to_ego_frame
+from simsplat_core.scenario.trajectory import (
+    ObjectTrajectory,
+    ego_yaw,
+    resample_series,
+    rotate_to_ego,
+    to_ego_frame,
+)
 
 SEQ_CHANNELS: tuple[str, ...] = (
     "ego_x", "ego_y", "ego_cos_h", "ego_sin_h", "ego_vx", "ego_vy",
@@ -86,13 +92,6 @@ def _map_channels(traj: ObjectTrajectory, clip_m: float) -> np.ndarray:
     ).astype(np.float64)
 
 
-def _resample(t: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray:
-    """``[L, C]`` linear interpolation of ``[T, C]`` ``values`` observed at ``t`` ``[T]``, at times ``at`` ``[L]``."""
-    if len(t) == 1:
-        return np.repeat(values, len(at), axis=0)
-    return np.stack([np.interp(at, t, values[:, c]) for c in range(values.shape[1])], axis=1)
-
-
 def trajectory_inputs(
     traj: ObjectTrajectory,
     ego_poses: np.ndarray,
@@ -129,7 +128,7 @@ def trajectory_inputs(
         axis=1,
     )  # [T, C - 1]
     at = np.linspace(traj.t[0], traj.t[-1], config.steps)
-    seq = _resample(traj.t, per_row, at)
+    seq = resample_series(traj.t, per_row, at)
     gap = np.abs(at[:, None] - traj.t[None, :]).min(axis=1)
     mask = (gap <= config.max_gap_s).astype(np.float64)
     seq = np.concatenate([seq * mask[:, None], mask[:, None]], axis=1)
