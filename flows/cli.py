@@ -86,9 +86,10 @@ def _world_config(frames: int, width: int, height: int):
     return WorldConfig(num_frames=frames, width=width, height=height)
 
 
-def _print_stages(stages) -> None:
-    """The stages each log skipped, and why (nothing when every log went through every stage)."""
-    skipped = [(p.seq_id, stage, reason) for p in stages for stage, reason in p.skipped().items()]
+def _print_stages(stages, only: tuple[str, ...] | None = None) -> None:
+    """The stages (``only`` those, when given) each log skipped, and why (nothing when none was skipped)."""
+    skipped = [(p.seq_id, stage, reason) for p in stages
+               for stage, reason in (p.skipped(only) if only else p.skipped()).items()]
     if not skipped:
         return
     table = Table(title="Stages skipped")
@@ -193,7 +194,7 @@ def align_command(
         raise typer.BadParameter(str(exc), param_hint="--seq") from exc
     result = _run_flow(align_flow, runner, workers, store_root=store, seq_ids=list(seq) if seq else None,
                        alignment=alignment)
-    _print_stages(result.stages)
+    _print_stages(result.stages, ("reconstruct",))
     _print_language(result.aligner, result.language)
 
 
@@ -221,16 +222,15 @@ def reconstruct(
 ) -> None:
     """Reconstruct stored logs into scene-graph Gaussian scenes under STORE/scenes/<seq_id>/<scene_hash>/."""
     from flows.pipeline import reconstruct_flow, reconstruction_config
-    from storage import ArtifactStore, list_logs
+    from tasks.stages import plan_stages, resolve_seq_ids
 
-    available = list_logs(ArtifactStore(store))
-    seq_ids = list(seq) if seq else available
-    unknown = [s for s in seq_ids if s not in available]
-    if unknown or not seq_ids:
-        raise typer.BadParameter(f"no complete log {unknown or ''} in {store}/logs; available: {available}",
-                                 param_hint="--seq")
+    try:
+        seq_ids = resolve_seq_ids(store, list(seq) if seq else None)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--seq") from exc
     scenes = _run_flow(reconstruct_flow, runner, workers, store_root=store, seq_ids=seq_ids,
                        config=reconstruction_config(iterations))
+    _print_stages(plan_stages(store, seq_ids), ("reconstruct",))
     _print_scenes(scenes)
 
 

@@ -19,13 +19,13 @@ from simsplat_core.language.motion_training import MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
-from storage import ArtifactStore, list_logs, list_scenes
+from storage import ArtifactStore, list_scenes
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.reconstruct import StoredScene, reconstruct_scene
-from tasks.stages import LogStages, plan_stages
+from tasks.stages import STAGES, LogStages, decide_stages, plan_stages, resolve_seq_ids
 
 logger = logging.getLogger(__name__)
 
@@ -71,10 +71,14 @@ def generate_logs(store_root: str, seeds: list[int], config: WorldConfig) -> lis
     return logs
 
 
-def _publish_stages_table(plans: list[LogStages]) -> None:
+def _report_stages(plans: list[LogStages], stages: tuple[str, ...] = STAGES) -> None:
+    """Log the ``stages`` (those this flow runs) each log skips, and publish them as the stages table."""
+    for plan in plans:
+        for stage, reason in plan.skipped(stages).items():
+            logger.info("%s: %s skipped: %s", plan.seq_id, stage, reason)
     rows = [{"seq_id": p.seq_id, "source": p.source, "images": p.images,
-             "reconstruct": f"skipped: {p.skip_reconstruct}" if p.skip_reconstruct else "yes",
-             "align": "yes", "evaluate": f"skipped: {p.skip_evaluate}" if p.skip_evaluate else "yes"}
+             **{stage: f"skipped: {reason}" if reason else "yes"
+                for stage, reason in p.reasons().items() if stage in stages}}
             for p in plans]
     create_table_artifact(rows, key="stages", description="Stages per stored log (and why one is skipped)")
 
@@ -86,17 +90,11 @@ def store_logs(store_root: str, generated: list[StoredLog]) -> tuple[list[Stored
     Raises:
         ValueError: the store holds no log (the message says how to add one).
     """
-    seq_ids = list_logs(ArtifactStore(store_root))
-    if not seq_ids:
-        raise ValueError(f"no driving log in {store_root}/logs: generate synthetic ones (simsplat run --sequences N) "
-                         "or ingest real ones (simsplat ingest av2 / waymo-frame)")
+    seq_ids = resolve_seq_ids(store_root)
     produced = {s.summary.seq_id: s for s in generated}
     logs = [produced.get(seq_id) or stored_log(store_root, seq_id) for seq_id in seq_ids]
-    plans = plan_stages(store_root, seq_ids)
-    for plan in plans:
-        for stage, reason in plan.skipped().items():
-            logger.info("%s: %s skipped: %s", plan.seq_id, stage, reason)
-    _publish_stages_table(plans)
+    plans = [decide_stages(s.summary.seq_id, s.summary.source, s.summary.num_images) for s in logs]
+    _report_stages(plans)
     return logs, plans
 
 
@@ -317,14 +315,8 @@ def plan_alignment(store_root: str, seq_ids: list[str] | None = None) -> Alignme
             reconstructed scene (named, with the command that makes one).
     """
     store = ArtifactStore(store_root)
-    every = list_logs(store)
-    if not every:
-        raise ValueError(f"no driving log in {store_root}/logs to align")
-    chosen = list(seq_ids) if seq_ids else every
-    unknown = [s for s in chosen if s not in every]
-    if unknown:
-        raise ValueError(f"no complete log {unknown} in {store_root}/logs; available: {every}")
-    stages = plan_stages(store_root, chosen)
+    every = resolve_seq_ids(store_root)
+    stages = plan_stages(store_root, resolve_seq_ids(store_root, seq_ids))
     targets: list[tuple[str, str | None]] = []
     for plan in stages:
         if not plan.reconstructs:
@@ -359,11 +351,7 @@ def align_flow(store_root: str, seq_ids: list[str] | None = None, alignment: Ali
         ValueError: see ``plan_alignment``.
     """
     plan = plan_alignment(store_root, seq_ids)
-    for stages in plan.stages:
-        if not stages.reconstructs:
-            logger.info("%s: no reconstruction (%s): aligned from its tracks and map", stages.seq_id,
-                        stages.skip_reconstruct)
-    _publish_stages_table(plan.stages)
+    _report_stages(plan.stages, ("reconstruct",))  # a log without a reconstruction is aligned from its tracks
     model, language = align_scenes(store_root, plan.targets, plan.training_seq_ids, alignment or AlignmentConfig(),
                                    aligner)
     return AlignResult(model, language, plan.stages)
@@ -374,10 +362,7 @@ def reconstruct_flow(store_root: str, seq_ids: list[str], config: Reconstruction
     """Reconstruct stored logs (one task per sequence) into scene-graph Gaussian scenes; logs without
     camera images are skipped (logged and in the stages table: they cannot be reconstructed)."""
     plans = plan_stages(store_root, seq_ids)
-    for plan in plans:
-        if not plan.reconstructs:
-            logger.info("%s: reconstruct skipped: %s", plan.seq_id, plan.skip_reconstruct)
-    _publish_stages_table(plans)
+    _report_stages(plans, ("reconstruct",))
     return reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs], config)
 
 

@@ -29,7 +29,6 @@ CHROMATIC_PALETTE: tuple[NamedColor, ...] = (
     NamedColor("purple", (0.45, 0.2, 0.6)),
     NamedColor("pink", (0.95, 0.55, 0.7)),
 )
-ACHROMATIC_NAMES: tuple[str, ...] = ("black", "gray", "silver", "white")
 #: Representative display colours of the achromatic names (the synthetic world paints with them).
 ACHROMATIC_PALETTE: tuple[NamedColor, ...] = (
     NamedColor("black", (0.05, 0.05, 0.06)),
@@ -37,6 +36,7 @@ ACHROMATIC_PALETTE: tuple[NamedColor, ...] = (
     NamedColor("silver", (0.66, 0.68, 0.71)),
     NamedColor("white", (0.9, 0.9, 0.88)),
 )
+ACHROMATIC_NAMES: tuple[str, ...] = tuple(c.name for c in ACHROMATIC_PALETTE)
 COLOR_NAMES: tuple[str, ...] = ACHROMATIC_NAMES + tuple(c.name for c in CHROMATIC_PALETTE)
 #: The one table of colour name -> display RGB in ``[0, 1]`` (``world/palette.py`` paints with it).
 DISPLAY_RGB: dict[str, tuple[float, float, float]] = {c.name: c.rgb for c in ACHROMATIC_PALETTE + CHROMATIC_PALETTE}

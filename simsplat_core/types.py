@@ -36,6 +36,8 @@ MAP_KINDS: tuple[str, ...] = (
     "lane_marking",
 )
 SPLITS: tuple[str, ...] = ("train", "test")
+#: ``SceneLog.source`` of the procedural world's logs (the only ones with ground-truth captions and masks).
+SYNTHETIC_SOURCE = "synthetic"
 
 
 class LogValidationError(ValueError):

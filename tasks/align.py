@@ -188,8 +188,7 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash
         graph = SceneGraph.from_records(loaded.records)
     built = build_language_scene(graph, log, text_encoder=encoder, aligner=aligner, embedder=embedder, config=config,
                                  scene_hash=scene_hash or "")
-    fitted = built.graph if built.graph is not None else graph  # the graph with the fitted features
-    records = fitted.to_records(scene_id) if fitted is not None else None
+    records = built.graph.to_records(scene_id) if built.graph is not None else None  # with the fitted features
     provenance = {"scene_hash": scene_hash or "", "log_key": log_key, "model_hash": model_hash,
                   "version": LANGUAGE_VERSION, "config": canonical(dataclasses.asdict(config)),
                   "text_encoder": encoder.name, "embedder": embedder.name}

@@ -55,9 +55,9 @@ def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[]
     relpath = f"logs/{seq_id}"
     manifest = read_log_manifest(store, seq_id)
     provenance = (manifest or {}).get("provenance", {})
-    if provenance.get("producer_key") == key and "summary" in provenance:
+    if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
         logger.info("%s: already stored for producer key %s, skipping", seq_id, key[:12])
-        return StoredLog(LogSummary(**provenance["summary"]), relpath, manifest_bytes(manifest), 0.0, True)
+        return _already_stored(store, seq_id, manifest)
     started = time.perf_counter()
     log = produce()
     summary = summarize_log(log)
@@ -77,9 +77,18 @@ def stored_log(store_root: str, seq_id: str) -> StoredLog:
         FileNotFoundError: no complete log ``seq_id`` in the store (named).
     """
     store = ArtifactStore(store_root)
-    manifest = require_log_manifest(store, seq_id)
+    return _already_stored(store, seq_id, require_log_manifest(store, seq_id))
+
+
+def _already_stored(store: ArtifactStore, seq_id: str, manifest: dict) -> StoredLog:
+    """The ``StoredLog`` of a complete log from its manifest (summary recorded by the producer, else read
+    from the log without pixels, with the image count the manifest recorded)."""
     recorded = manifest.get("provenance", {}).get("summary")
-    summary = LogSummary(**recorded) if recorded else summarize_log(read_scene_log(store, seq_id, load_images=False))
+    if recorded:
+        summary = LogSummary(**recorded)
+    else:
+        read = summarize_log(read_scene_log(store, seq_id, load_images=False))
+        summary = dataclasses.replace(read, num_images=int(manifest.get("images", {}).get("count", 0)))
     return StoredLog(summary, f"logs/{seq_id}", manifest_bytes(manifest), 0.0, True)
 
 

@@ -16,10 +16,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from storage import ArtifactStore, require_log_manifest
+from simsplat_core.types import SYNTHETIC_SOURCE
+from storage import ArtifactStore, list_logs, require_log_manifest
 
-#: The log source whose ground truth the grounding benchmark is built from.
-SYNTHETIC_SOURCE = "synthetic"
+#: The per-log stages a flow may skip (alignment is never skipped: every log gets motion and location).
+STAGES: tuple[str, ...] = ("reconstruct", "evaluate")
 NO_IMAGES = "no camera images"
 NO_GROUND_TRUTH = "no ground-truth captions (real log)"
 
@@ -49,10 +50,13 @@ class LogStages:
     def evaluates(self) -> bool:
         return not self.skip_evaluate
 
-    def skipped(self) -> dict[str, str]:
-        """``stage -> reason`` of the stages this log skips."""
-        return {stage: reason for stage, reason in (("reconstruct", self.skip_reconstruct),
-                                                     ("evaluate", self.skip_evaluate)) if reason}
+    def reasons(self) -> dict[str, str]:
+        """``stage -> reason`` of every stage (``""``: the stage runs)."""
+        return {"reconstruct": self.skip_reconstruct, "evaluate": self.skip_evaluate}
+
+    def skipped(self, stages: tuple[str, ...] = STAGES) -> dict[str, str]:
+        """``stage -> reason`` of the stages among ``stages`` that this log skips."""
+        return {stage: reason for stage, reason in self.reasons().items() if reason and stage in stages}
 
 
 def decide_stages(seq_id: str, source: str, images: int) -> LogStages:
@@ -60,6 +64,24 @@ def decide_stages(seq_id: str, source: str, images: int) -> LogStages:
     skip_reconstruct = "" if images > 0 else NO_IMAGES
     skip_evaluate = "" if source == SYNTHETIC_SOURCE and images > 0 else (skip_reconstruct or NO_GROUND_TRUTH)
     return LogStages(seq_id, source, images, skip_reconstruct, skip_evaluate)
+
+
+def resolve_seq_ids(store_root: str, seq_ids: list[str] | None = None) -> list[str]:
+    """``seq_ids`` (default: every complete log in the store), checked against the store.
+
+    Raises:
+        ValueError: the store holds no log (saying how to add one), or a chosen log is not in it (naming
+            it and the available ones).
+    """
+    available = list_logs(ArtifactStore(store_root))
+    if not available:
+        raise ValueError(f"no driving log in {store_root}/logs: generate synthetic ones (simsplat run --sequences N) "
+                         "or ingest real ones (simsplat ingest av2 / waymo-frame)")
+    chosen = list(seq_ids) if seq_ids else available
+    unknown = [s for s in chosen if s not in available]
+    if unknown:
+        raise ValueError(f"no complete log {unknown} in {store_root}/logs; available: {available}")
+    return chosen
 
 
 def plan_stages(store_root: str, seq_ids: list[str]) -> list[LogStages]:

@@ -1,8 +1,7 @@
 """Language alignment and grounding (SIMSplat Sec. 3.2): the method only; its evaluation is ``simsplat_core.eval``.
 
 * ``text``: ``TextEncoder`` protocol, the offline E5 encoder, a registry (``make_text_encoder``).
-* ``vocabulary``: motion / location classes with prototype and query phrasings.
-* ``trajectory``, ``map_context``: object trajectories in ego frames and point queries against the road map.
+* (the behaviour vocabulary, trajectories and map context it builds on live in ``simsplat_core.scenario``)
 * ``motion_labels``: rule-based auto-labels from trajectories, ego poses and the map.
 * ``codebooks``, ``motion_encoder``, ``motion_dataset``, ``motion_training``: the trajectory encoder whose
   outputs are convex combinations of text prototypes (``MotionAligner``).

@@ -383,8 +383,10 @@ class FieldFitReport:
     * ``object_accuracy``: share of object pixels whose decoded feature is closest to their own node's
       ``f`` among all targets, or to a look-alike's (targets with cosine >= ``LOOK_ALIKE_COSINE``:
       two red sedans whose per-view captions mix slightly differently).
+    ``graph`` is a copy of the input graph holding the fitted features (the input is not changed).
     """
 
+    graph: SceneGraph = dataclasses.field(repr=False, compare=False)
     iterations: int
     seconds: float
     views: int
@@ -402,7 +404,6 @@ class FieldFitReport:
     object_accuracy_before: float
     object_accuracy_after: float
     node_features: dict[int, np.ndarray] = dataclasses.field(default_factory=dict, repr=False)
-    graph: SceneGraph | None = dataclasses.field(default=None, repr=False, compare=False)
 
     def summary(self, prefix: str = "fit_") -> dict[str, float]:
         """Flat numbers for reports (``node_features`` and ``graph`` left out)."""
@@ -613,6 +614,7 @@ def fit_feature_field(
     seconds = time.perf_counter() - t0
     nan = float("nan")
     report = FieldFitReport(
+        graph=store_background_latent(set_gaussian_features(graph, fitted), background),
         iterations=len(losses), seconds=seconds, views=len(views), eval_views=len(eval_v),
         loss_first=losses[0] if losses else nan, loss_last=losses[-1] if losses else nan,
         latent_mse_before=before["latent_mse"], latent_mse_after=after["latent_mse"],
@@ -621,7 +623,6 @@ def fit_feature_field(
         object_cosine_before=before["object_cosine"], object_cosine_after=after["object_cosine"],
         object_accuracy_before=before["object_accuracy"], object_accuracy_after=after["object_accuracy"],
         node_features=node_features,
-        graph=store_background_latent(set_gaussian_features(graph, fitted), background),
     )
     logger.info("feature field: %d steps on %d views in %.1f s; latent MSE %.4f -> %.4f, object cosine %.4f -> %.4f",
                 report.iterations, report.views, seconds, report.latent_mse_before, report.latent_mse_after,

@@ -22,13 +22,11 @@ from simsplat_core.language.motion_encoder import InputConfig, trajectory_inputs
 from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_trajectory
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.trajectory import AGENT_KINDS, ObjectTrajectory, log_trajectories
-from simsplat_core.types import SceneLog
+from simsplat_core.types import SYNTHETIC_SOURCE, SceneLog
 
 logger = logging.getLogger(__name__)
 
 _MIRROR = np.diag([1.0, -1.0, 1.0, 1.0])
-#: ``SceneLog.source`` of the procedural world's logs (the ones ``RealismConfig`` roughens).
-SYNTHETIC_SOURCE = "synthetic"
 
 
 def mirror_log(log: SceneLog) -> SceneLog:

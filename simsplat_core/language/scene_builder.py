@@ -329,7 +329,6 @@ def build_language_scene(
         fit = fit_feature_field(graph, views, node_latents, z_bg, config.fit_config(), autoencoder=autoencoder,
                                 node_targets={node_of[o]: object_feats[o] for o in fitted_ids},
                                 background_target=f_bg)
-        assert fit.graph is not None
         graph = fit.graph  # the input graph is not changed: the fitted features live in this copy
         metrics.update(fit.summary())
         # the field as rendered on each node's own pixels; the Gaussians' mean for nodes the fit views miss

@@ -14,19 +14,20 @@ import numpy as np
 
 from simsplat_core.geometry import invert_transform, yaw_of_rotation
 from simsplat_core.scenario.map_context import MapContext, MapFacts
+from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES, PEDESTRIAN, VEHICLE
 from simsplat_core.types import SceneLog, Track
 
-#: Agent kinds with a motion codebook.
-AGENT_KINDS: tuple[str, ...] = ("vehicle", "pedestrian")
+#: Agent kinds with a motion codebook (``VEHICLE``, ``PEDESTRIAN``: the order indexes training samples).
+AGENT_KINDS: tuple[str, ...] = tuple(MOTION_VOCABULARIES)
 
 
 def agent_kind(category: str) -> str | None:
     """Motion codebook of an object category: pedestrians walk; vehicles, cyclists and other movers drive;
     static objects and signs have none (``None``)."""
     if category == "pedestrian":
-        return "pedestrian"
+        return PEDESTRIAN
     if category in ("vehicle", "cyclist", "other"):
-        return "vehicle"
+        return VEHICLE
     return None
 
 

@@ -1,8 +1,10 @@
 """The behaviour vocabulary, spelled once: motion classes per agent kind, location sectors and map contexts.
 
-Every module that names a class (world captions, auto-labeller, query parser and lexicon, paraphrases,
-benchmarks) imports the constants below (``TURNING_LEFT``, ``PARKED``, ``LEFT_OF_EGO``, ...) or looks
-classes up in the vocabularies; none spells a class name again.
+The modules that name a class (auto-labeller, query parser and lexicon, scoring, paraphrases,
+benchmarks) import the constants below (``TURNING_LEFT``, ``PARKED``, ``LEFT_OF_EGO``, ...) or look
+classes up in the vocabularies; ``tests/simsplat_core/scenario/test_vocabulary.py`` fails when another
+module spells a class name. The world's captions and behaviour names are English of their own (a
+caption says "parked" as a word, not as a class) and are listed there as exempt.
 
 Every class has a stable name (used in labels, persisted states and tables), several *prototype*
 phrasings (encoded as E5 passages and averaged into the class prototype) and several *query*

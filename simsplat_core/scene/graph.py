@@ -206,11 +206,12 @@ class SceneGraph:
         node_id = node.node_id if node.node_id > 0 else max(taken) + 1
         if node_id in taken:
             raise ValueError(f"SceneGraph.with_node: node id {node_id} is taken")
+        own_poses = poses is None  # the node's own poses keep their learned refinement; new ones are final
         if poses is None:
             poses, present = node.poses, node.present if present is None else present
         track, axis_poses, mask = self._axis_track(poses, present, node_id)
         new = dataclasses.replace(node.to(self.device), node_id=node_id, poses=axis_poses, present=mask,
-                                  pose_deltas=None if track is not None else node.pose_deltas, track=track)
+                                  pose_deltas=node.pose_deltas if own_poses and track is None else None, track=track)
         return self._derived([*self.nodes, new], "with_node", node_id, _tensor_digest(new.poses, new.present),
                              _track_digest(track))
 

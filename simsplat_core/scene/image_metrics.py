@@ -1,24 +1,20 @@
-"""Image quality metrics (torch): PSNR, SSIM, their masked variants and the D-SSIM training loss.
+"""Image quality metrics of reconstructions (torch): PSNR, SSIM and their masked variants.
 
 Images are float tensors in ``[0, 1]`` laid out channels-last, ``[H, W, 3]`` or batched ``[B, H, W, 3]``
 (any channel count works). Conventions:
 
 * **PSNR** ``= 10 log10(1 / MSE)`` per image (data range 1). Batched inputs give one value per image.
-* **SSIM** (Wang et al. 2004) with an 11x11 Gaussian window (sigma 1.5), ``C1 = 0.01^2``,
-  ``C2 = 0.03^2``, statistics per channel. ``padding="valid"`` (the metric default) evaluates the map only
-  where the window fits inside the image, i.e. an ``[H - 10, W - 10]`` map, as scikit-image's
-  ``structural_similarity(gaussian_weights=True, sigma=1.5, use_sample_covariance=False)`` does.
-  ``padding="same"`` zero-pads (the 3DGS training convention) so every pixel gets a value.
+* **SSIM**: the kernel of :mod:`simsplat_core.scene.losses` (its window, constants and padding modes);
+  ``padding="valid"`` by default here, as scikit-image's ``structural_similarity(gaussian_weights=True,
+  sigma=1.5, use_sample_covariance=False)`` evaluates it.
 * **Masked PSNR**: MSE over the masked pixels only (all channels). **Masked SSIM**: mean of the
   ``"same"``-padded SSIM map over the masked pixels (the window still sees unmasked neighbours, which
   is what "SSIM of the object region" means in driving-scene papers). Both return ``nan`` for an
   empty mask.
-* **D-SSIM** loss ``= 1 - SSIM`` (``"same"`` padding, mean over the map).
 
 These score a reconstruction on held-out frames (:mod:`simsplat_core.scene.evaluate`, run by the trainer
 at checkpoints and at the end): validation belongs to the method it validates, so they live in
-``scene/`` beside the losses (:mod:`simsplat_core.scene.losses`, whose SSIM kernel they share), and the
-evaluation package ``eval/`` stays on top of the algorithms.
+``scene/`` beside the losses, and the evaluation package ``eval/`` stays on top of the algorithms.
 """
 
 from __future__ import annotations
@@ -28,19 +24,7 @@ import math
 import torch
 from torch import Tensor
 
-from simsplat_core.scene.losses import (
-    SSIM_C1,
-    SSIM_C2,
-    SSIM_SIGMA,
-    SSIM_WINDOW,
-    Padding,
-    batched,
-    check_pair,
-    dssim_loss,
-    gaussian_window,
-    psnr_from_mse,
-    ssim_map,
-)
+from simsplat_core.scene.losses import Padding, batched, check_pair, psnr_from_mse, ssim_map
 
 
 def mse(pred: Tensor, target: Tensor) -> Tensor:
@@ -97,19 +81,4 @@ def masked_ssim(pred: Tensor, target: Tensor, mask: Tensor) -> Tensor:
     return out[0] if squeeze else out
 
 
-__all__ = [
-    "SSIM_C1",
-    "SSIM_C2",
-    "SSIM_SIGMA",
-    "SSIM_WINDOW",
-    "Padding",
-    "dssim_loss",
-    "gaussian_window",
-    "masked_psnr",
-    "masked_ssim",
-    "mse",
-    "psnr",
-    "psnr_from_mse",
-    "ssim",
-    "ssim_map",
-]
+__all__ = ["masked_psnr", "masked_ssim", "mse", "psnr", "ssim"]

@@ -138,12 +138,6 @@ def train_step(graph: SceneGraph, optimizer: torch.optim.Optimizer, strategy: De
     return float(loss.detach()), float(mse)
 
 
-def freeze(graph: SceneGraph) -> SceneGraph:
-    """A copy of a trained graph with every learnable tensor detached (no grad, no optimizer references);
-    ``graph`` is not changed."""
-    return graph.detached()
-
-
 def _add_pose_refinement(graph: SceneGraph) -> None:
     """Zero learnable pose refinements on the moving object nodes of a graph the trainer owns (in place)."""
     for node in graph.object_nodes:
@@ -210,7 +204,7 @@ def _reconstruct(log: SceneLog, config: ReconstructionConfig, progress: Progress
         if progress is not None and (step % config.progress_every == 0 or step == config.iterations - 1
                                      or "psnr_test" in report):
             progress(step + 1, config.iterations, report)
-    graph = freeze(graph)
+    graph = graph.detached()  # no grad, no optimizer references; the trainer's own graph is left as it is
     t_train = time.perf_counter()
 
     test_renders = render_views(graph, test, log.objects, backend=config.backend)

@@ -20,7 +20,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.geometry import box_corners, pose_from_yaw, project_box_bounds
-from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, Track, node_type_for_category, split_for_frame
+from simsplat_core.types import (
+    SYNTHETIC_SOURCE,
+    CameraImage,
+    ObjectInfo,
+    SceneLog,
+    Track,
+    node_type_for_category,
+    split_for_frame,
+)
 from simsplat_core.world import behaviors as bh
 from simsplat_core.world.agents import Agent, EgoPlan, populate, sample_ego_plan
 from simsplat_core.world.captions import compose_caption, describe_appearance, describe_track
@@ -224,7 +232,7 @@ def generate_log(seed: int, config: WorldConfig | None = None, seq_id: str | Non
     }
     log = SceneLog(
         seq_id=seq_id,
-        source="synthetic",
+        source=SYNTHETIC_SOURCE,
         timestamps_us=timestamps,
         ego_poses=world.ego_poses,
         images=tuple(images),

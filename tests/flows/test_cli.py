@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import hashlib
+import re
 from pathlib import Path
 
 import cv2
@@ -212,10 +213,14 @@ def test_run_align_and_query_on_a_store_holding_only_the_av2_sample(prefect_api_
     text = _flat(result.output)
     assert "reconstruct skipped: no camera images" in text and "Language scenes" in text
     assert list_scenes(ArtifactStore(str(store)), log.seq_id) == []
+    aligner = re.search(r"motion aligner ([0-9a-f]{8})", text)
+    assert aligner is not None
 
     result = runner.invoke(app, ["align", "--store", str(store), "--seq", log.seq_id])
     assert result.exit_code == 0, result.output
-    assert "skipped" in result.output  # the aligner and the language scene are reused
+    # the aligner and the language scene are reused: the same model, still one language scene
+    assert f"motion aligner {aligner.group(1)}" in _flat(result.output)
+    assert len(list((store / "alignment").glob(f"*/scenes/{log.seq_id}/*"))) == 1
 
     result = runner.invoke(app, ["query", "--store", str(store), "--seq", log.seq_id,
                                  "the vehicle changing lanes to the left"])

@@ -57,8 +57,7 @@ class AppearanceOnlyGrounder:
         if not nodes:
             return {}
         q = self.text_encoder.encode_queries([text])[0]
-        appearance = [n.f_app for n in scene.nodes if n.f_app is not None]
-        sims = cosine_scores(np.stack(appearance), q)
+        sims = cosine_scores(np.stack([n.f_app for n in nodes if n.f_app is not None]), q)
         return {n.node_id: float(s) for n, s in zip(nodes, sims)}
 
     def ground(self, scene: LanguageScene, text: str) -> tuple[int, ...]:

@@ -108,12 +108,11 @@ def node_id_maps_from_log(
     no instance masks.
     """
     images = [img for img in log.images if img.instance is not None]
-    instances = [img.instance for img in images if img.instance is not None]
-    if not instances:
+    if not images:
         return None
     frames = sorted({img.frame_idx for img in images})
     cameras = tuple(dict.fromkeys(img.camera for img in images))
-    height, width = instances[0].shape
+    height, width = images[0].height, images[0].width
     lut_size = max([o.instance_id for o in log.objects] + [0]) + 1
     lut = np.zeros(lut_size, dtype=np.int32)
     for obj in log.objects:

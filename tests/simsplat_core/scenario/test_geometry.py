@@ -4,9 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simsplat_core.color_names import DISPLAY_RGB
 from simsplat_core.scenario.geometry import box_footprints, corner_road_distances, footprints_overlap, offroad
-from simsplat_core.world.palette import NAMED_COLORS
 
 
 def test_oriented_boxes_overlap_by_separating_axes() -> None:
@@ -32,6 +30,3 @@ def test_corner_distances_and_offroad() -> None:
     corners = box_footprints(np.zeros(2), 0.0, (4.0, 2.0))
     assert corners.shape == (4, 2) and np.allclose(np.abs(corners), [2.0, 1.0])
 
-
-def test_world_paints_with_the_naming_palette() -> None:
-    assert all(NAMED_COLORS[name] == DISPLAY_RGB[name] for name in NAMED_COLORS)

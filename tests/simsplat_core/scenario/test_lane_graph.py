@@ -36,13 +36,22 @@ def av2(shared_data: Path) -> tuple[LaneGraph, dict[str, list[str]], list[MapFea
     return LaneGraph.from_features(log.map_features), explicit, list(log.map_features)
 
 
+def _one_lane(lane) -> LaneGraph:
+    return LaneGraph.from_features([MapFeature(lane.lane_id, "lane", np.c_[lane.points, np.zeros(len(lane.points))])])
+
+
 def _assert_successors_connect(graph: LaneGraph, max_gap_m: float = 6.0) -> None:
-    """Every successor starts near where its predecessor ends (or overlaps it) and heads the same way."""
+    """Every successor starts near where its predecessor ends, or the two overlap (the successor starts on
+    the predecessor, or the predecessor ends on the successor: junction connectors branching off a lane)."""
     for i, nxt in enumerate(graph.successors):
-        end = graph.lanes[i].points[-1]
+        lane = graph.lanes[i]
+        end = lane.points[-1]
         for j in nxt:
-            nearest = graph.nearest(end[None], max_dist_m=0.6)
-            assert np.linalg.norm(graph.lanes[j].points[0] - end) <= max_gap_m or nearest.lane[0] >= 0
+            successor = graph.lanes[j]
+            near = np.linalg.norm(successor.points[0] - end) <= max_gap_m
+            starts_on = _one_lane(lane).nearest(successor.points[:1], max_dist_m=0.6).lane[0] >= 0
+            ends_on = _one_lane(successor).nearest(end[None], max_dist_m=0.6).lane[0] >= 0
+            assert near or starts_on or ends_on, (lane.lane_id, successor.lane_id)
             assert i in graph.predecessors[j]
 
 

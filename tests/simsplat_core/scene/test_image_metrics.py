@@ -8,17 +8,8 @@ import numpy as np
 import pytest
 import torch
 
-from simsplat_core.scene.image_metrics import (
-    SSIM_C1,
-    SSIM_C2,
-    dssim_loss,
-    gaussian_window,
-    masked_psnr,
-    masked_ssim,
-    psnr,
-    ssim,
-    ssim_map,
-)
+from simsplat_core.scene.image_metrics import masked_psnr, masked_ssim, psnr, ssim
+from simsplat_core.scene.losses import SSIM_C1, SSIM_C2, dssim_loss, gaussian_window, ssim_map
 
 
 def _images(seed: int = 0, shape: tuple[int, ...] = (24, 31, 3)) -> tuple[torch.Tensor, torch.Tensor]:
