@@ -540,7 +540,7 @@ def _single_queries(
     return out
 
 
-def _group_candidates(facts: list[ObjectFacts], config: BenchmarkConfig) -> list[tuple[Description, list[ObjectFacts]]]:
+def group_candidates(facts: list[ObjectFacts], config: BenchmarkConfig) -> list[tuple[Description, list[ObjectFacts]]]:
     """Descriptions with one or two constraints fitting 2..group_max objects, all well visible."""
     seen: set[Description] = set()
     out = []
@@ -643,7 +643,7 @@ def generate_queries(log: SceneLog, config: BenchmarkConfig | None = None,
                     continue
                 group_targets.add(ids)
             raw.append((desc, kind, style, ids, target.object_id if kind == "single" else "", ""))
-    candidates = _group_candidates(all_facts, config)
+    candidates = group_candidates(all_facts, config)
     order = rng.permutation(len(candidates))
     used_families: set[tuple[str, str]] = set()
     picked = 0
@@ -711,6 +711,7 @@ __all__ = [
     "build_benchmark",
     "candidate_descriptions",
     "generate_queries",
+    "group_candidates",
     "matching",
     "object_facts",
     "plausible_readings",

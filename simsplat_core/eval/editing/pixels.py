@@ -1,0 +1,168 @@
+"""Pixel checks of edits: visible where it should be, looks as asked, gone when removed.
+
+Inputs are :class:`~simsplat_core.eval.editing.observation.PixelEvidence`: the edited Gaussian scene's
+renders with node ids, the world's own rendering of the same edit with instance ids and the log's images
+of the unedited scene, at the same frames and cameras.
+
+* **visible**: an inserted, moved or redrawn object should be seen where the world's rendering of the
+  edit shows it unoccluded (at least ``MIN_VIEW_PIXELS`` pixels of its instance in a view); there the
+  rendered node must cover at least ``MIN_COVER`` of those pixels, in at least ``MIN_VIEW_SHARE`` of the
+  views. An inserted object the world never shows in the checked frames fails (it was put out of sight).
+* **appearance**: the built-in captioner (``language.appearance.captioner.describe_track``) captions the
+  rendered crops of an inserted or replacing object (views with at least ``MIN_CAPTION_PIXELS`` node
+  pixels, box size from the edited agent); its colour (vehicles, static objects: main or second colour;
+  pedestrians: top and trousers) and body style (vehicles, cones and barriers: the captioner names them
+  from the box) must be the asked ones.
+* **removed**: in views where the log shows a removed object (``MIN_VIEW_PIXELS``), the edited render has
+  no pixel of its node, and over the object's pixels it is closer (mean squared error) to the world's
+  rendering without the object than to the log's image with it, in at least ``MIN_VIEW_SHARE`` of them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from simsplat_core.eval.editing.checks import CheckResult, Verdict
+from simsplat_core.eval.editing.intents import EditIntent
+from simsplat_core.eval.editing.observation import EditObservation, PixelEvidence, state_changes
+from simsplat_core.language.appearance.captioner import describe_track
+from simsplat_core.language.appearance.crops import ObjectCrop, crop_object
+from simsplat_core.language.appearance.subtypes import STATIC_SUBTYPES, VEHICLE_SUBTYPES
+
+#: A view shows an object when it has at least this many of its pixels.
+MIN_VIEW_PIXELS = 40
+#: The rendered node must cover this share of the world's pixels of the object in a view.
+MIN_COVER = 0.3
+#: ... in this share of the views that show it.
+MIN_VIEW_SHARE = 0.6
+#: Crops smaller than this are not captioned.
+MIN_CAPTION_PIXELS = 40
+#: Body styles the captioner names from the box (others are not checked by type).
+CHECKABLE_SUBTYPES: frozenset[str] = frozenset(VEHICLE_SUBTYPES) | frozenset(STATIC_SUBTYPES[:2])
+
+
+def expected_views(evidence: PixelEvidence, object_id: str) -> list[tuple[int, int]]:
+    """``(frame row, camera)`` where the world's rendering of the edit shows ``object_id``."""
+    inst = evidence.world_instance.get(object_id)
+    if inst is None:
+        return []
+    counts = (evidence.world_edited.ids == inst).sum(axis=(2, 3))  # [F, C]
+    return [(int(f), int(c)) for f, c in zip(*np.nonzero(counts >= MIN_VIEW_PIXELS))]
+
+
+def check_visible(evidence: PixelEvidence, object_id: str, node_id: int, must_show: bool, v: Verdict) -> None:
+    """``object_id`` drawn by ``node_id`` covers the world's pixels of it in enough views (module docstring)."""
+    views = expected_views(evidence, object_id)
+    if not views:
+        v.require(not must_show, f"{object_id} is out of sight in every checked frame")
+        if not must_show:
+            v.note(f"{object_id} out of sight")
+        return
+    inst = evidence.world_instance[object_id]
+    covered = []
+    for f, c in views:
+        truth = evidence.world_edited.ids[f, c] == inst
+        drawn = evidence.edited.ids[f, c] == node_id
+        covered.append(float((truth & drawn).sum()) / float(truth.sum()))
+    share = float(np.mean(np.asarray(covered) >= MIN_COVER))
+    v.measured[f"visible_share_{object_id}"] = share
+    v.require(share >= MIN_VIEW_SHARE, f"{object_id} drawn in {share:.0%} of the {len(views)} views where it should "
+              f"be seen (median cover {np.median(covered):.0%})")
+
+
+def object_crops(evidence: PixelEvidence, node_id: int, object_id: str, category: str,
+                 box_size: np.ndarray) -> list[ObjectCrop]:
+    """Crops of the rendered node in every view with at least ``MIN_CAPTION_PIXELS`` of its pixels."""
+    ev = evidence.edited
+    out = []
+    for f in range(len(ev.frames)):
+        for c, camera in enumerate(ev.cameras):
+            mask = ev.ids[f, c] == node_id
+            if mask.sum() < MIN_CAPTION_PIXELS:
+                continue
+            cut = crop_object(ev.rgb[f, c], mask)
+            if cut is None:
+                continue
+            rgb, m, bbox = cut
+            out.append(ObjectCrop(rgb, m, category, np.asarray(box_size, np.float64), ev.frames[f], camera, object_id,
+                                  bbox))
+    return out
+
+
+def check_appearance(evidence: PixelEvidence, intent: EditIntent, object_id: str, node_id: int, category: str,
+                     box_size: np.ndarray, v: Verdict) -> None:
+    """The captioner's description of the rendered object matches the asked colours and body style."""
+    asset = intent.asset
+    if asset is None:
+        return
+    crops = object_crops(evidence, node_id, object_id, category, box_size)
+    if not v.require(bool(crops), f"{object_id}: no view with {MIN_CAPTION_PIXELS}+ pixels to caption"):
+        return
+    caption = describe_track(crops)
+    v.note(f"{object_id} captioned {caption.text!r}")
+    if category == "pedestrian":
+        if asset.upper is not None:
+            v.require(caption.upper_color == asset.upper,
+                      f"{object_id}: top {caption.upper_color}, asked {asset.upper}")
+        if asset.lower is not None:
+            v.require(caption.lower_color == asset.lower,
+                      f"{object_id}: trousers {caption.lower_color}, asked {asset.lower}")
+        return
+    if asset.color is not None:
+        v.require(asset.color in caption.colors, f"{object_id}: colour {'/'.join(caption.colors)}, asked {asset.color}")
+    if asset.subtype is not None and asset.subtype in CHECKABLE_SUBTYPES:
+        v.require(caption.subtype == asset.subtype, f"{object_id}: a {caption.subtype}, asked a {asset.subtype}")
+
+
+def check_removed(evidence: PixelEvidence, object_id: str, node_id: int, v: Verdict) -> None:
+    """No pixel of the removed node, and its region looks like the world without it (module docstring)."""
+    inst = evidence.original_instance.get(object_id)
+    if inst is None:
+        v.require(False, f"{object_id} has no instance id in the log")
+        return
+    orig = evidence.world_original
+    counts = (orig.ids == inst).sum(axis=(2, 3))
+    views = [(int(f), int(c)) for f, c in zip(*np.nonzero(counts >= MIN_VIEW_PIXELS))]
+    if not views:
+        v.note(f"{object_id} out of sight in the checked frames")
+        return
+    left = int(sum(int((evidence.edited.ids[f, c] == node_id).sum()) for f, c in views))
+    v.require(left == 0, f"{left} pixels of removed node {node_id} still rendered")
+    closer = []
+    for f, c in views:
+        mask = orig.ids[f, c] == inst
+        edited = evidence.edited.rgb[f, c][mask]
+        without = float(np.mean((edited - evidence.world_edited.rgb[f, c][mask]) ** 2))
+        with_it = float(np.mean((edited - orig.rgb[f, c][mask]) ** 2))
+        closer.append(without < with_it)
+    share = float(np.mean(closer))
+    v.measured[f"removed_share_{object_id}"] = share
+    v.require(share >= MIN_VIEW_SHARE, f"where {object_id} was, the render looks like the scene with it in "
+              f"{1 - share:.0%} of {len(views)} views")
+
+
+def check_pixels(intent: EditIntent, obs: EditObservation, evidence: PixelEvidence) -> CheckResult:
+    """Every pixel check that applies to the edit (module docstring)."""
+    v = Verdict()
+    before, after = obs.before, obs.after
+    if before is None or after is None:
+        return CheckResult(False, f"refused ({obs.refused}): {obs.message}")
+    changes = state_changes(before, after)
+    for object_id in changes.removed:
+        check_removed(evidence, object_id, int(before.node_ids[before.index(object_id)]), v)
+    shown = set(changes.added) | set(changes.moved) | set(changes.redrawn)
+    for object_id in after.object_ids:
+        if object_id not in shown:
+            continue
+        row = after.index(object_id)
+        node = int(after.node_ids[row])
+        if not v.require(node >= 0, f"{object_id} has no scene-graph node after the edit"):
+            continue
+        check_visible(evidence, object_id, node, must_show=object_id in changes.added, v=v)
+        if object_id in changes.added or object_id in changes.redrawn:
+            check_appearance(evidence, intent, object_id, node, after.categories[row], after.size[row], v)
+    return v.result()
+
+
+__all__ = ["CHECKABLE_SUBTYPES", "MIN_CAPTION_PIXELS", "MIN_COVER", "MIN_VIEW_PIXELS", "MIN_VIEW_SHARE",
+           "check_appearance", "check_pixels", "check_removed", "check_visible", "expected_views", "object_crops"]

@@ -1,0 +1,613 @@
+"""Candidate edits of one synthetic scene, chosen from its ground truth so that each is well posed.
+
+Every planner returns :class:`Draft` s -- an intent kind (a ``wording.FORMS`` key), the edit in
+ground-truth terms and the phrases that fill the sentence forms -- for one category of SIMSplat Table 3
+or for the infeasible set. A feasible draft is one a competent editor can carry out within the 4 s of
+the log, judged from the world itself:
+
+* targets and anchors are well visible (``truth.well_visible``) and have a description that singles them
+  out (``references.py``);
+* motion edits suit the target's state: speeds and stops for moving vehicles with room to brake,
+  turns for vehicles approaching the junction in a lane that has the turn and close enough to make it
+  before the log ends, lane changes where a lane of the same direction lies on that side and the arm is
+  long enough, reversing for standing vehicles with free road behind, crossing the street for people
+  standing or walking near the kerb;
+* insert spots are free of every agent at the first frame.
+
+Infeasible drafts are what the issue names: an object that is not in the scene ("the purple bus"), a car
+on the sidewalk, a turn for a vehicle driving away from the only junction, a lane change for a
+pedestrian, motion for a static object, requests that are no edit at all.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simsplat_core.editing.commands import SPEED_UNITS
+from simsplat_core.eval.editing.intents import (
+    EGO,
+    AssetIntent,
+    EditIntent,
+    MotionIntent,
+    PlacementIntent,
+    SpeedWords,
+)
+from simsplat_core.eval.editing.references import (
+    absent_pedestrian_phrase,
+    absent_vehicle_phrase,
+    group_phrases,
+    object_phrase,
+    static_groups,
+    static_phrase,
+)
+from simsplat_core.eval.editing.truth import SceneTruth
+from simsplat_core.eval.editing.wording import (
+    PEDESTRIAN_RELATIVE_SPEEDS,
+    VEHICLE_RELATIVE_SPEEDS,
+    count_word,
+    distance_phrase,
+    indefinite,
+    person_phrase,
+    pick,
+    seconds_phrase,
+    speed_words,
+)
+from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.world.agents import EGO_SIZE, Agent
+from simsplat_core.world.road import connector_points, target_lane
+
+#: Seconds the logs last (40 frames at 10 Hz); edits must show within them.
+LOG_SPAN_S = 3.9
+#: Comfortable deceleration used to judge whether a stop is reachable (m/s^2).
+COMFORT_DECEL = 3.5
+#: A spot is free when no agent centre is this close at the first frame (metres).
+FREE_RADIUS_M = 6.0
+
+_TURNING = (voc.TURNING_LEFT, voc.TURNING_RIGHT)
+_STATIONARY = (voc.STOPPED, voc.PARKED)
+_CRUISING = (voc.GOING_STRAIGHT, voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT)
+_VEHICLE_NOUNS: dict[str, tuple[str, ...]] = {
+    "sedan": ("sedan",), "hatchback": ("hatchback",), "SUV": ("SUV",), "van": ("van",),
+    "pickup truck": ("pickup truck", "pickup"), "truck": ("truck", "box truck"), "bus": ("bus",),
+}
+_CAR_LIKE = ("sedan", "hatchback", "SUV")
+#: Static assets asked for: ``(subtype, colour or None, nouns)``.
+STATIC_ASSETS: tuple[tuple[str, str | None, tuple[str, ...]], ...] = (
+    ("traffic cone", "orange", ("traffic cone", "orange traffic cone", "orange cone", "cone")),
+    ("traffic cone", "orange", ("traffic cone", "cone")),
+    ("barrier", None, ("barrier", "road barrier", "construction barrier")),
+    ("barrier", "white", ("white barrier", "white road barrier")),
+    ("barrel", "orange", ("orange barrel", "traffic barrel", "construction barrel")),
+)
+
+
+@dataclass(frozen=True)
+class Draft:
+    """A candidate prompt before its sentence form is chosen.
+
+    Attributes:
+        kind: ``wording.FORMS`` key.
+        intent: the edit in ground-truth terms (a form without ``{d}`` drops ``placement.distance_m``).
+        slots: phrases for the forms' slots.
+    """
+
+    kind: str
+    intent: EditIntent
+    slots: dict[str, str] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class AssetPools:
+    """What the asset bank can be asked for: ``(subtype, colour)`` of vehicles and ``(upper, lower)`` clothing
+    of pedestrians seen well in the evaluated scenes (the bank cuts its assets out of them)."""
+
+    vehicles: tuple[tuple[str, str], ...]
+    pedestrians: tuple[tuple[str, str], ...]
+
+    @classmethod
+    def from_truths(cls, truths: Sequence[SceneTruth]) -> AssetPools:
+        vehicles, pedestrians = set(), set()
+        for truth in truths:
+            for agent in truth.world.agents:
+                if not truth.well_visible(agent.object_id):
+                    continue
+                if agent.category == "vehicle":
+                    vehicles.add((agent.subtype, agent.appearance["color"]))
+                elif agent.category == "pedestrian":
+                    pedestrians.add((agent.appearance["upper_color"], agent.appearance["lower_color"]))
+        if not vehicles or not pedestrians:
+            raise ValueError("no well-visible vehicle or pedestrian in the scenes: nothing to build assets from")
+        return cls(tuple(sorted(vehicles)), tuple(sorted(pedestrians)))
+
+
+# ---------------------------------------------------------------------------------------------- helpers
+def _speed0(agent: Agent) -> float:
+    return float(agent.traj["speed"][0])
+
+
+def _label(truth: SceneTruth, object_id: str) -> str | None:
+    return truth.facts[object_id].motion
+
+
+class _Namer:
+    """Fresh words for one object at every call (the description family and wording vary)."""
+
+    def __init__(self, truth: SceneTruth, agent: Agent, rng: np.random.Generator) -> None:
+        self.truth, self.agent, self.rng = truth, agent, rng
+
+    def __call__(self) -> str:
+        if self.agent.category in ("vehicle", "pedestrian"):
+            phrase = object_phrase(self.truth, self.agent.object_id, self.rng)
+        else:
+            phrase = static_phrase(self.truth, self.agent.object_id, self.rng)
+        assert phrase is not None  # _named only keeps objects that have one
+        return phrase
+
+
+def _named(truth: SceneTruth, rng: np.random.Generator, kinds: tuple[str, ...]) -> list[tuple[Agent, _Namer]]:
+    """Well-visible agents of ``kinds`` with a description that singles them out, and their namers."""
+    out = []
+    for agent in truth.world.agents:
+        if agent.category not in kinds or not truth.well_visible(agent.object_id):
+            continue
+        phrase = (object_phrase(truth, agent.object_id, rng) if agent.category in ("vehicle", "pedestrian")
+                  else static_phrase(truth, agent.object_id, rng))
+        if phrase is not None:
+            out.append((agent, _Namer(truth, agent, rng)))
+    return out
+
+
+def _free(truth: SceneTruth, xy: np.ndarray, frame: int = 0, radius: float = FREE_RADIUS_M) -> bool:
+    """No agent (nor the ego) centre within ``radius`` of ``xy`` at ``frame``."""
+    centres = [truth.ego_xy[frame]] + [a.traj["xy"][frame] for a in truth.world.agents]
+    return bool(np.min(np.linalg.norm(np.asarray(centres) - xy, axis=1)) > radius)
+
+
+def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> np.ndarray | None:
+    """World point ``distance`` ahead of the ego along its lane (``side`` lanes to the left, +1, or right,
+    -1), ``None`` when that lane does not exist or the spot is off the road."""
+    xy0, h0 = truth.ego_xy[0], float(truth.ego_heading[0])
+    left = np.array([-np.sin(h0), np.cos(h0)])
+    start = xy0 + side * truth.layout.lane_w_h * left
+    if side:
+        pos = truth.road_position(start, h0)
+        if pos.lane is None or pos.region != "travel":
+            return None
+    try:
+        path = truth.lanes.follow(start, h0, "straight")
+    except ValueError:
+        return None
+    s = path.start_s + distance
+    if s > path.path.length:
+        return None
+    return np.asarray(path.path.position(s), dtype=np.float64)
+
+
+def _vehicle_asset(pools: AssetPools, rng: np.random.Generator, avoid: tuple[str, str] | None = None
+                   ) -> tuple[AssetIntent, str]:
+    """An asset vehicle (most from the pool, some recoloured within its kind's catalogue colours)."""
+    from simsplat_core.world.palette import VEHICLE_KIND_BY_NAME  # noqa: PLC0415  # numba-heavy world package
+
+    options = [p for p in pools.vehicles if p != avoid] or list(pools.vehicles)
+    subtype, color = options[int(rng.integers(len(options)))]
+    if rng.random() < 0.25:
+        color = pick(rng, VEHICLE_KIND_BY_NAME[subtype].colors)
+    if subtype in _CAR_LIKE and rng.random() < 0.2:
+        noun, intent_subtype = "car", None
+    else:
+        noun, intent_subtype = pick(rng, _VEHICLE_NOUNS.get(subtype, (subtype,))), subtype
+    words = indefinite(f"{color} {noun}")
+    return AssetIntent("vehicle", intent_subtype, color, description=words), words
+
+
+def _pedestrian_asset(pools: AssetPools, rng: np.random.Generator) -> tuple[AssetIntent, str]:
+    upper, lower = pools.pedestrians[int(rng.integers(len(pools.pedestrians)))]
+    both = rng.random() < 0.4
+    words = person_phrase(upper, lower if both else None, rng)
+    return AssetIntent("pedestrian", None, None, upper, lower if both else None, description=words), words
+
+
+def _static_asset(rng: np.random.Generator, count: int = 1) -> tuple[AssetIntent, str]:
+    subtype, color, nouns = STATIC_ASSETS[int(rng.integers(len(STATIC_ASSETS)))]
+    noun = pick(rng, nouns)
+    words = indefinite(noun)
+    return AssetIntent("static", subtype, color, count=count, description=words), words
+
+
+def _anchor_vehicles(truth: SceneTruth, rng: np.random.Generator) -> list[tuple[Agent, _Namer]]:
+    """Named vehicles in a travel or parking lane of an arm at the first frame (not in the junction)."""
+    out = []
+    for agent, phrase in _named(truth, rng, ("vehicle",)):
+        pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+        if pos.arm is not None and pos.region in ("travel", "parking"):
+            out.append((agent, phrase))
+    return out
+
+
+def _spot_near(agent: Agent, along: float, across: float) -> np.ndarray:
+    h = float(agent.traj["heading"][0])
+    fwd, left = np.array([np.cos(h), np.sin(h)]), np.array([-np.sin(h), np.cos(h)])
+    return np.asarray(agent.traj["xy"][0] + along * fwd + across * left, dtype=np.float64)
+
+
+def _others_free(truth: SceneTruth, xy: np.ndarray, skip: str, radius: float) -> bool:
+    centres = [truth.ego_xy[0]] + [a.traj["xy"][0] for a in truth.world.agents if a.object_id != skip]
+    return bool(np.min(np.linalg.norm(np.asarray(centres) - xy, axis=1)) > radius)
+
+
+# ---------------------------------------------------------------------------------------------- add
+def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    out: list[Draft] = []
+    ego_pos = truth.road_position(truth.ego_xy[0], float(truth.ego_heading[0]))
+    for distance in (10.0, 12.0, 15.0, 18.0, 20.0, 25.0, 30.0):
+        spot = _ego_lane_spot(truth, distance)
+        if spot is not None and _free(truth, spot):
+            for kind in ("vehicle_lane_ahead", "vehicle_lane_speed"):
+                asset, words = _vehicle_asset(pools, rng)
+                motion = None
+                slots = {"A": words, "d": distance_phrase(distance, rng)}
+                if kind == "vehicle_lane_speed":
+                    unit = pick(rng, ("km/h", "km/h", "m/s", "mph"))
+                    said, value, mps = speed_words(float(rng.uniform(5.0, 11.0)), unit, rng)
+                    motion = MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit))
+                    slots["v"] = said
+                out.append(Draft(kind, EditIntent("insert", asset=asset, motion=motion,
+                                                  placement=PlacementIntent("in_lane", EGO, distance, "same")), slots))
+        for side, name in ((1, "left"), (-1, "right")):
+            if ego_pos.lane is None or not 0 <= ego_pos.lane - side < truth.layout.lanes_h:
+                continue
+            spot = _ego_lane_spot(truth, distance, side)
+            if spot is not None and _free(truth, spot):
+                asset, words = _vehicle_asset(pools, rng)
+                out.append(Draft("vehicle_side_lane", EditIntent(
+                    "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, name)),
+                    {"A": words, "d": distance_phrase(distance, rng), "side": name}))
+        opposite = truth.ego_xy[0] + distance * np.array([np.cos(truth.ego_heading[0]), np.sin(truth.ego_heading[0])])
+        h0 = float(truth.ego_heading[0])
+        across = 2 * (ego_pos.lateral if ego_pos.lateral else 0.0)
+        opposite = opposite + across * np.array([-np.sin(h0), np.cos(h0)])
+        pos = truth.road_position(opposite, h0 + np.pi)
+        if distance >= 15 and pos.region == "travel" and pos.lane is not None and _free(truth, opposite):
+            asset, words = _vehicle_asset(pools, rng)
+            out.append(Draft("vehicle_oncoming", EditIntent(
+                "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "opposite")),
+                {"A": words, "d": distance_phrase(distance, rng)}))
+    for anchor, phrase in _anchor_vehicles(truth, rng):
+        length = anchor.size[0]
+        for kind, sign, relation in (("vehicle_behind_anchor", -1.0, "behind"),
+                                     ("vehicle_front_anchor", 1.0, "in_front_of")):
+            gap = float(pick(rng, ("5", "6", "8", "10")))
+            spot = _spot_near(anchor, sign * (length / 2 + gap + 2.4), 0.0)
+            pos = truth.road_position(spot, float(anchor.traj["heading"][0]))
+            if pos.region not in ("travel", "parking") or not _others_free(truth, spot, anchor.object_id, 5.0):
+                continue
+            asset, words = _vehicle_asset(pools, rng)
+            out.append(Draft(kind, EditIntent("insert", asset=asset,
+                                              placement=PlacementIntent(relation, anchor.object_id, gap)),
+                             {"A": words, "anchor": phrase(), "d": distance_phrase(gap, rng)}))
+    return out
+
+
+def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    del pools
+    out: list[Draft] = []
+    ego_pos = truth.road_position(truth.ego_xy[0], float(truth.ego_heading[0]))
+    for distance in (8.0, 10.0, 12.0, 15.0, 20.0):
+        spot = _ego_lane_spot(truth, distance)
+        if spot is not None and _free(truth, spot, radius=4.0):
+            asset, words = _static_asset(rng)
+            out.append(Draft("static_lane_ahead", EditIntent(
+                "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "same")),
+                {"A": words, "d": distance_phrase(distance, rng)}))
+            n = int(rng.integers(3, 6))
+            asset = AssetIntent("static", "traffic cone", "orange", count=n, description=f"a row of {n} cones")
+            out.append(Draft("static_row", EditIntent(
+                "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "same")),
+                {"n": count_word(n, rng), "items": pick(rng, ("cones", "traffic cones", "orange cones")),
+                 "d": distance_phrase(distance, rng)}))
+        for side, name in ((1, "left"), (-1, "right")):
+            if ego_pos.lane is None or not 0 <= ego_pos.lane - side < truth.layout.lanes_h:
+                continue
+            spot = _ego_lane_spot(truth, distance, side)
+            if spot is not None and _free(truth, spot, radius=4.0):
+                asset, words = _static_asset(rng)
+                out.append(Draft("static_side_lane", EditIntent(
+                    "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, name)),
+                    {"A": words, "d": distance_phrase(distance, rng), "side": name}))
+                n = int(rng.integers(3, 6))
+                asset = AssetIntent("static", "traffic cone", "orange", count=n, description=f"a row of {n} cones")
+                out.append(Draft("static_row_side", EditIntent(
+                    "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, name)),
+                    {"n": count_word(n, rng), "items": pick(rng, ("cones", "traffic cones", "orange cones")),
+                     "d": distance_phrase(distance, rng), "side": name}))
+    for distance in (10.0, 15.0, 20.0):
+        asset, words = _static_asset(rng)
+        out.append(Draft("static_sidewalk", EditIntent(
+            "insert", asset=asset, placement=PlacementIntent("on_sidewalk", EGO, distance)),
+            {"A": words, "d": distance_phrase(distance, rng)}))
+    asset, words = _static_asset(rng)
+    out.append(Draft("static_crosswalk", EditIntent("insert", asset=asset,
+                                                    placement=PlacementIntent("on_crosswalk", EGO)), {"A": words}))
+    for anchor, phrase in _anchor_vehicles(truth, rng):
+        for kind, along, relation in (("static_anchor_behind", -1.0, "behind"),
+                                      ("static_anchor_front", 1.0, "in_front_of")):
+            gap = float(pick(rng, ("1", "1.5", "2", "3")))
+            spot = _spot_near(anchor, along * (anchor.size[0] / 2 + gap), 0.0)
+            if truth.layout.on_road(spot[None])[0] and _others_free(truth, spot, anchor.object_id, 3.0):
+                asset, words = _static_asset(rng)
+                out.append(Draft(kind, EditIntent("insert", asset=asset,
+                                                  placement=PlacementIntent(relation, anchor.object_id, gap)),
+                                 {"A": words, "anchor": phrase(), "d": distance_phrase(gap, rng)}))
+        for sign, name, relation in ((1.0, "left", "left_of"), (-1.0, "right", "right_of")):
+            gap = float(pick(rng, ("1", "1.5", "2")))
+            spot = _spot_near(anchor, 0.0, sign * (anchor.size[1] / 2 + gap))
+            if truth.layout.on_road(spot[None])[0] and _others_free(truth, spot, anchor.object_id, 3.0):
+                asset, words = _static_asset(rng)
+                out.append(Draft("static_anchor_side", EditIntent(
+                    "insert", asset=asset, placement=PlacementIntent(relation, anchor.object_id, gap)),
+                    {"A": words, "anchor": phrase(), "d": distance_phrase(gap, rng), "side": name}))
+    return out
+
+
+def plan_add_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    out: list[Draft] = []
+    for distance in (8.0, 10.0, 12.0, 15.0, 20.0):
+        for kind, placement, motion in (
+            ("pedestrian_sidewalk", PlacementIntent("on_sidewalk", EGO, distance), None),
+            ("pedestrian_crossing", PlacementIntent("in_front_of", EGO, distance), MotionIntent(cross_street=True)),
+            ("pedestrian_insert_jaywalk", PlacementIntent("in_front_of", EGO, distance),
+             MotionIntent(cross_street=True, jaywalk=True)),
+            ("pedestrian_insert_run", PlacementIntent("on_sidewalk", EGO, distance), MotionIntent(gait="run")),
+        ):
+            asset, words = _pedestrian_asset(pools, rng)
+            out.append(Draft(kind, EditIntent("insert", asset=asset, placement=placement, motion=motion),
+                             {"A": words, "d": distance_phrase(distance, rng)}))
+        asset, words = _pedestrian_asset(pools, rng)
+        said, value, mps = speed_words(float(rng.uniform(0.8, 1.8)), "m/s", rng)
+        out.append(Draft("pedestrian_walk_speed", EditIntent(
+            "insert", asset=asset, placement=PlacementIntent("on_sidewalk", EGO, distance),
+            motion=MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, "m/s"))),
+            {"A": words, "d": distance_phrase(distance, rng), "v": said}))
+    for _ in range(2):
+        asset, words = _pedestrian_asset(pools, rng)
+        out.append(Draft("pedestrian_crosswalk", EditIntent("insert", asset=asset,
+                                                            placement=PlacementIntent("on_crosswalk", EGO)),
+                         {"A": words}))
+    for anchor, phrase in _named(truth, rng, ("vehicle", "pedestrian")):
+        side = pick(rng, ("left", "right"))
+        gap = float(pick(rng, ("1", "1.5", "2")))
+        asset, words = _pedestrian_asset(pools, rng)
+        out.append(Draft("pedestrian_next_to", EditIntent(
+            "insert", asset=asset, placement=PlacementIntent("next_to", anchor.object_id)),
+            {"A": words, "anchor": phrase()}))
+        asset, words = _pedestrian_asset(pools, rng)
+        out.append(Draft("pedestrian_side_of", EditIntent(
+            "insert", asset=asset, placement=PlacementIntent(f"{side}_of", anchor.object_id, gap)),
+            {"A": words, "anchor": phrase(), "d": distance_phrase(gap, rng), "side": side}))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- modify
+def _turn_reachable(truth: SceneTruth, agent: Agent, turn: str) -> bool:
+    """Approaching the junction in a lane that has ``turn``, close enough to be well into it by the end."""
+    pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+    v = _speed0(agent)
+    if pos.arm is None or not pos.inbound or pos.lane is None or v < 3.0:
+        return False
+    if target_lane(truth.layout, pos.arm, pos.lane, turn) is None:
+        return False
+    to_stop = pos.along - truth.layout.stopline_s(pos.arm)
+    conn = connector_points(truth.layout, pos.arm, pos.lane, turn)
+    if conn is None or to_stop < -0.5:
+        return False
+    conn_len = float(np.linalg.norm(np.diff(conn, axis=0), axis=1).sum())
+    return to_stop + 0.6 * conn_len <= 0.8 * v * LOG_SPAN_S
+
+
+def _lane_change_room(truth: SceneTruth, agent: Agent, side: str) -> bool:
+    pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+    v = _speed0(agent)
+    if pos.arm is None or pos.lane is None or pos.region != "travel" or v < 4.0:
+        return False
+    new_lane = pos.lane - 1 if side == "left" else pos.lane + 1
+    if not 0 <= new_lane < truth.layout.lanes(pos.arm):
+        return False
+    if pos.inbound:
+        return pos.along - truth.layout.stopline_s(pos.arm) >= v * 3.5 + 5.0
+    return pos.along + v * LOG_SPAN_S < truth.layout.arm_length
+
+
+def _crosswalk_stop_room(truth: SceneTruth, agent: Agent) -> bool:
+    pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+    v = _speed0(agent)
+    if pos.arm is None or not pos.inbound or v < 3.0:
+        return False
+    front_to_crosswalk = pos.along - agent.size[0] / 2 - truth.layout.crosswalk_range(pos.arm)[1]
+    return v * v / (2 * COMFORT_DECEL) + 1.0 <= front_to_crosswalk <= v * LOG_SPAN_S
+
+
+def _room_behind(truth: SceneTruth, agent: Agent, metres: float = 8.0) -> bool:
+    spot = _spot_near(agent, -(agent.size[0] / 2 + metres / 2), 0.0)
+    if not truth.layout.on_road(spot[None])[0]:
+        return False
+    for frame in range(0, truth.log.num_frames, 5):
+        centres = [truth.ego_xy[frame]] + [a.traj["xy"][frame] for a in truth.world.agents
+                                          if a.object_id != agent.object_id]
+        if np.min(np.linalg.norm(np.asarray(centres) - spot, axis=1)) < metres / 2 + EGO_SIZE[0] / 2:
+            return False
+    return True
+
+
+def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    out: list[Draft] = []
+    for agent, phrase in _named(truth, rng, ("vehicle",)):
+        oid, v0, label = agent.object_id, _speed0(agent), _label(truth, agent.object_id)
+        steady = float(np.std(agent.traj["speed"])) < 0.3
+        moving = v0 >= 3.0
+        slot = {"T": phrase()}
+        if moving and label in _CRUISING:
+            unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))
+            delta = float(rng.uniform(2.5, 5.5)) * (1 if rng.random() < 0.5 or v0 < 6.5 else -1)
+            words, value, mps = speed_words(v0 + delta, unit, rng)
+            if abs(mps - v0) >= 2.0 and mps >= 3.0:
+                out.append(Draft("vehicle_speed_abs", EditIntent("modify", (oid,), motion=MotionIntent(
+                    speed_mps=mps, speed=SpeedWords("absolute", value, unit))), {**slot, "v": words}))
+        if moving and steady and label in _CRUISING:
+            rel, mode, value, unit = VEHICLE_RELATIVE_SPEEDS[int(rng.integers(len(VEHICLE_RELATIVE_SPEEDS)))]
+            target = v0 * value if mode == "factor" else v0 + value * SPEED_UNITS[unit]
+            if 1.5 <= target <= 17.0 and abs(target - v0) <= 7.5:
+                out.append(Draft("vehicle_speed_rel", EditIntent("modify", (oid,), motion=MotionIntent(
+                    speed_mps=target, speed=SpeedWords(mode, value, unit))), {**slot, "rel": rel}))
+        if moving and label not in (voc.STOPPING, voc.SLOWING_DOWN):
+            if _crosswalk_stop_room(truth, agent):
+                out.append(Draft("vehicle_stop_crosswalk", EditIntent(
+                    "modify", (oid,), motion=MotionIntent(stop=True, stop_before="crosswalk")), slot))
+            out.append(Draft("vehicle_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)), slot))
+            by = float(pick(rng, ("2", "2.5", "3")))
+            if v0 / by <= 4.5:
+                out.append(Draft("vehicle_stop_by", EditIntent("modify", (oid,), motion=MotionIntent(
+                    stop=True, stop_by_s=by)), {**slot, "t": seconds_phrase(by, rng)}))
+            out.append(Draft("vehicle_brake_hard", EditIntent("modify", (oid,), motion=MotionIntent(
+                longitudinal="brake_hard")), slot))
+            out.append(Draft("vehicle_decelerate", EditIntent("modify", (oid,), motion=MotionIntent(
+                longitudinal="decelerate")), slot))
+        if moving and label not in (voc.SPEEDING_UP, *_TURNING) and v0 <= 12.0:
+            out.append(Draft("vehicle_accelerate", EditIntent("modify", (oid,), motion=MotionIntent(
+                longitudinal="accelerate")), slot))
+        if label in _STATIONARY and _room_behind(truth, agent):
+            out.append(Draft("vehicle_reverse", EditIntent("modify", (oid,), motion=MotionIntent(reverse=True)), slot))
+        if label not in (voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT, *_TURNING):
+            for side in ("left", "right"):
+                if _lane_change_room(truth, agent, side):
+                    out.append(Draft("vehicle_lane_change", EditIntent("modify", (oid,), motion=MotionIntent(
+                        lane_change=side)), {**slot, "side": side}))
+        for turn in ("left", "right"):
+            if label != f"turning_{turn}" and _turn_reachable(truth, agent, turn):
+                out.append(Draft("vehicle_turn", EditIntent("modify", (oid,), motion=MotionIntent(turn=turn)),
+                                 {**slot, "side": turn}))
+        if label in _TURNING and _turn_reachable(truth, agent, "straight"):
+            out.append(Draft("vehicle_straight", EditIntent("modify", (oid,), motion=MotionIntent(turn="straight")),
+                             slot))
+        if moving:
+            delay = float(pick(rng, ("1", "1.5", "2")))
+            out.append(Draft("vehicle_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
+                             {**slot, "t": seconds_phrase(delay, rng)}))
+        asset, words = _vehicle_asset(pools, rng, avoid=(agent.subtype, agent.appearance["color"]))
+        out.append(Draft("vehicle_replace", EditIntent("replace", (oid,), asset=asset), {**slot, "A": words}))
+    return out
+
+
+def _near_kerb(truth: SceneTruth, agent: Agent) -> tuple[bool, bool]:
+    """``(on a sidewalk within 2.5 m of the kerb, also away from the crosswalks)`` at the first frame."""
+    pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+    if pos.arm is None or pos.region != "sidewalk":
+        return False, False
+    near = abs(pos.lateral) - truth.layout.half_width(pos.arm) <= 2.5
+    c0, c1 = truth.layout.crosswalk_range(pos.arm)
+    away = abs(pos.along - 0.5 * (c0 + c1)) >= 0.5 * (c1 - c0) + 3.0
+    return near, near and away
+
+
+def plan_modify_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    del pools
+    out: list[Draft] = []
+    for agent, phrase in _named(truth, rng, ("pedestrian",)):
+        oid, v0, label = agent.object_id, _speed0(agent), _label(truth, agent.object_id)
+        walking_throughout = v0 >= 0.8 and float(np.mean(agent.traj["speed"] >= 0.8)) >= 0.6
+        slot = {"T": phrase()}
+        if walking_throughout:
+            target = float(pick(rng, ("0.6", "0.8", "2", "2.5")))
+            unit = "km/h" if rng.random() < 0.3 else "m/s"
+            if unit == "km/h":
+                kmh = float(pick(rng, ("3", "7", "8")))
+                words, value, mps = f"{kmh:g} km/h", kmh, kmh / 3.6
+            else:
+                words, value, mps = speed_words(target, "m/s", rng)
+            if abs(mps - v0) >= 0.4:
+                out.append(Draft("pedestrian_speed_abs", EditIntent("modify", (oid,), motion=MotionIntent(
+                    speed_mps=mps, speed=SpeedWords("absolute", value, unit))), {**slot, "v": words}))
+            rel, mode, factor, unit = PEDESTRIAN_RELATIVE_SPEEDS[int(rng.integers(len(PEDESTRIAN_RELATIVE_SPEEDS)))]
+            out.append(Draft("pedestrian_speed_rel", EditIntent("modify", (oid,), motion=MotionIntent(
+                speed_mps=v0 * factor, speed=SpeedWords(mode, factor, unit))), {**slot, "rel": rel}))
+            out.append(Draft("pedestrian_run", EditIntent("modify", (oid,), motion=MotionIntent(gait="run")), slot))
+            out.append(Draft("pedestrian_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)), slot))
+            delay = float(pick(rng, ("1", "1.5", "2")))
+            out.append(Draft("pedestrian_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
+                             {**slot, "t": seconds_phrase(delay, rng)}))
+        if label in (voc.STANDING, voc.WALKING_ALONG):
+            near, away = _near_kerb(truth, agent)
+            if near:
+                out.append(Draft("pedestrian_cross", EditIntent("modify", (oid,), motion=MotionIntent(
+                    cross_street=True)), slot))
+            if away:
+                out.append(Draft("pedestrian_jaywalk", EditIntent("modify", (oid,), motion=MotionIntent(
+                    cross_street=True, jaywalk=True)), slot))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- remove
+def plan_remove(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    del pools
+    out = [Draft("remove_single", EditIntent("remove", (agent.object_id,)), {"T": phrase()})
+           for agent, phrase in _named(truth, rng, ("vehicle", "pedestrian", "static", "sign"))]
+    for phrase, ids in [*group_phrases(truth, rng), *static_groups(truth)]:
+        out.append(Draft("remove_group", EditIntent("remove", ids, group=True), {"T": phrase}))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- infeasible
+def plan_infeasible(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    out: list[Draft] = []
+    for _ in range(3):
+        absent = absent_vehicle_phrase(truth, rng) if rng.random() < 0.7 else absent_pedestrian_phrase(rng)
+        out.append(Draft("absent_remove", EditIntent("remove", expected_refusals=("not_found",), structured=False),
+                         {"T": absent}))
+        out.append(Draft("absent_modify", EditIntent("modify", expected_refusals=("not_found",), structured=False),
+                         {"T": absent}))
+        asset, words = _vehicle_asset(pools, rng)
+        out.append(Draft("absent_anchor", EditIntent("insert", asset=asset, expected_refusals=("not_found",),
+                                                     structured=False), {"A": words, "anchor": absent}))
+        asset, words = _vehicle_asset(pools, rng)
+        distance = float(pick(rng, ("10", "15", "20")))
+        out.append(Draft("car_on_sidewalk", EditIntent(
+            "insert", asset=asset, placement=PlacementIntent("on_sidewalk", EGO, distance),
+            expected_refusals=("infeasible_placement",)), {"A": words, "d": distance_phrase(distance, rng)}))
+    for agent, phrase in _named(truth, rng, ("vehicle",)):
+        pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+        if pos.arm is not None and pos.inbound is False and pos.along > truth.layout.stopline_s(pos.arm):
+            side = pick(rng, ("left", "right"))
+            out.append(Draft("turn_no_intersection", EditIntent(
+                "modify", (agent.object_id,), motion=MotionIntent(turn=side),
+                expected_refusals=("infeasible_motion",)), {"T": phrase(), "side": side}))
+    for agent, phrase in _named(truth, rng, ("pedestrian",)):
+        side = pick(rng, ("left", "right"))
+        out.append(Draft("pedestrian_lane_change", EditIntent(
+            "modify", (agent.object_id,), motion=MotionIntent(lane_change=side),
+            expected_refusals=("wrong_category", "infeasible_motion")), {"T": phrase(), "side": side}))
+    for agent, phrase in _named(truth, rng, ("static", "sign")):
+        words, value, mps = speed_words(8.0, "km/h", rng)
+        out.append(Draft("static_motion", EditIntent(
+            "modify", (agent.object_id,), motion=MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value,
+                                                                                             "km/h")),
+            expected_refusals=("wrong_category", "infeasible_motion")), {"T": phrase(), "v": words}))
+    out += [Draft("nonsense", EditIntent("modify", expected_refusals=("unsupported",), structured=False))
+            for _ in range(4)]
+    return out
+
+
+Planner = Callable[[SceneTruth, AssetPools, np.random.Generator], list[Draft]]
+#: The planner of each prompt category (``prompts.CATEGORIES`` and ``"infeasible"``).
+PLANNERS: dict[str, Planner] = {
+    "add_vehicle": plan_add_vehicle,
+    "add_static": plan_add_static,
+    "add_pedestrian": plan_add_pedestrian,
+    "modify_vehicle": plan_modify_vehicle,
+    "modify_pedestrian": plan_modify_pedestrian,
+    "remove": plan_remove,
+    "infeasible": plan_infeasible,
+}
+
+__all__ = ["AssetPools", "Draft", "LOG_SPAN_S", "PLANNERS", "STATIC_ASSETS"]
