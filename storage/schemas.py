@@ -496,3 +496,24 @@ GROUNDING_OUTCOMES_SCHEMA = _schema(
         ("seconds", pa.float64()),
     ],
 )
+
+
+
+# ----------------------------------------------------------------------------- editing evaluation (run tables)
+#: Tables of ``simsplat eval editing`` (columns defined by ``simsplat_core.eval.editing.outcomes``).
+EDITING_TABLES: tuple[str, ...] = ("editing", "editing_infeasible", "edit_fidelity", "editing_outcomes")
+
+
+def editing_table_schema(name: str) -> pa.Schema:
+    """Schema of one editing-evaluation table (``EDITING_TABLES``): ``editing`` (method, category, prompts,
+    completed, rate), ``editing_infeasible``, ``edit_fidelity`` (method, category, edits, psnr, ssim,
+    psnr_unedited, psnr_region, psnr_unedited_region) and ``editing_outcomes`` (one row per method and prompt).
+
+    Raises:
+        KeyError: an unknown table name.
+    """
+    from simsplat_core.eval.editing.outcomes import TABLE_COLUMNS  # imported here: storage loads without the core
+
+    if name not in TABLE_COLUMNS:
+        raise KeyError(f"no editing table {name!r}; known: {list(TABLE_COLUMNS)}")
+    return _schema(name, 1, list(TABLE_COLUMNS[name]))
