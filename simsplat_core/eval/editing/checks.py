@@ -257,9 +257,9 @@ def _lane_paths(truth: SceneTruth, xy: np.ndarray, heading: float, choice: str) 
         lane = int((lanes.left if choice == "left" else lanes.right)[lane])
         if lane < 0:
             return []
-        start = lanes.lanes[lane]
-        near = start.points[np.argmin(np.linalg.norm(start.points - xy, axis=1))]
-        xy = near
+        neighbour = lanes.lanes[lane].points
+        s_on, _ = _along_path(neighbour, np.asarray(xy, float))
+        xy = np.stack([np.interp(s_on, _arc(neighbour), neighbour[:, k]) for k in range(2)])
     out = []
     for manoeuvre in ("straight", "left", "right"):
         try:
@@ -283,9 +283,14 @@ def _along_path(pts: np.ndarray, xy: np.ndarray) -> tuple[float, float]:
     return s, float(d[i])
 
 
+def _arc(pts: np.ndarray) -> np.ndarray:
+    """``[P]`` cumulative arc length of a polyline."""
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(pts, axis=0), axis=1))])
+
+
 def _path_heading(pts: np.ndarray, s: float) -> float:
     seg = np.diff(pts, axis=0)
-    cum = np.concatenate([[0.0], np.cumsum(np.linalg.norm(seg, axis=1))])
+    cum = _arc(pts)
     i = int(np.clip(np.searchsorted(cum, s, side="right") - 1, 0, len(seg) - 1))
     return float(np.arctan2(seg[i, 1], seg[i, 0]))
 

@@ -56,6 +56,7 @@ from simsplat_core.eval.editing.wording import (
     speed_words,
 )
 from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.world.agents import EGO_SIZE, Agent
 from simsplat_core.world.road import connector_points, target_lane
 
@@ -63,8 +64,9 @@ from simsplat_core.world.road import connector_points, target_lane
 LOG_SPAN_S = 3.9
 #: Comfortable deceleration used to judge whether a stop is reachable (m/s^2).
 COMFORT_DECEL = 3.5
-#: A spot is free when no agent centre is this close at the first frame (metres).
-FREE_RADIUS_M = 6.0
+#: Footprints (length, width) of the objects a spot must have room for: a car and a traffic cone.
+CAR_FOOTPRINT = (5.5, 2.2)
+CONE_FOOTPRINT = (0.6, 0.6)
 
 _TURNING = (voc.TURNING_LEFT, voc.TURNING_RIGHT)
 _STATIONARY = (voc.STOPPED, voc.PARKED)
@@ -160,15 +162,20 @@ def _named(truth: SceneTruth, rng: np.random.Generator, kinds: tuple[str, ...]) 
     return out
 
 
-def _free(truth: SceneTruth, xy: np.ndarray, frame: int = 0, radius: float = FREE_RADIUS_M) -> bool:
-    """No agent (nor the ego) centre within ``radius`` of ``xy`` at ``frame``."""
-    centres = [truth.ego_xy[frame]] + [a.traj["xy"][frame] for a in truth.world.agents]
-    return bool(np.min(np.linalg.norm(np.asarray(centres) - xy, axis=1)) > radius)
+def _free(truth: SceneTruth, xy: np.ndarray, heading: float, size: tuple[float, float] = CAR_FOOTPRINT,
+          margin: float = 1.0, skip: str = "", frame: int = 0) -> bool:
+    """A box of ``size`` at ``xy`` facing ``heading``, grown by ``margin``, overlaps neither the ego nor any agent
+    (but ``skip``) at ``frame``."""
+    boxes = [(truth.ego_xy[frame], float(truth.ego_heading[frame]), EGO_SIZE[:2])]
+    boxes += [(a.traj["xy"][frame], float(a.traj["heading"][frame]), a.size[:2]) for a in truth.world.agents
+              if a.object_id != skip]
+    return not any(footprints_overlap(np.asarray(xy, float)[None], np.array([heading]), size, np.asarray(c)[None],
+                                      np.array([h]), (float(sz[0]), float(sz[1])), margin)[0] for c, h, sz in boxes)
 
 
-def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> np.ndarray | None:
-    """World point ``distance`` ahead of the ego along its lane (``side`` lanes to the left, +1, or right,
-    -1), ``None`` when that lane does not exist or the spot is off the road."""
+def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> tuple[np.ndarray, float] | None:
+    """``(world point, lane heading)`` ``distance`` ahead of the ego along its lane (``side`` lanes to the left,
+    +1, or right, -1); ``None`` when that lane does not exist or ends before."""
     xy0, h0 = truth.ego_xy[0], float(truth.ego_heading[0])
     left = np.array([-np.sin(h0), np.cos(h0)])
     start = xy0 + side * truth.layout.lane_w_h * left
@@ -183,7 +190,7 @@ def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> np.ndar
     s = path.start_s + distance
     if s > path.path.length:
         return None
-    return np.asarray(path.path.position(s), dtype=np.float64)
+    return np.asarray(path.path.position(s), dtype=np.float64), float(path.path.heading(s))
 
 
 def _vehicle_asset(pools: AssetPools, rng: np.random.Generator, avoid: tuple[str, str] | None = None
@@ -233,18 +240,13 @@ def _spot_near(agent: Agent, along: float, across: float) -> np.ndarray:
     return np.asarray(agent.traj["xy"][0] + along * fwd + across * left, dtype=np.float64)
 
 
-def _others_free(truth: SceneTruth, xy: np.ndarray, skip: str, radius: float) -> bool:
-    centres = [truth.ego_xy[0]] + [a.traj["xy"][0] for a in truth.world.agents if a.object_id != skip]
-    return bool(np.min(np.linalg.norm(np.asarray(centres) - xy, axis=1)) > radius)
-
-
 # ---------------------------------------------------------------------------------------------- add
 def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
     out: list[Draft] = []
     ego_pos = truth.road_position(truth.ego_xy[0], float(truth.ego_heading[0]))
     for distance in (10.0, 12.0, 15.0, 18.0, 20.0, 25.0, 30.0):
-        spot = _ego_lane_spot(truth, distance)
-        if spot is not None and _free(truth, spot):
+        found = _ego_lane_spot(truth, distance)
+        if found is not None and _free(truth, *found):
             for kind in ("vehicle_lane_ahead", "vehicle_lane_speed"):
                 asset, words = _vehicle_asset(pools, rng)
                 motion = None
@@ -259,8 +261,8 @@ def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Genera
         for side, name in ((1, "left"), (-1, "right")):
             if ego_pos.lane is None or not 0 <= ego_pos.lane - side < truth.layout.lanes_h:
                 continue
-            spot = _ego_lane_spot(truth, distance, side)
-            if spot is not None and _free(truth, spot):
+            found = _ego_lane_spot(truth, distance, side)
+            if found is not None and _free(truth, *found):
                 asset, words = _vehicle_asset(pools, rng)
                 out.append(Draft("vehicle_side_lane", EditIntent(
                     "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, name)),
@@ -270,7 +272,7 @@ def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Genera
         across = 2 * (ego_pos.lateral if ego_pos.lateral else 0.0)
         opposite = opposite + across * np.array([-np.sin(h0), np.cos(h0)])
         pos = truth.road_position(opposite, h0 + np.pi)
-        if distance >= 15 and pos.region == "travel" and pos.lane is not None and _free(truth, opposite):
+        if distance >= 15 and pos.region == "travel" and pos.lane is not None and _free(truth, opposite, h0 + np.pi):
             asset, words = _vehicle_asset(pools, rng)
             out.append(Draft("vehicle_oncoming", EditIntent(
                 "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "opposite")),
@@ -282,7 +284,7 @@ def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Genera
             gap = float(pick(rng, ("5", "6", "8", "10")))
             spot = _spot_near(anchor, sign * (length / 2 + gap + 2.4), 0.0)
             pos = truth.road_position(spot, float(anchor.traj["heading"][0]))
-            if pos.region not in ("travel", "parking") or not _others_free(truth, spot, anchor.object_id, 5.0):
+            if pos.region not in ("travel", "parking") or not _free(truth, spot, float(anchor.traj["heading"][0])):
                 continue
             asset, words = _vehicle_asset(pools, rng)
             out.append(Draft(kind, EditIntent("insert", asset=asset,
@@ -296,8 +298,8 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
     out: list[Draft] = []
     ego_pos = truth.road_position(truth.ego_xy[0], float(truth.ego_heading[0]))
     for distance in (8.0, 10.0, 12.0, 15.0, 20.0):
-        spot = _ego_lane_spot(truth, distance)
-        if spot is not None and _free(truth, spot, radius=4.0):
+        found = _ego_lane_spot(truth, distance)
+        if found is not None and _free(truth, *found, size=CONE_FOOTPRINT, margin=1.5):
             asset, words = _static_asset(rng)
             out.append(Draft("static_lane_ahead", EditIntent(
                 "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "same")),
@@ -311,8 +313,8 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
         for side, name in ((1, "left"), (-1, "right")):
             if ego_pos.lane is None or not 0 <= ego_pos.lane - side < truth.layout.lanes_h:
                 continue
-            spot = _ego_lane_spot(truth, distance, side)
-            if spot is not None and _free(truth, spot, radius=4.0):
+            found = _ego_lane_spot(truth, distance, side)
+            if found is not None and _free(truth, *found, size=CONE_FOOTPRINT, margin=1.5):
                 asset, words = _static_asset(rng)
                 out.append(Draft("static_side_lane", EditIntent(
                     "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, name)),
@@ -336,7 +338,7 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
                                       ("static_anchor_front", 1.0, "in_front_of")):
             gap = float(pick(rng, ("1", "1.5", "2", "3")))
             spot = _spot_near(anchor, along * (anchor.size[0] / 2 + gap), 0.0)
-            if truth.layout.on_road(spot[None])[0] and _others_free(truth, spot, anchor.object_id, 3.0):
+            if truth.layout.on_road(spot[None])[0] and _free(truth, spot, 0.0, CONE_FOOTPRINT, 0.5, anchor.object_id):
                 asset, words = _static_asset(rng)
                 out.append(Draft(kind, EditIntent("insert", asset=asset,
                                                   placement=PlacementIntent(relation, anchor.object_id, gap)),
@@ -344,7 +346,7 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
         for sign, name, relation in ((1.0, "left", "left_of"), (-1.0, "right", "right_of")):
             gap = float(pick(rng, ("1", "1.5", "2")))
             spot = _spot_near(anchor, 0.0, sign * (anchor.size[1] / 2 + gap))
-            if truth.layout.on_road(spot[None])[0] and _others_free(truth, spot, anchor.object_id, 3.0):
+            if truth.layout.on_road(spot[None])[0] and _free(truth, spot, 0.0, CONE_FOOTPRINT, 0.5, anchor.object_id):
                 asset, words = _static_asset(rng)
                 out.append(Draft("static_anchor_side", EditIntent(
                     "insert", asset=asset, placement=PlacementIntent(relation, anchor.object_id, gap)),
@@ -551,7 +553,8 @@ def plan_modify_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.
 # ---------------------------------------------------------------------------------------------- remove
 def plan_remove(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
     del pools
-    out = [Draft("remove_single", EditIntent("remove", (agent.object_id,)), {"T": phrase()})
+    out = [Draft("remove_single" if agent.category in ("vehicle", "pedestrian") else "remove_static",
+                 EditIntent("remove", (agent.object_id,)), {"T": phrase()})
            for agent, phrase in _named(truth, rng, ("vehicle", "pedestrian", "static", "sign"))]
     for phrase, ids in [*group_phrases(truth, rng), *static_groups(truth)]:
         out.append(Draft("remove_group", EditIntent("remove", ids, group=True), {"T": phrase}))

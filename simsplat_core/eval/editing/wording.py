@@ -276,6 +276,12 @@ FORMS: dict[str, tuple[str, ...]] = {
         "Take {T} out of the scene.",
         "Please remove {T}.",
     ),
+    "remove_static": (
+        "Remove {T}.",
+        "Take away {T}.",
+        "Get rid of {T} next to the road.",
+        "Delete {T} from the street.",
+    ),
     "remove_group": (
         "Remove {T}.",
         "Delete {T}.",

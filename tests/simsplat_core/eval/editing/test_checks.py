@@ -1,0 +1,265 @@
+"""State checks on hand-made edited agents: each passes the edit it was made for and fails others."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from simsplat_core.eval.editing.checks import check_refusal, check_states, measured_speed
+from simsplat_core.eval.editing.intents import (
+    EGO,
+    AssetIntent,
+    EditIntent,
+    MotionIntent,
+    PlacementIntent,
+    SpeedWords,
+)
+from simsplat_core.eval.editing.observation import EditObservation, state_changes
+from simsplat_core.eval.editing.plans import _ego_lane_spot, _free
+from simsplat_core.eval.editing.truth import SceneTruth
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.world.paths import route
+
+
+@pytest.fixture(scope="module")
+def truth(truths) -> SceneTruth:
+    return truths[1]
+
+
+@pytest.fixture(scope="module")
+def before(truth) -> AgentStates:
+    return AgentStates.from_log(truth.log, truth.node_of_object)
+
+
+def _cruiser(truth: SceneTruth) -> str:
+    """A vehicle driving at a steady speed >= 5 m/s."""
+    for a in truth.world.agents:
+        if a.category == "vehicle" and a.traj["speed"][0] >= 5 and np.std(a.traj["speed"]) < 0.1:
+            return a.object_id
+    raise AssertionError("no steady vehicle in the scene")
+
+
+def _along_path(truth, before, oid, s_of_t, node_id=None):
+    """``before`` with ``oid`` driving its own path at arc lengths ``s_of_t(t)`` (relative to its start)."""
+    agent = truth.agent(oid)
+    path = agent.motion.path
+    s = agent.traj["s"][0] + s_of_t(before.times)
+    row = before.index(oid)
+    xy, heading = path.position(s), path.heading(s)
+    speed = np.gradient(s, before.times)
+    return before.with_agent(oid, "vehicle", "edited", xy=xy, heading=heading, speed=speed,
+                             valid=np.ones(before.num_steps, bool), size=before.size[row],
+                             node_id=int(before.node_ids[row]) if node_id is None else node_id)
+
+
+def _obs(before, after) -> EditObservation:
+    return EditObservation(None, "", before, after)
+
+
+def test_measured_speed_comes_from_positions(truth, before) -> None:
+    oid = _cruiser(truth)
+    after = _along_path(truth, before, oid, lambda t: 6.0 * t)
+    row = after.index(oid)
+    lying = after.with_agent(oid, "vehicle", "edited", xy=after.xy[row], heading=after.heading[row],
+                             speed=np.full(after.num_steps, 20.0), valid=after.valid[row], size=after.size[row],
+                             node_id=int(after.node_ids[row]))
+    assert np.allclose(measured_speed(lying, row)[5:-5], 6.0, atol=0.05)
+
+
+def test_remove_exactly_the_targets(truth, before) -> None:
+    intent = EditIntent("remove", ("veh_01",))
+    assert check_states(truth, intent, _obs(before, before.without(["veh_01"]))).passed
+    wrong = check_states(truth, intent, _obs(before, before.without(["veh_02"])))
+    assert not wrong.passed and "removed ['veh_02']" in wrong.reason
+    extra = check_states(truth, intent, _obs(before, before.without(["veh_01", "veh_02"])))
+    assert not extra.passed
+    group = EditIntent("remove", ("veh_01", "veh_02"), group=True)
+    assert check_states(truth, group, _obs(before, before.without(["veh_01", "veh_02"]))).passed
+    assert not check_states(truth, group, _obs(before, before.without(["veh_01"]))).passed
+
+
+def test_speed_reached_on_the_same_path(truth, before) -> None:
+    oid = _cruiser(truth)
+    v0 = float(truth.agent(oid).traj["speed"][0])
+    target = v0 + 3.0
+    # accelerate at 2 m/s^2 from v0 to target, then hold
+    t_acc = 3.0 / 2.0
+
+    def s_of_t(t):
+        return np.where(t < t_acc, v0 * t + t * t, v0 * t_acc + t_acc**2 + target * (t - t_acc))
+
+    after = _along_path(truth, before, oid, s_of_t)
+    intent = EditIntent("modify", (oid,), motion=MotionIntent(speed_mps=target, speed=SpeedWords("absolute", target,
+                                                                                                 "m/s")))
+    ok = check_states(truth, intent, _obs(before, after))
+    assert ok.passed, ok.reason
+    assert ok.measured["speed_mps"] == pytest.approx(target, abs=0.3)
+    too_slow = EditIntent("modify", (oid,), motion=MotionIntent(speed_mps=target + 3.0))
+    assert "speed" in check_states(truth, too_slow, _obs(before, after)).reason
+    unchanged = check_states(truth, intent, _obs(before, before))
+    assert not unchanged.passed and "changed the trajectory of nothing" in unchanged.reason
+
+
+def test_other_agents_must_not_move(truth, before) -> None:
+    oid = _cruiser(truth)
+    after = _along_path(truth, before, oid, lambda t: 0.5 * truth.agent(oid).traj["speed"][0] * t)
+    other = next(a.object_id for a in truth.world.agents if a.category == "vehicle" and a.object_id != oid)
+    row = after.index(other)
+    moved = after.with_agent(other, "vehicle", "edited", xy=after.xy[row] + 2.0, heading=after.heading[row],
+                             speed=after.speed[row], valid=after.valid[row], size=after.size[row],
+                             node_id=int(after.node_ids[row]))
+    half = 0.5 * float(truth.agent(oid).traj["speed"][0])
+    intent = EditIntent("modify", (oid,), motion=MotionIntent(speed_mps=half))
+    assert check_states(truth, intent, _obs(before, after)).passed
+    assert other in check_states(truth, intent, _obs(before, moved)).reason
+
+
+def test_stop_and_stop_by_time(truth, before) -> None:
+    oid = _cruiser(truth)
+    v0 = float(truth.agent(oid).traj["speed"][0])
+    decel = v0 / 2.0  # standing still after 2 s
+
+    def s_of_t(t):
+        tc = np.minimum(t, 2.0)
+        return v0 * tc - 0.5 * decel * tc * tc
+
+    after = _along_path(truth, before, oid, s_of_t)
+    stop = EditIntent("modify", (oid,), motion=MotionIntent(stop=True))
+    result = check_states(truth, stop, _obs(before, after))
+    assert result.passed, result.reason
+    assert result.measured["stopped_at_s"] == pytest.approx(2.0, abs=0.4)
+    assert check_states(truth, EditIntent("modify", (oid,), motion=MotionIntent(stop=True, stop_by_s=2.5)),
+                        _obs(before, after)).passed
+    late = check_states(truth, EditIntent("modify", (oid,), motion=MotionIntent(stop=True, stop_by_s=0.5)),
+                        _obs(before, after))
+    assert not late.passed and "asked by 0.5" in late.reason
+    slower = _along_path(truth, before, oid, lambda t: 0.6 * v0 * t)
+    assert not check_states(truth, stop, _obs(before, slower)).passed
+    hard = check_states(truth, EditIntent("modify", (oid,), motion=MotionIntent(longitudinal="brake_hard")),
+                        _obs(before, after))
+    assert hard.passed == (decel >= 4.0), hard.reason
+
+
+def test_turn_checked_by_the_auto_labeller(truth, before, prompts) -> None:
+    turn = next(p for p in prompts if p.kind == "vehicle_turn" and p.seq_id == truth.seq_id)
+    oid, side = turn.intent.targets[0], turn.intent.motion.turn
+    agent = truth.agent(oid)
+    pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+    path = route(truth.layout, pos.arm, pos.lane, side)
+    s0 = path.project(agent.traj["xy"][0])
+    s = s0 + float(agent.traj["speed"][0]) * before.times
+    row = before.index(oid)
+    after = before.with_agent(oid, "vehicle", "edited", xy=path.position(s), heading=path.heading(s),
+                              speed=np.full(before.num_steps, agent.traj["speed"][0]), valid=before.valid[row],
+                              size=before.size[row], node_id=int(before.node_ids[row]))
+    ok = check_states(truth, turn.intent, _obs(before, after))
+    assert ok.passed, ok.reason
+    other = "right" if side == "left" else "left"
+    wrong = check_states(truth, EditIntent("modify", (oid,), motion=MotionIntent(turn=other)), _obs(before, after))
+    assert not wrong.passed and f"turning_{other}" in wrong.reason
+
+
+def test_lane_change_checked_by_the_auto_labeller(truth, before, prompts) -> None:
+    change = next(p for p in prompts if p.kind == "vehicle_lane_change" and p.seq_id == truth.seq_id)
+    oid, side = change.intent.targets[0], change.intent.motion.lane_change
+    row = before.index(oid)
+    h = before.heading[row]
+    left = np.stack([-np.sin(h), np.cos(h)], axis=1)
+    w = np.clip((before.times - 0.5) / 2.5, 0, 1)
+    shift = (3.0 * w * w - 2.0 * w**3) * truth.layout.lane_w_h * (1 if side == "left" else -1)
+    after = before.with_agent(oid, "vehicle", "edited", xy=before.xy[row] + shift[:, None] * left, heading=h,
+                              speed=before.speed[row], valid=before.valid[row], size=before.size[row],
+                              node_id=int(before.node_ids[row]))
+    ok = check_states(truth, change.intent, _obs(before, after))
+    assert ok.passed, ok.reason
+    other = EditIntent("modify", (oid,), motion=MotionIntent(lane_change="right" if side == "left" else "left"))
+    assert not check_states(truth, other, _obs(before, after)).passed
+
+
+def test_delay_stands_then_follows_the_path(truth, before) -> None:
+    oid = _cruiser(truth)
+    v0 = float(truth.agent(oid).traj["speed"][0])
+    delayed = _along_path(truth, before, oid, lambda t: v0 * np.maximum(t - 1.5, 0.0))
+    intent = EditIntent("modify", (oid,), motion=MotionIntent(delay_s=1.5))
+    ok = check_states(truth, intent, _obs(before, delayed))
+    assert ok.passed, ok.reason
+    slow_start = _along_path(truth, before, oid, lambda t: 0.5 * v0 * t)
+    assert "before the delay" in check_states(truth, intent, _obs(before, slow_start)).reason
+
+
+def _insert(before, oid, category, xy, heading, size, speed=0.0):
+    n = before.num_steps
+    xy = np.broadcast_to(np.asarray(xy, float), (n, 2)).copy() if np.ndim(xy) == 1 else xy
+    return before.with_agent(oid, category, "inserted", xy=xy, heading=np.full(n, heading),
+                             speed=np.full(n, speed), valid=np.ones(n, bool), size=size, node_id=999)
+
+
+def test_insert_in_the_ego_lane_at_the_said_distance(truth, before) -> None:
+    d = next(d for d in np.arange(8.0, 30.0) if _free(truth, *_ego_lane_spot(truth, d)))
+    spot, h = _ego_lane_spot(truth, d)
+    intent = EditIntent("insert", asset=AssetIntent("vehicle", "sedan", "red"),
+                        placement=PlacementIntent("in_lane", EGO, d, "same"))
+    ok = check_states(truth, intent, _obs(before, _insert(before, "new_0", "vehicle", spot, h, (4.6, 1.8, 1.45))))
+    assert ok.passed, ok.reason
+    far = spot + 10.0 * np.array([np.cos(h), np.sin(h)])
+    assert "not in the same lane" in check_states(
+        truth, intent, _obs(before, _insert(before, "new_0", "vehicle", far, h, (4.6, 1.8, 1.45)))).reason
+    left = spot + truth.layout.lane_w_h * np.array([-np.sin(h), np.cos(h)])
+    assert not check_states(truth, intent, _obs(before, _insert(before, "new_0", "vehicle", left, h,
+                                                                (4.6, 1.8, 1.45)))).passed
+    side = EditIntent("insert", asset=AssetIntent("vehicle"), placement=PlacementIntent("in_lane", EGO, d, "left"))
+    assert check_states(truth, side, _obs(before, _insert(before, "new_0", "vehicle", left, h,
+                                                          (4.6, 1.8, 1.45)))).passed
+    wrong_kind = check_states(truth, intent, _obs(before, _insert(before, "new_0", "pedestrian", spot, h,
+                                                                  (0.6, 0.6, 1.7))))
+    assert "asked for a vehicle" in wrong_kind.reason
+    two = _insert(_insert(before, "new_1", "vehicle", far, h, (4.6, 1.8, 1.45)), "new_0", "vehicle", spot, h,
+                  (4.6, 1.8, 1.45))
+    assert "added 2 agents" in check_states(truth, intent, _obs(before, two)).reason
+
+
+def test_insert_behind_an_anchor_and_overlaps(truth, before) -> None:
+    anchor = "veh_05"  # the stopped pickup
+    agent = truth.agent(anchor)
+    h = float(agent.traj["heading"][0])
+    back = agent.traj["xy"][0] - (agent.size[0] / 2 + 6.0 + 2.3) * np.array([np.cos(h), np.sin(h)])
+    intent = EditIntent("insert", asset=AssetIntent("vehicle"), placement=PlacementIntent("behind", anchor, 6.0))
+    ok = check_states(truth, intent, _obs(before, _insert(before, "new_0", "vehicle", back, h, (4.6, 1.8, 1.45))))
+    assert ok.passed, ok.reason
+    front = agent.traj["xy"][0] + (agent.size[0] / 2 + 8.3) * np.array([np.cos(h), np.sin(h)])
+    assert "in front of the anchor" in check_states(
+        truth, intent, _obs(before, _insert(before, "new_0", "vehicle", front, h, (4.6, 1.8, 1.45)))).reason
+    on_top = check_states(truth, intent, _obs(before, _insert(before, "new_0", "vehicle", agent.traj["xy"][0], h,
+                                                              (4.6, 1.8, 1.45))))
+    assert "overlapping ['veh_05']" in on_top.reason
+
+
+def test_insert_on_the_sidewalk_ahead(truth, before) -> None:
+    ego = truth.road_position(truth.ego_xy[0], float(truth.ego_heading[0]))
+    layout = truth.layout
+    spot = layout.arm_point(ego.arm, ego.along - 12.0, layout.half_width(ego.arm) + layout.sidewalk_w / 2)
+    intent = EditIntent("insert", asset=AssetIntent("pedestrian", upper="red"),
+                        placement=PlacementIntent("on_sidewalk", EGO, 12.0))
+    ok = check_states(truth, intent, _obs(before, _insert(before, "new_0", "pedestrian", spot, 0.0, (0.6, 0.6, 1.7))))
+    assert ok.passed, ok.reason
+    road = layout.arm_point(ego.arm, ego.along - 12.0, 1.0)
+    assert "asked for the sidewalk" in check_states(
+        truth, intent, _obs(before, _insert(before, "new_0", "pedestrian", road, 0.0, (0.6, 0.6, 1.7)))).reason
+
+
+def test_refusals(before) -> None:
+    intent = EditIntent("remove", expected_refusals=("not_found",), structured=False)
+    assert check_refusal(intent, EditObservation.refusal("not_found", "no purple bus")).passed
+    odd = check_refusal(intent, EditObservation.refusal("unsupported", "?"))
+    assert odd.passed and "unexpected reason" in odd.reason
+    assert not check_refusal(intent, EditObservation(None, "removed node 3", before, before)).passed
+    feasible = EditIntent("remove", ("veh_01",))
+    assert "refused" in check_states(None, feasible, EditObservation.refusal("not_found", "nope")).reason  # type: ignore[arg-type]
+
+
+def test_state_changes_measures_redrawn_and_moved(before) -> None:
+    row = before.index("veh_01")
+    redrawn = before.with_agent("veh_01", "vehicle", "edited", xy=before.xy[row], heading=before.heading[row],
+                                speed=before.speed[row], valid=before.valid[row], size=(11.5, 2.5, 3.1), node_id=777)
+    changes = state_changes(before, redrawn)
+    assert changes.redrawn == ("veh_01",) and changes.moved == () and changes.removed == ()
