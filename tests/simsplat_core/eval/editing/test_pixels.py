@@ -1,0 +1,92 @@
+"""Pixel checks on hand-made views: drawn where the world shows it, captioned as asked, removed in pixels."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from simsplat_core.eval.editing.checks import Verdict
+from simsplat_core.eval.editing.intents import AssetIntent, EditIntent, PlacementIntent
+from simsplat_core.eval.editing.observation import AssetLook, EditObservation, PixelEvidence, ViewSet
+from simsplat_core.eval.editing.pixels import check_pixels, check_removed, check_visible
+from simsplat_core.eval.editing.world_edit import edit_world
+from simsplat_core.scenario.agents import AgentStates
+
+H, W = 20, 30
+
+
+def _views(rgb: np.ndarray, ids: np.ndarray) -> ViewSet:
+    return ViewSet((0,), ("front",), rgb[None, None].astype(np.float32), ids[None, None].astype(np.int32))
+
+
+def _box(value: int, background: int) -> np.ndarray:
+    ids = np.full((H, W), background, np.int32)
+    ids[5:15, 10:20] = value
+    return ids
+
+
+def test_visible_needs_the_node_where_the_world_shows_the_object() -> None:
+    grey = np.full((H, W, 3), 0.5)
+    world = _views(grey, _box(7, 0))
+    drawn = PixelEvidence(_views(grey, _box(42, -1)), world, world, {"new_0": 7}, {})
+    v = Verdict()
+    check_visible(drawn, "new_0", 42, must_show=True, v=v)
+    assert v.result().passed
+    elsewhere = np.full((H, W), -1, np.int32)
+    elsewhere[0:4, 0:4] = 42
+    v = Verdict()
+    check_visible(PixelEvidence(_views(grey, elsewhere), world, world, {"new_0": 7}, {}), "new_0", 42, True, v)
+    assert not v.result().passed and "drawn in 0%" in v.result().reason
+    v = Verdict()
+    check_visible(PixelEvidence(_views(grey, _box(42, -1)), _views(grey, np.zeros((H, W))), world, {"new_0": 7}, {}),
+                  "new_0", 42, must_show=True, v=v)
+    assert "out of sight" in v.result().reason and not v.result().passed
+
+
+def test_removed_region_must_look_like_the_scene_without_it() -> None:
+    with_it, without = np.zeros((H, W, 3)), np.ones((H, W, 3))
+    with_it[5:15, 10:20] = [0.8, 0.1, 0.1]
+    original = _views(with_it, _box(3, 0))
+    world_without = _views(without, np.zeros((H, W)))
+    good = PixelEvidence(_views(without, np.full((H, W), -1)), world_without, original, {}, {"veh_00": 3})
+    v = Verdict()
+    check_removed(good, "veh_00", 12, v)
+    assert v.result().passed
+    ghost = PixelEvidence(_views(with_it, np.full((H, W), -1)), world_without, original, {}, {"veh_00": 3})
+    v = Verdict()
+    check_removed(ghost, "veh_00", 12, v)
+    assert not v.result().passed and "looks like the scene with it" in v.result().reason
+    still = PixelEvidence(_views(without, _box(12, -1)), world_without, original, {}, {"veh_00": 3})
+    v = Verdict()
+    check_removed(still, "veh_00", 12, v)
+    assert "still rendered" in v.result().reason
+
+
+def test_caption_of_the_rendered_object_checks_colour_and_type(truths) -> None:
+    """A perfect editor: the 'Gaussian' render is the world's own render of the edit (node id = instance id)."""
+    truth = truths[0]
+    before = AgentStates.from_log(truth.log, truth.node_of_object)
+    h = float(truth.ego_heading[0])
+    xy = truth.ego_xy[0] + 12.0 * np.array([np.cos(h), np.sin(h)])
+    n = before.num_steps
+    size = (4.85, 1.95, 1.78)
+    after = before.with_agent("new_0", "vehicle", "inserted", xy=np.tile(xy, (n, 1)), heading=np.full(n, h),
+                              speed=np.zeros(n), valid=np.ones(n, bool), size=size, node_id=500)
+    world = edit_world(truth.world, before, after, {"new_0": AssetLook("vehicle", "SUV", "yellow", size)})
+    renders = world.render(0)
+    rgb = np.stack([r[3] for r in renders])[None]
+    inst = np.stack([r[5] for r in renders])[None]
+    cams = tuple(r[0] for r in renders)
+    views = ViewSet((0,), cams, rgb.astype(np.float32), inst.astype(np.int32))
+    node_ids = np.where(inst == world.instance["new_0"], 500, -1).astype(np.int32)
+    evidence = PixelEvidence(ViewSet((0,), cams, rgb.astype(np.float32), node_ids), views, views,
+                             dict(world.instance), {})
+    obs = EditObservation(None, "", before, after)
+
+    def intent(color: str, subtype: str) -> EditIntent:
+        return EditIntent("insert", asset=AssetIntent("vehicle", subtype, color),
+                          placement=PlacementIntent("in_lane", "ego", 12.0, "same"))
+
+    ok = check_pixels(intent("yellow", "SUV"), obs, evidence)
+    assert ok.passed, ok.reason
+    assert "colour yellow, asked blue" in check_pixels(intent("blue", "SUV"), obs, evidence).reason
+    assert "a SUV, asked a van" in check_pixels(intent("yellow", "van"), obs, evidence).reason
