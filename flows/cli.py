@@ -353,6 +353,79 @@ def _print_grounding(result) -> None:
         console.print(f"{name}: {uri}")
 
 
+@eval_app.command("editing")
+def eval_editing(
+    store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs, aligned scenes and an asset "
+                                       "bank (`simsplat assets build`).")],
+    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    per_category: Annotated[int, typer.Option(min=1, help="Prompts per category of Table 3, over all sequences.")] = 30,
+    infeasible: Annotated[int, typer.Option(min=0, help="Infeasible prompts (they must be refused).")] = 20,
+    methods: Annotated[list[str] | None, typer.Option(help="ours / chatsim-like / omnire-like (repeatable or comma "
+                                                      "separated; default: all).")] = None,
+    render_all: Annotated[bool, typer.Option("--render-all", help="Render every frame of every edit (default: the "
+                                             "test frames and the frames where the edit is seen).")] = False,
+    seed: Annotated[int, typer.Option(help="Seed of the prompt set.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Language editing benchmark (SIMSplat Table 3): prompts written from the synthetic worlds' ground truth,
+    each edit checked against ground truth (trajectories, renders, captions), completion per category for this
+    editor and the ChatSim-like / OmniRe-like variants, infeasible prompts refused, and edit fidelity against the
+    world's own rendering of each edit."""
+    from flows.progress import StepBars
+    from storage import ArtifactStore, list_logs
+    from storage.language_scenes import list_language_scenes
+    from tasks.editing_eval import evaluate_editing_run
+
+    artifacts = ArtifactStore(store)
+    aligned = [s for s in list_logs(artifacts) if list_language_scenes(artifacts, s)]
+    seq_ids = list(seq) if seq else aligned
+    missing = [s for s in seq_ids if s not in aligned]
+    if missing or not seq_ids:
+        raise typer.BadParameter(f"no language scene for {missing or 'any log'} in {store}; aligned: {aligned} "
+                                 "(run `simsplat run` or the alignment stage first)", param_hint="--seq")
+    names = [n.strip() for m in methods or () for n in m.split(",") if n.strip()] or None
+    try:
+        with StepBars(headline=""):
+            result = evaluate_editing_run.fn(store, seq_ids, out, per_category=per_category, infeasible=infeasible,
+                                             methods=names, render_all=render_all, seed=seed)
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    if as_json:
+        from dataclasses import asdict
+
+        typer.echo(json.dumps(asdict(result), default=float))
+        return
+    _print_editing(result)
+
+
+def _print_editing(result) -> None:
+    from simsplat_core.eval.editing.prompts import CATEGORIES
+
+    table = Table(title=f"Editing on {len(result.seq_ids)} sequences, {result.prompts['total']} prompts "
+                        f"(+{result.prompts['infeasible']} infeasible): task completion")
+    table.add_column("method")
+    for category in (*CATEGORIES, "total"):
+        table.add_column(category)
+    table.add_column("infeasible refused")
+    for method, per in result.completion.items():
+        table.add_row(method, *(f"{per.get(c, float('nan')):.2f}" for c in (*CATEGORIES, "total")),
+                      f"{result.refused.get(method, float('nan')):.2f}")
+    console.print(table)
+    fid = Table(title="Edit fidelity vs the world's rendering of the edit (PSNR dB; unedited test PSNR)")
+    for col in ("method", *CATEGORIES, "total", "unedited"):
+        fid.add_column(col)
+    for method, per in result.fidelity.items():
+        fid.add_row(method, *(f"{per[c]['psnr']:.2f}" for c in (*CATEGORIES, "total")),
+                    f"{per['total']['psnr_unedited']:.2f}")
+    console.print(fid)
+    for method, stats in result.edit_seconds.items():
+        if stats:
+            console.print(f"{method}: one edit {stats['median']:.2f} s median, {stats['max']:.2f} s max")
+    for name, uri in result.tables.items():
+        console.print(f"{name}: {uri}")
+
+
 @app.command()
 def world(
     out: Annotated[str, typer.Option(help="Artifact store root to write into.")],

@@ -97,11 +97,15 @@ def log_views(log: SceneLog, frames: Sequence[int]) -> ViewSet:
     by_key = {(img.frame_idx, img.camera): img for img in log.images}
     rgb, ids = [], []
     for f in frames:
-        row = [by_key[(f, c)] for c in cams]
-        if any(img.image is None or img.instance is None for img in row):
-            raise ValueError(f"{log.seq_id}: frame {f} lacks images or instance maps")
-        rgb.append(np.stack([img.image for img in row]))
-        ids.append(np.stack([img.instance for img in row]))
+        images, instances = [], []
+        for c in cams:
+            img = by_key[(f, c)]
+            if img.image is None or img.instance is None:
+                raise ValueError(f"{log.seq_id}: frame {f} camera {c} lacks its image or instance map")
+            images.append(img.image)
+            instances.append(img.instance)
+        rgb.append(np.stack(images))
+        ids.append(np.stack(instances))
     return ViewSet(tuple(frames), cams, np.stack(rgb).astype(np.float32), np.stack(ids).astype(np.int32))
 
 
