@@ -138,9 +138,13 @@ def _gaussian_columns(asset: Any) -> dict[str, np.ndarray]:
 
 
 def write_asset_bank(store: ArtifactStore, bank: Any, *, provenance: Mapping[str, Any] | None = None,
-                     overwrite: bool = False) -> str:
+                     extra_files: Mapping[str, bytes] | None = None, overwrite: bool = False) -> str:
     """Write ``bank`` (a ``simsplat_core.editing.assets.AssetBank``) atomically under ``assets/<bank_hash>/``;
     returns the bank hash. A complete bank with that hash is kept as it is unless ``overwrite``.
+
+    Args:
+        provenance: JSON-serialisable facts stored in the manifest (sources, config, versions).
+        extra_files: ``name -> bytes`` written into the bank directory with it (e.g. ``contact_sheet.png``).
 
     Raises:
         ValueError: a malformed hash, or an asset with per-Gaussian features (they belong to one scene).
@@ -170,6 +174,8 @@ def write_asset_bank(store: ArtifactStore, bank: Any, *, provenance: Mapping[str
                 store.write_table(path, deformation_table(scene_id, 0, asset.deform_frames, offsets),
                                   DEFORMATIONS_SCHEMA)
                 nbytes += store.size(path)
+        for name, data in (extra_files or {}).items():
+            store.write_bytes(join_relpath(tmp, name), data)
         manifest = {
             "format": MANIFEST_FORMAT,
             "format_version": ASSET_BANK_FORMAT_VERSION,
@@ -179,6 +185,7 @@ def write_asset_bank(store: ArtifactStore, bank: Any, *, provenance: Mapping[str
             "bytes": int(nbytes),
             "schema_version": schema_version(ASSETS_SCHEMA),
             "written_at": datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds"),
+            "files": sorted(extra_files or {}),
             "provenance": dict(provenance or {}),
         }
         mark_done(store, tmp, bank.bank_hash, manifest)
@@ -187,6 +194,26 @@ def write_asset_bank(store: ArtifactStore, bank: Any, *, provenance: Mapping[str
 
 
 # ----------------------------------------------------------------------------- read
+#: Columns of ``read_asset_index`` rows (the assets table less its per-frame lists).
+INDEX_COLUMNS = ("asset_id", "category", "subtype", "caption", "color", "size", "source_seq", "source_object",
+                 "num_gaussians", "attributes")
+
+
+def read_asset_index(store: ArtifactStore, bank_hash: str | None = None) -> tuple[str, list[dict[str, Any]]]:
+    """``(bank hash, rows)``: one dict per asset of a bank's ``assets.parquet`` (``INDEX_COLUMNS``; ``size``
+    a list of three floats, ``attributes`` a dict), without reading any Gaussians.
+
+    Raises:
+        FileNotFoundError, SchemaError, CorruptArtifactError: as ``read_asset_bank``.
+    """
+    full = resolve_bank_hash(store, bank_hash)
+    table = store.read_table(join_relpath(bank_dir(full), "assets.parquet"), ASSETS_SCHEMA)
+    rows = table.select(list(INDEX_COLUMNS)).to_pylist()
+    for row in rows:
+        row["attributes"] = dict(row["attributes"])
+    return full, rows
+
+
 def _bad(store: ArtifactStore, path: str, column: str, row: int, message: str) -> CorruptArtifactError:
     return CorruptArtifactError(f"{store.uri(path)}: column {column!r}, row {row}: {message}")
 
@@ -255,5 +282,5 @@ def read_asset_bank(store: ArtifactStore, bank_hash: str | None = None) -> Any:
     return bank
 
 
-__all__ = ["ASSETS_DIR", "ASSET_BANK_FORMAT_VERSION", "bank_dir", "bank_exists", "list_asset_banks",
-           "read_asset_bank", "read_bank_manifest", "resolve_bank_hash", "write_asset_bank"]
+__all__ = ["ASSETS_DIR", "ASSET_BANK_FORMAT_VERSION", "INDEX_COLUMNS", "bank_dir", "bank_exists", "list_asset_banks",
+           "read_asset_bank", "read_asset_index", "read_bank_manifest", "resolve_bank_hash", "write_asset_bank"]

@@ -111,9 +111,9 @@ def recolored(asset: Asset, color: str) -> Asset:
     if color not in COLOR_NAMES:
         raise ValueError(f"unknown colour {color!r}; known: {list(COLOR_NAMES)}")
     rows = body_rows(asset)
-    rgb = asset.gaussians.rgb.numpy().copy()
-    rgb[rows] = shifted_rgb(rgb[rows], asset.color, color)
-    colors = logit(torch.as_tensor(rgb, dtype=torch.float32))
+    colors = asset.gaussians.colors.clone()  # logits: the rows off the body keep theirs bit for bit
+    body_rgb = shifted_rgb(asset.gaussians.rgb.numpy()[rows], asset.color, color)
+    colors[torch.as_tensor(rows)] = logit(torch.as_tensor(body_rgb, dtype=torch.float32))
     gs = asset.gaussians.map_rows(lambda name, t: colors if name == "colors" else t)
     if asset.category == "pedestrian":
         lower = asset.attributes.get("lower_color") or None

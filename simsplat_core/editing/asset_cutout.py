@@ -207,6 +207,7 @@ def _cleaned(node: ObjectNode, track: Track | None, category: str, cfg: CutoutCo
     size = _box_size(track, node)
     keep, share = _clean_rows(node, size, cfg)
     gaussians = node.gaussians.detach().to("cpu").index(keep)
+    gaussians.features = None  # language latents belong to the source scene's autoencoder
     kept, mirrored = len(gaussians), ""
     if not isinstance(node, NonRigidNode):
         gaussians.extras.pop(OFFSETS, None)

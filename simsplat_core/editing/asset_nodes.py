@@ -10,8 +10,9 @@ offsets are *retimed*: the gait phase follows the distance walked, not time.
 
 **Gait retiming.** The source walked ``a_k`` metres up to its deform frame ``d_k`` (``k = 0 .. T_h-1``,
 ``Asset.deform_arc_length``). First a *loop* is chosen, the last deform frame ``d_L`` (at least half-way
-along the walk) whose offsets are closest to the first frame's: ``[d_0, d_L]`` then holds whole gait
-cycles and repeats without a jump; its length is ``W = a_L - a_0``. A new frame whose path has walked
+along the walk) whose offsets and their change to the next frame are closest to the first frame's
+(:func:`gait_loop`): ``[d_0, d_L]`` then holds whole gait cycles and repeats without a jump; its length
+is ``W = a_L - a_0``. A new frame whose path has walked
 ``s`` metres (``arc_length``, from the start of the track) shows the source at the (fractional) deform
 time ``tau`` with ``a(tau) = a_0 + (s mod W)``: a path twice as fast cycles the legs twice as fast, a
 path longer than the source's walk loops. A source that did not walk (``W < STANDING_WALK_M``) loops in
@@ -52,6 +53,11 @@ def path_arc_length(track: PoseTrack) -> np.ndarray:
 def gait_loop(offsets: torch.Tensor, frames: np.ndarray, arc: np.ndarray) -> int:
     """Index ``L`` of the deform frame that closes the gait loop (see the module docstring).
 
+    A candidate ``k`` (at least ``MIN_LOOP_SHARE`` along the walk, or along the frames for a source that
+    stood) is scored by how far frames ``k, k + 1`` are from frames ``0, 1`` (mean per-Gaussian distance):
+    matching the pose *and* its motion, so half a cycle (legs together, moving the other way) does not
+    close a loop. The latest candidate within ``LOOP_TOLERANCE`` of the best score wins.
+
     Args:
         offsets: ``[N, T_h, 3]`` per-Gaussian offsets.
         frames: ``[T_h]`` deform frames.
@@ -66,13 +72,15 @@ def gait_loop(offsets: torch.Tensor, frames: np.ndarray, arc: np.ndarray) -> int
     progress = (arc - arc[0]) / walked if walked >= STANDING_WALK_M else (frames - frames[0]) / float(
         frames[-1] - frames[0])
     candidates = np.flatnonzero(progress >= MIN_LOOP_SHARE)
-    candidates = candidates[candidates >= 1]
+    candidates = candidates[(candidates >= 1) & (candidates <= n_frames - 2)]
     if candidates.size == 0:
         return n_frames - 1
-    first = offsets[:, 0]  # [N, 3]
-    mismatch = np.array([float((offsets[:, k] - first).norm(dim=-1).mean()) for k in candidates.tolist()])
-    best = float(mismatch.min())
-    good = candidates[mismatch <= best * LOOP_TOLERANCE + 1e-9]
+
+    def distance(k: int) -> float:
+        return float(((offsets[:, k:k + 2] - offsets[:, 0:2]).norm(dim=-1)).mean())
+
+    mismatch = np.array([distance(k) for k in candidates.tolist()])
+    good = candidates[mismatch <= float(mismatch.min()) * LOOP_TOLERANCE + 1e-9]
     return int(good.max())
 
 
