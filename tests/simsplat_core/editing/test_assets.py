@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 
@@ -157,3 +160,13 @@ def test_banks_reject_duplicate_ids_and_bad_hashes() -> None:
         AssetBank.from_assets([mesh_vehicle("t.a"), mesh_vehicle("t.a")])
     with pytest.raises(ValueError, match="hex"):
         AssetBank((mesh_vehicle("t.a"),), "not-a-hash")
+
+
+def test_asset_modules_are_framework_free() -> None:
+    code = (
+        "import sys, simsplat_core.editing.assets, simsplat_core.editing.asset_cutout, "
+        "simsplat_core.editing.asset_nodes, simsplat_core.viz.asset_sheet; "
+        "bad = sorted(m for m in sys.modules if m.split('.')[0] in ('prefect', 'ray', 'storage', 'tasks', 'flows', "
+        "'pyarrow')); assert not bad, bad"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True)
