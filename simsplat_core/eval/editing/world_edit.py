@@ -12,9 +12,10 @@ world (a copy; the original is never changed)
   editor should have drawn;
 * redraws replaced agents with the replacing asset's look on the same trajectory.
 
-An asset the world cannot build (a kind outside its catalogue, e.g. a procedural barrel) is drawn by the
-closest catalogue object of similar size and reported as not native: visibility checks still use it,
-fidelity leaves it out.
+Static objects are drawn with the procedural kinds' meshes (``editing.procedural_assets.static_kind_mesh``, the
+world's own meshes for the world's kinds), from which the bank's procedural Gaussians were made. A look the
+world cannot build (an unknown kind) is drawn by the closest kind of similar size and reported as not native:
+visibility checks still use it, fidelity leaves it out.
 
 Steps where an agent does not exist (``AgentStates.valid`` false) place it far away (``AWAY_M``), where no
 camera sees it. Instance ids of the edited world are positions in its agent list plus one
@@ -30,11 +31,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.color_names import DISPLAY_RGB
+from simsplat_core.editing.procedural_assets import STATIC_KINDS as PROCEDURAL_KINDS
+from simsplat_core.editing.procedural_assets import static_kind_mesh
 from simsplat_core.eval.editing.observation import AssetLook, state_changes
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.world import World
 from simsplat_core.world import behaviors as bh
 from simsplat_core.world.agents import WALK_SWING, Agent
+from simsplat_core.world.mesh import Mesh
 from simsplat_core.world.palette import HAIR_COLORS, SKIN_TONES, STATIC_KINDS, VEHICLE_KIND_BY_NAME
 
 #: Where an agent goes at steps it does not exist (metres from the origin).
@@ -80,13 +84,15 @@ def _rgb(color: str) -> tuple[float, float, float]:
     return DISPLAY_RGB[color]
 
 
-def _static_kind(look: AssetLook) -> tuple[str, bool]:
-    """The world's static kind for a look (itself when in the catalogue, else the one nearest in size)."""
-    if look.subtype in STATIC_KINDS:
-        return look.subtype, True
-    size = np.asarray(look.size)
-    nearest = min(STATIC_KINDS, key=lambda k: float(np.linalg.norm(np.asarray(STATIC_KINDS[k][1]) - size)))
-    return nearest, False
+def _static_mesh(look: AssetLook) -> tuple[Mesh, bool]:
+    """The mesh of a static look: its procedural kind's mesh (the world's own for the world's kinds), else a
+    stand-in -- the world kind nearest in size -- with ``native`` false."""
+    rgb = _rgb(look.color) if look.color in DISPLAY_RGB else DISPLAY_RGB["orange"]
+    size = tuple(float(v) for v in look.size)
+    if look.subtype in PROCEDURAL_KINDS:
+        return static_kind_mesh(look.subtype, size, rgb), True  # type: ignore[arg-type]
+    nearest = min(STATIC_KINDS, key=lambda k: float(np.linalg.norm(np.asarray(STATIC_KINDS[k][1]) - np.asarray(size))))
+    return static_kind_mesh(nearest, size, rgb), False  # type: ignore[arg-type]
 
 
 def native_agent(look: AssetLook, object_id: str, traj: dict[str, np.ndarray],
@@ -114,10 +120,11 @@ def native_agent(look: AssetLook, object_id: str, traj: dict[str, np.ndarray],
         agent = Agent("pedestrian", "pedestrian", size, motion, traj,  # type: ignore[arg-type]
                       {"upper_color": look.color, "lower_color": lower}, base)
     else:
-        kind, native = _static_kind(look)
-        category, _, _ = STATIC_KINDS[kind]
-        rgb = _rgb(look.color) if look.color in DISPLAY_RGB else DISPLAY_RGB["orange"]
-        agent = Agent(category, kind, size, motion, traj, {"color": look.color}, {"rgb": rgb})  # type: ignore[arg-type]
+        mesh, native = _static_mesh(look)
+        category = STATIC_KINDS[look.subtype][0] if look.subtype in STATIC_KINDS else "static"
+        # the mesh cache filled in up front: the world builds meshes only of its own catalogue
+        agent = Agent(category, look.subtype, size, motion, traj, {"color": look.color},  # type: ignore[arg-type]
+                      {"rgb": DISPLAY_RGB.get(look.color, DISPLAY_RGB["orange"])}, _mesh=mesh)
     agent.object_id = object_id
     return agent, native
 

@@ -56,12 +56,14 @@ def test_inserting_a_native_car_makes_pixels_of_its_instance(scene) -> None:
     inst = edited.instance["new_0"]
     pixels = [int((r[5] == inst).sum()) for r in edited.render(0)]
     assert pixels[truth.log.cameras.index("front")] > 300
-    # a kind the world cannot build is drawn by a stand-in and reported
-    barrel = after.with_agent("new_0", "static", "inserted", xy=np.tile(xy, (n, 1)), heading=np.full(n, h),
-                              speed=np.zeros(n), valid=np.ones(n, bool), size=(0.6, 0.6, 0.9), node_id=99)
-    stand_in = edit_world(truth.world, before, barrel, {"new_0": AssetLook("static", "barrel", "orange",
-                                                                           (0.6, 0.6, 0.9))})
-    assert "new_0" not in stand_in.native and stand_in.notes
+    # procedural kinds are native (their own meshes); an unknown kind is drawn by a stand-in and reported
+    for subtype, native in (("barrel", True), ("mailbox", False)):
+        static = after.with_agent("new_0", "static", "inserted", xy=np.tile(xy, (n, 1)), heading=np.full(n, h),
+                                  speed=np.zeros(n), valid=np.ones(n, bool), size=(0.6, 0.6, 0.9), node_id=99)
+        drawn = edit_world(truth.world, before, static, {"new_0": AssetLook("static", subtype, "orange",
+                                                                            (0.6, 0.6, 0.9))})
+        assert ("new_0" in drawn.native) == native and bool(drawn.notes) != native
+        assert (np.stack([r[5] for r in drawn.render(0)]) == drawn.instance["new_0"]).sum() > 20
     with pytest.raises(ValueError, match="no look"):
         edit_world(truth.world, before, after, {})
 
