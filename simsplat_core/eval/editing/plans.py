@@ -83,6 +83,8 @@ STATIC_ASSETS: tuple[tuple[str, str | None, tuple[str, ...]], ...] = (
     ("barrier", None, ("barrier", "road barrier", "construction barrier")),
     ("barrier", "white", ("white barrier", "white road barrier")),
     ("barrel", "orange", ("orange barrel", "traffic barrel", "construction barrel")),
+    ("barrel", "yellow", ("yellow barrel", "yellow traffic drum")),
+    ("road work sign", "orange", ("road work sign", "orange construction sign")),
 )
 
 
