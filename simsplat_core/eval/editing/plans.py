@@ -430,7 +430,8 @@ def _crosswalk_stop_room(truth: SceneTruth, agent: Agent) -> bool:
     if pos.arm is None or not pos.inbound or v < 3.0:
         return False
     front_to_crosswalk = pos.along - agent.size[0] / 2 - truth.layout.crosswalk_range(pos.arm)[1]
-    return v * v / (2 * COMFORT_DECEL) + 1.0 <= front_to_crosswalk <= v * LOG_SPAN_S
+    # room to brake comfortably, and close enough that braking all the way ends within the log
+    return v * v / (2 * COMFORT_DECEL) + 1.0 <= front_to_crosswalk <= v * LOG_SPAN_S / 2
 
 
 def _room_behind(truth: SceneTruth, agent: Agent, metres: float = 8.0) -> bool:
@@ -469,7 +470,9 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
             if _crosswalk_stop_room(truth, agent):
                 out.append(Draft("vehicle_stop_crosswalk", EditIntent(
                     "modify", (oid,), motion=MotionIntent(stop=True, stop_before="crosswalk")), slot))
-            out.append(Draft("vehicle_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)), slot))
+            if v0 / COMFORT_DECEL <= LOG_SPAN_S - 1.0:  # a comfortable stop ends within the log
+                out.append(Draft("vehicle_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)),
+                                 slot))
             by = float(pick(rng, ("2", "2.5", "3")))
             if v0 / by <= 4.5:
                 out.append(Draft("vehicle_stop_by", EditIntent("modify", (oid,), motion=MotionIntent(
