@@ -112,7 +112,8 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
     """The vehicle's trajectory (module docstring). Raises ``EditRefused`` (``infeasible_motion``)."""
     req = request
     start = req.start
-    base = _base_route(req, lanes)
+    own = _own_route(req)
+    base = _base_route(req, own, lanes)
     s0 = base.project(start.xy)[0]
     route, s0 = _vehicle_route(req, base, s0, lanes)
     moving = abs(start.speed) > 0.3 or (req.log is not None and _log_moves(req.log))
@@ -127,21 +128,29 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
     horizon = float(req.times[-1] - req.times[start.step])
     reach = s0 + max(abs(v0), cruise or 0.0, req.limits.max_speed_mps / 2) * horizon + 50.0
     caps = curvature_caps(route, s0, reach, req.limits.lateral_accel_mps2)
-    plan = _plan(req, s0, v0, v_ref, stop, caps, leader)
+    if own is not None and req.turn is None and _keeps_log_speed(req):
+        plan = _replay_log(req, own, s0)
+    else:
+        plan = _plan(req, s0, v0, v_ref, stop, caps, leader)
     if req.turn in ("left", "right"):
         _check_turn_reached(req, route, plan, s0)
     return _compose(req, route, plan)
 
 
-def _base_route(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Route:
-    """The agent's own path: its log path extended along the lanes, else the lane it is on, else straight."""
+def _own_route(req: _Common) -> Route | None:
+    """The agent's own log path (``None`` without a log, or when it stands)."""
+    if req.log is None:
+        return None
+    steps = np.flatnonzero(req.log.valid)
+    return log_route(req.log.xy[steps], req.log.heading[steps])
+
+
+def _base_route(req: VehicleMotionRequest, own: Route | None, lanes: LaneGraph | None) -> Route:
+    """The agent's own path extended along the lanes, else the lane it is on, else straight."""
     start = req.start
-    if req.log is not None:
-        steps = np.flatnonzero(req.log.valid)
-        own = log_route(req.log.xy[steps], req.log.heading[steps])
-        if own is not None:
-            end = lane_route(lanes, own.position(own.length), float(own.heading(own.length)))
-            return merge_onto(own, own.length, end[0], MERGE_M) if end is not None else own
+    if own is not None:
+        end = lane_route(lanes, own.position(own.length), float(own.heading(own.length)))
+        return merge_onto(own, own.length, end[0], MERGE_M) if end is not None else own
     on_lane = lane_route(lanes, start.xy, start.heading)
     if on_lane is not None:
         return merge_onto(None, 0.0, on_lane[0], MERGE_M, point=start.xy)
@@ -150,18 +159,12 @@ def _base_route(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Route:
 
 def _vehicle_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> tuple[Route, float]:
     """Route with the requested turn / lane change / sideways shift, and the start's arc length on it."""
-    start, label = req.start, req.label
+    start = req.start
     route = base
     ramp = max(MIN_RAMP_M, SHIFT_S * max(abs(start.speed), req.target_speed_mps or 0.0))
     if req.turn is not None:
-        turned = lane_route(lanes, start.xy, start.heading, req.turn)
-        if turned is None:
-            raise EditRefused(f"turning requires an intersection ahead of {label}, and {label} is not on a lane "
-                              "of the map", reason="infeasible_motion")
-        if req.turn != "straight" and "turn" not in turned[0].marks:
-            raise EditRefused(f"turning requires an intersection ahead of {label} where its lane may turn "
-                              f"{req.turn}: none within 300 m", reason="infeasible_motion")
-        route = merge_onto(base, s0, turned[0], MERGE_M, final_offset_m=req.lateral_offset_m)
+        s_join, turned = _turn_route(req, base, s0, lanes)
+        route = merge_onto(base, s_join, turned, MERGE_M, final_offset_m=req.lateral_offset_m)
     elif req.lane_change is not None:
         target = _neighbour_route(req, lanes)
         length = max(MIN_RAMP_M * 1.5, req.lane_change_s * max(abs(start.speed), req.target_speed_mps or 0.0,
@@ -170,6 +173,37 @@ def _vehicle_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: Lan
     elif req.lateral_offset_m:
         route = offset_route(base, s0, req.lateral_offset_m, ramp)
     return route, route.project(start.xy)[0] if route is not base else s0
+
+
+def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> tuple[float, Route]:
+    """``(s_join, lane route making the turn)``: followed from the start, or from a little further along the
+    agent's own path when the lane nearest the start runs elsewhere than the path (overlapping lanes in an
+    intersection): the first candidate heading the way the path does over the next 10 m wins, else the
+    first that makes the turn."""
+    label, turn = req.label, req.turn
+    assert turn is not None
+    making: list[tuple[float, Route]] = []
+    for ahead in (0.0, 4.0, 8.0, 12.0, 16.0):
+        s_p = s0 + ahead
+        cand = lane_route(lanes, base.position(s_p), float(base.heading(s_p)), turn)
+        if cand is None or (turn != "straight" and "turn" not in cand[0].marks):
+            continue
+        route = cand[0]
+        s_c = route.project(base.position(s_p))[0]
+        probe = np.linspace(0.0, 10.0, 6)
+        apart = np.abs(np.angle(np.exp(1j * (route.heading(s_c + probe) - base.heading(s_p + probe))))).max()
+        logger.debug("turn %s from %.1f m ahead: %s, headings %.0f deg apart", turn, ahead, route.marks,
+                     np.rad2deg(apart))
+        if apart <= np.deg2rad(20.0):
+            return s_p, route
+        making.append((s_p, route))
+    if making:
+        return making[0]
+    if lane_route(lanes, req.start.xy, req.start.heading) is None:
+        raise EditRefused(f"turning requires an intersection ahead of {label}, and {label} is not on a lane of "
+                          "the map", reason="infeasible_motion")
+    raise EditRefused(f"turning requires an intersection ahead of {label} where its lane may turn {turn}: none "
+                      "within 300 m", reason="infeasible_motion")
 
 
 def _neighbour_route(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Route:
@@ -229,21 +263,23 @@ def plan_pedestrian(request: PedestrianMotionRequest, map_ctx: MapContext) -> Pl
     """The pedestrian's trajectory (module docstring). Raises ``EditRefused`` (``infeasible_motion``)."""
     req = request
     start = req.start
+    own = _own_route(req)
     if req.cross_street:
         route = _jaywalk_route(req, map_ctx) if req.jaywalk else _crosswalk_route(req, map_ctx)
     else:
-        own = None
-        if req.log is not None:
-            steps = np.flatnonzero(req.log.valid)
-            own = log_route(req.log.xy[steps], req.log.heading[steps])
         route = own if own is not None else straight_route(start.xy, start.heading)
     s0 = route.project(start.xy)[0]
     if req.lateral_offset_m:
         route = offset_route(route, s0, req.lateral_offset_m, 3.0)
+    if own is not None and not req.cross_street and _keeps_log_speed(req):
+        return _compose(req, route, _replay_log(req, own, s0))
     v_ref = _speed_reference(req, req.target_speed_mps, reverse=False)
     stop = _stop_target(req, route, s0, map_ctx)
+    crossing = stop is None and req.cross_street
+    if crossing:  # a crossing ends on the far sidewalk (where the route ends), if it gets there
+        stop = StopTarget(at_s=max(route.length, s0))
     v0 = 0.0 if req.hold_until_s is not None and _first_step(req) else start.speed
-    plan = _plan(req, s0, v0, v_ref, stop, None, None)
+    plan = _plan(req, s0, v0, v_ref, stop, None, None, must_stop=not crossing)
     return _compose(req, route, plan)
 
 
@@ -279,7 +315,7 @@ def _crosswalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route
     pts = [start.xy]
     if not on_it:
         pts.append(near - 0.5 * across)
-    pts += [far, far + KERB_STEP_M * across, far + (KERB_STEP_M + 30.0) * across]
+    pts += [far, far + KERB_STEP_M * across]
     return polyline_route(np.array(pts), smooth=3)
 
 
@@ -317,7 +353,7 @@ def _jaywalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
     left = np.flatnonzero(~on_road[entered[0]:])
     far = ray[entered[0] + left[0]] if left.size else ray[-1]
     pts = [start.xy] + ([begin] if np.linalg.norm(begin - start.xy) > 0.5 else [])
-    pts += [far + KERB_STEP_M * direction, far + (KERB_STEP_M + 30.0) * direction]
+    pts += [far + KERB_STEP_M * direction]
     return polyline_route(np.array(pts), smooth=3)
 
 
@@ -336,6 +372,38 @@ def _away_from_crosswalks(xy: np.ndarray, along: np.ndarray, map_ctx: MapContext
 # ------------------------------------------------------------------------------------------ shared
 def _log_moves(log: LogTrajectory) -> bool:
     return bool(np.abs(log.speed[log.valid]).max(initial=0.0) > 0.5)
+
+
+def _keeps_log_speed(req: _Common) -> bool:
+    """Nothing asks for a different progress than the log's (only sideways changes)."""
+    vehicle_change = isinstance(req, VehicleMotionRequest) and (req.reverse or req.leader is not None)
+    return (req.log is not None and _log_moves(req.log) and req.target_speed_mps is None and req.stop is None
+            and req.hold_until_s is None and not vehicle_change)
+
+
+def _replay_log(req: _Common, own: Route, s0: float) -> SpeedPlan:
+    """The log's own progress along its path from the start step (arc lengths of its positions on ``own``,
+    which the edited route shares up to the edit), then its last speed held beyond its last valid step."""
+    log = req.log
+    assert log is not None
+    k0 = req.start.step
+    steps = np.flatnonzero(log.valid)
+    steps = steps[steps >= k0]
+    s_log = np.array([own.project(log.xy[k])[0] for k in steps])
+    s_log = s0 + np.maximum.accumulate(s_log - s_log[0])
+    times = req.times
+    s = np.interp(times, times[steps], s_log)
+    v = np.zeros(len(times))
+    if len(times) - k0 > 1:
+        v[k0:] = np.gradient(s[k0:], times[k0:])
+    last = int(steps[-1])
+    if last + 1 < len(times):
+        v_last = float(v[last])
+        tail = plan_speed(times, t0=float(times[last]), s0=float(s[last]), v0=v_last, v_ref=lambda t: v_last,
+                          limits=req.limits)
+        s[last + 1:], v[last + 1:] = tail.s[last + 1:], tail.v[last + 1:]
+    a = np.gradient(v, times) if len(times) > 1 else np.zeros(len(times))
+    return SpeedPlan(s, v, a)
 
 
 def _first_step(req: _Common) -> bool:
@@ -399,13 +467,24 @@ def _ahead(req: _Common, s_stop: float, s0: float, what: str) -> float:
 
 
 def _plan(req: _Common, s0: float, v0: float, v_ref: Callable[[float], float], stop: StopTarget | None,
-          caps: SpeedCaps | None, leader: LeaderTrack | None) -> SpeedPlan:
+          caps: SpeedCaps | None, leader: LeaderTrack | None, must_stop: bool = True) -> SpeedPlan:
+    """The longitudinal plan; with ``must_stop`` a stop that does not come to rest within the steps is
+    refused (it would not be seen)."""
+    t0 = float(req.times[req.start.step])
     try:
-        return plan_speed(req.times, t0=float(req.times[req.start.step]), s0=s0, v0=v0,
-                          a0=req.start.accel if v0 == req.start.speed else 0.0, v_ref=v_ref, limits=req.limits,
-                          stop=stop, caps=caps, leader=leader)
+        plan = plan_speed(req.times, t0=t0, s0=s0, v0=v0, a0=req.start.accel if v0 == req.start.speed else 0.0,
+                          v_ref=v_ref, limits=req.limits, stop=stop, caps=caps, leader=leader)
     except ValueError as err:
         raise EditRefused(f"{req.label} {err}", reason="infeasible_motion") from None
+    if must_stop and stop is not None and plan.stopped_at is None and abs(v0) > 1e-6:
+        end = float(req.times[-1])
+        where = (f"the stopping point is {stop.at_s - s0:.0f} m ahead, but {req.label} covers "
+                 f"{plan.s[-1] - s0:.0f} m" if stop.at_s is not None else
+                 f"it cannot be at rest by {stop.at_time:g} s" if stop.at_time is not None else
+                 "it cannot come to rest")
+        raise EditRefused(f"{req.label} cannot make the stop before the log ends ({end:.1f} s): {where}",
+                          reason="infeasible_motion")
+    return plan
 
 
 def _compose(req: _Common, route: Route, plan: SpeedPlan) -> PlannedTrajectory:

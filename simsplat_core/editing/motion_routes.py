@@ -126,18 +126,19 @@ def straight_route(xy: np.ndarray, heading: float, back_m: float = 100.0, ahead_
 
 def log_route(xy: np.ndarray, heading: np.ndarray, min_step_m: float = 0.5, min_length_m: float = 1.0) -> Route | None:
     """The path of a log trajectory (``xy [K, 2]``, ``heading [K]`` at its valid steps, in order) with its
-    box headings; points closer than ``min_step_m`` to the last kept one are dropped (box jitter of a
-    standing agent). ``None`` when it moves less than ``min_length_m`` (a parked car has no path)."""
+    box headings, in the direction the boxes face: a point is kept when it lies at least ``min_step_m``
+    from the last kept one and ahead of it (box jitter of a standing agent and annotation wobble do not
+    fold the path back). ``None`` when it moves less than ``min_length_m`` (a parked car has no path)."""
     xy = np.asarray(xy, dtype=np.float64)
     heading = np.unwrap(np.asarray(heading, dtype=np.float64))
     if len(xy) < 2:
         return None
     keep = [0]
     for k in range(1, len(xy)):
-        if np.linalg.norm(xy[k] - xy[keep[-1]]) >= min_step_m:
+        step = xy[k] - xy[keep[-1]]
+        ahead = float(np.dot(step, _unit(float(heading[keep[-1]]))))
+        if np.linalg.norm(step) >= min_step_m and ahead >= 0.5 * min_step_m:
             keep.append(k)
-    if keep[-1] != len(xy) - 1 and np.linalg.norm(xy[-1] - xy[keep[-1]]) > 1e-6:
-        keep.append(len(xy) - 1)
     if len(keep) < 2:
         return None
     route = polyline_route(xy[keep], heading[keep])

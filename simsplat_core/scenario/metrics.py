@@ -9,8 +9,9 @@ refinement of the next issue scores rollouts with the same ones.
   ``any`` over the other agents.
 * :func:`collision_steps` -- the checked rows against everyone, split by the other agent's kind (vehicle,
   pedestrian, static object). Pairs of two unedited agents (``source == "log"``) are the log's own overlaps
-  (parked cars touching, boxes of a group of people) and are not collisions of the edit: they are left
-  out and counted separately (``CollisionSteps.log_pairs``).
+  (parked cars touching, boxes of a group of people) and are not collisions of the edit; given the
+  unedited scenario (``baseline``), neither is a pair that overlapped there at the same step. They are
+  left out and counted separately (``CollisionSteps.log_pairs``).
 * :func:`offroad_steps` -- Waymax's ``OffroadMetric``: some box corner lies outside the drivable area
   (``geometry.offroad``), for vehicles and cyclists. Pedestrians and static objects may stand on sidewalks:
   they are off-road only where the map says where people may be (it has sidewalks) and their box centre
@@ -126,7 +127,8 @@ class CollisionSteps:
         rows: ``[R]`` checked agent rows.
         pairs: ``[R, A, T]`` overlaps counted as collisions (log-vs-log pairs removed).
         vehicle, pedestrian, static: ``[R, T]`` collision with some agent of that kind.
-        log_pairs: ``[R, A, T]`` overlaps between two unedited (``"log"``) agents, not counted.
+        log_pairs: ``[R, A, T]`` overlaps that are the log's own (two unedited agents, or a pair that
+            overlapped in the baseline at that step), not counted.
     """
 
     rows: np.ndarray
@@ -143,17 +145,46 @@ class CollisionSteps:
         return {VEHICLE: self.vehicle, PEDESTRIAN: self.pedestrian, STATIC: self.static}[kind]
 
 
-def collision_steps(states: AgentStates, rows: Sequence[int] | np.ndarray) -> CollisionSteps:
-    """Collisions of agents ``rows`` with everyone, per step, split by the other agent's kind."""
+def collision_steps(states: AgentStates, rows: Sequence[int] | np.ndarray,
+                    baseline: AgentStates | None = None) -> CollisionSteps:
+    """Collisions of agents ``rows`` with everyone, per step, split by the other agent's kind.
+
+    ``baseline`` (the unedited scenario on the same steps): a pair of agents that already overlapped there
+    at that step is the log's overlap too (an edited car whose log box touched a parked car's keeps
+    touching it before the edit changes anything), not a collision.
+    """
     rows = _as_rows(states, rows)
     hit = overlap_rows(states, rows)
     is_log = np.array([s == "log" for s in states.sources])
-    log_pair = (is_log[rows][:, None] & is_log[None])[..., None]  # [R, A, 1]
+    log_pair = np.broadcast_to((is_log[rows][:, None] & is_log[None])[..., None], hit.shape).copy()  # [R, A, T]
+    if baseline is not None:
+        log_pair |= _baseline_overlap(states, rows, baseline)
     pairs = hit & ~log_pair
     kinds = np.array([kind_of(c) for c in states.categories])
     by_kind = {k: (pairs & (kinds == k)[None, :, None]).any(axis=1) for k in KINDS}
     return CollisionSteps(rows=rows, pairs=pairs, vehicle=by_kind[VEHICLE], pedestrian=by_kind[PEDESTRIAN],
                           static=by_kind[STATIC], log_pairs=hit & log_pair)
+
+
+def _baseline_overlap(states: AgentStates, rows: np.ndarray, baseline: AgentStates) -> np.ndarray:
+    """``[R, A, T]`` bool: the pair (by object id) overlapped in ``baseline`` at that step."""
+    out = np.zeros((len(rows), states.num_agents, states.num_steps), dtype=bool)
+    if baseline.num_steps != states.num_steps:
+        raise ValueError(f"baseline has {baseline.num_steps} steps, the states {states.num_steps}")
+    index = {oid: k for k, oid in enumerate(baseline.object_ids)}
+    base_rows = [index.get(states.object_ids[r], -1) for r in rows]
+    present = [k for k in base_rows if k >= 0]
+    if not present:
+        return out
+    base_hit = overlap_rows(baseline, present)  # [P, A_b, T]
+    cols = np.array([index.get(oid, -1) for oid in states.object_ids])
+    known = cols >= 0
+    p = 0
+    for r, k in enumerate(base_rows):
+        if k >= 0:
+            out[r, known] = base_hit[p, cols[known]]
+            p += 1
+    return out
 
 
 def offroad_steps(states: AgentStates, map_ctx: MapContext, rows: Sequence[int] | np.ndarray | None = None,
@@ -346,7 +377,7 @@ class ValidationReport:
     Attributes:
         agents: one entry per checked agent, in the order checked.
         frame_idx: ``[T]`` log frames of the steps (for messages).
-        log_overlap_steps: (pair, step) overlaps between two unedited agents that were not counted.
+        log_overlap_steps: (checked agent, other agent, step) overlaps that are the log's own, not counted.
     """
 
     agents: tuple[AgentValidation, ...] = ()
@@ -402,10 +433,11 @@ def _kinematic_summary(category: str, masks: dict[str, np.ndarray], kin: Kinemat
 
 def validate_agents(states: AgentStates, map_ctx: MapContext, rows: Sequence[int] | np.ndarray,
                     limits: KinematicLimits | Mapping[str, KinematicLimits] | None = None,
-                    offroad_tolerance_m: float = 0.0) -> ValidationReport:
-    """Collisions (with every agent, log-vs-log pairs left out), off-road and kinematic checks of ``rows``."""
+                    offroad_tolerance_m: float = 0.0, baseline: AgentStates | None = None) -> ValidationReport:
+    """Collisions (with every agent; log-vs-log pairs and, given the unedited ``baseline``, pairs that
+    overlapped there at the same step left out), off-road and kinematic checks of ``rows``."""
     rows = _as_rows(states, rows)
-    coll = collision_steps(states, rows)
+    coll = collision_steps(states, rows, baseline)
     off = offroad_steps(states, map_ctx, rows, offroad_tolerance_m)
     kin = kinematics(states, rows, limits)
     masks = _violation_masks(states, rows, kin, limits)
