@@ -40,10 +40,12 @@ from simsplat_core.editing.motion_requests import (
 )
 from simsplat_core.editing.motion_routes import (
     Route,
+    crosswalk_ends,
     curvature_caps,
     lane_route,
     log_route,
     merge_onto,
+    nearest_lane_segment,
     next_area_s,
     offset_route,
     polyline_route,
@@ -283,23 +285,13 @@ def plan_pedestrian(request: PedestrianMotionRequest, map_ctx: MapContext) -> Pl
     return _compose(req, route, plan)
 
 
-def _crosswalk_ends(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The two ends ``([2], [2])`` of a crosswalk's long axis (where people step on and off it)."""
-    pts = np.asarray(polygon, dtype=np.float64)[:, :2]
-    centre = pts.mean(axis=0)
-    _, _, vt = np.linalg.svd(pts - centre)
-    axis = vt[0]
-    along = (pts - centre) @ axis
-    return centre + along.min() * axis, centre + along.max() * axis
-
-
 def _crosswalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
     """To the near end of the nearest crosswalk, across it and onto the far kerb."""
     start = req.start
     if not map_ctx.crosswalks:
         raise EditRefused(f"{req.label} cannot cross at a crosswalk: the map has none (ask to jaywalk instead)",
                           reason="infeasible_motion")
-    ends = [_crosswalk_ends(p) for p in map_ctx.crosswalks]
+    ends = [crosswalk_ends(p) for p in map_ctx.crosswalks]
     dist = [min(np.linalg.norm(a - start.xy), np.linalg.norm(b - start.xy)) for a, b in ends]
     k = int(np.argmin(dist))
     if dist[k] > CROSSWALK_REACH_M:
@@ -323,20 +315,15 @@ def _jaywalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
     """Straight across the road (perpendicular to the nearest lane), at least ``JAYWALK_CLEARANCE_M`` from any
     crosswalk, onto the far kerb."""
     start = req.start
-    if not map_ctx.has_lanes:
+    nearest = nearest_lane_segment(map_ctx, start.xy)
+    if nearest is None:
         raise EditRefused(f"{req.label} cannot cross the street: the map has no lanes to cross",
                           reason="infeasible_motion")
-    seg_a, seg_b = map_ctx.lane_a, map_ctx.lane_b
-    rel = start.xy - seg_a
-    ab = seg_b - seg_a
-    t = np.clip((rel * ab).sum(1) / (ab * ab).sum(1), 0.0, 1.0)
-    foot = seg_a + t[:, None] * ab
-    k = int(np.argmin(np.linalg.norm(start.xy - foot, axis=1)))
-    if np.linalg.norm(start.xy - foot[k]) > 30.0:
+    foot, along, dist = nearest
+    if dist > 30.0:
         raise EditRefused(f"{req.label} cannot cross the street: no road within 30 m", reason="infeasible_motion")
-    along = ab[k] / np.linalg.norm(ab[k])
     normal = np.array([-along[1], along[0]])
-    to_road = foot[k] - start.xy
+    to_road = foot - start.xy
     facts = map_ctx.facts(start.xy[None], np.array([start.heading]))
     if facts.on_drivable[0] or np.linalg.norm(to_road) < 0.5:
         direction = normal if np.dot(normal, [np.cos(start.heading), np.sin(start.heading)]) >= 0 else -normal

@@ -11,8 +11,9 @@ headings hold the end values. Routes are built from:
   two closed by a quintic ramp along the new route (turns from a log path onto the lane graph, lane
   changes, sideways shifts), so positions, headings and curvature stay continuous.
 
-Also: :func:`next_area_s` (where a route first enters a crosswalk / intersection ahead) and
-:func:`curvature_caps` (curve speed bounds for ``speed_profile``).
+Also: :func:`next_area_s` (where a route first enters a crosswalk / intersection ahead),
+:func:`curvature_caps` (curve speed bounds for ``speed_profile``), :func:`crosswalk_ends` and
+:func:`nearest_lane_segment` (map geometry the controller and the placement share).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.editing.speed_profile import SpeedCaps
+from simsplat_core.scenario.geometry import segment_distances
 from simsplat_core.scenario.lane_graph import LaneGraph, LanePath
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.path import Path
@@ -212,6 +214,29 @@ def merge_onto(before: Route | None, s_join: float, after: Route, ramp_m: float,
 def offset_route(route: Route, s_from: float, offset_m: float, ramp_m: float) -> Route:
     """``route`` shifted sideways by ``offset_m`` (positive = left) from ``s_from`` on, eased in over ``ramp_m``."""
     return merge_onto(route, s_from, route, ramp_m, final_offset_m=offset_m)
+
+
+def crosswalk_ends(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two ends ``([2], [2])`` of a crosswalk polygon's long axis (where people step on and off it)."""
+    pts = np.asarray(polygon, dtype=np.float64)[:, :2]
+    centre = pts.mean(axis=0)
+    axis = np.linalg.svd(pts - centre)[2][0]
+    along = (pts - centre) @ axis
+    return centre + along.min() * axis, centre + along.max() * axis
+
+
+def nearest_lane_segment(map_ctx: MapContext, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, float] | None:
+    """``(foot [2], unit direction of travel [2], distance)`` of the lane centre-line segment nearest the point
+    ``xy [2]`` (any direction), ``None`` on a map without lanes."""
+    if not map_ctx.has_lanes:
+        return None
+    p = np.asarray(xy, dtype=np.float64)[:2]
+    dist = segment_distances(p[None], map_ctx.lane_a, map_ctx.lane_b)[0]
+    k = int(np.argmin(dist))
+    a, b = map_ctx.lane_a[k], map_ctx.lane_b[k]
+    ab = b - a
+    t = float(np.clip(np.dot(p - a, ab) / np.dot(ab, ab), 0.0, 1.0))
+    return a + t * ab, ab / np.linalg.norm(ab), float(dist[k])
 
 
 def next_area_s(route: Route, map_ctx: MapContext, kind: str, s_from: float, max_ahead_m: float = 200.0,

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.editing.commands import Placement
+from simsplat_core.editing.motion_routes import crosswalk_ends, nearest_lane_segment
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import yaw_of_rotation
 from simsplat_core.scenario.agents import EGO_ID, EGO_SIZE, AgentStates
@@ -340,23 +341,18 @@ def _fitting_point(query: np.ndarray, polys: Sequence[np.ndarray], size: tuple[f
 def _area_heading(ctx: _Context, area: str, xy: np.ndarray, polys: Sequence[np.ndarray], heading: float) -> float:
     """Along the crosswalk's long axis (away from the anchor's side), else along the nearest lane segment
     (the way agreeing with ``heading``)."""
-    mc = ctx.map_ctx
     if area == "crosswalk":
         poly = next(p for p in polys if _in_any(xy[None], [p])[0])
-        pts = poly - poly.mean(axis=0)
-        axis = np.linalg.svd(pts)[2][0]
+        end_a, end_b = crosswalk_ends(poly)
+        axis = (end_b - end_a) / np.linalg.norm(end_b - end_a)
         if np.dot(axis, poly.mean(axis=0) - ctx.anchor.xy) < 0:
             axis = -axis
         return float(np.arctan2(axis[1], axis[0]))
-    if mc.has_lanes:
-        ab = mc.lane_b - mc.lane_a
-        t = np.clip(((xy - mc.lane_a) * ab).sum(1) / (ab * ab).sum(1), 0.0, 1.0)
-        k = int(np.argmin(np.linalg.norm(mc.lane_a + t[:, None] * ab - xy, axis=1)))
-        d = ab[k] / np.linalg.norm(ab[k])
-        if np.dot(d, [np.cos(heading), np.sin(heading)]) < 0:
-            d = -d
-        return float(np.arctan2(d[1], d[0]))
-    return heading
+    nearest = nearest_lane_segment(ctx.map_ctx, xy)
+    if nearest is None:
+        return heading
+    d = nearest[1] if np.dot(nearest[1], [np.cos(heading), np.sin(heading)]) >= 0 else -nearest[1]
+    return float(np.arctan2(d[1], d[0]))
 
 
 def _where(ctx: _Context, xy: np.ndarray, heading: float) -> str:
