@@ -105,6 +105,10 @@ def test_people_and_objects_beside_an_anchor_keep_the_gap(world) -> None:
     person = _place(world, Placement(relation="right_of", distance_m=2.0), "pedestrian", PERSON, anchor=van)
     assert person.xy[1] - van_xy[1] == pytest.approx(-(2.1 / 2 + 2.0 + PERSON[1] / 2))
     assert person.xy[0] == pytest.approx(van_xy[0]) and person.area == "road"  # in the next lane
+    _refused(world, Placement(relation="in_lane", lane="left"), "no lane to the left of the white van", anchor=van)
+    oncoming = _place(world, Placement(relation="left_of"), anchor=van)  # left of the inner lane: oncoming traffic
+    assert oncoming.xy[1] - van_xy[1] == pytest.approx(layout.lane_w("W"), abs=0.05)
+    assert abs(abs(oncoming.heading) - np.pi) < 1e-3
     cone = _place(world, Placement(relation="behind"), "static", CONE, anchor=van)
     assert van_xy[0] - cone.xy[0] == pytest.approx(5.5 / 2 + 3.0 + CONE[0] / 2)
     # the z follows the anchor's ground
