@@ -10,8 +10,8 @@
    (jaywalking), or on along their way;
 2. a longitudinal plan (``speed_profile.plan_speed``): jerk-limited tracking of the wanted speed (the log's
    own speed where the behaviour does not change it, replayed later after a delayed start), curve speed
-   caps, a leader's gap (IDM), stops at a time, before the next crosswalk / intersection or behind an
-   object, ending at rest;
+   caps, a leader's gap and gaps to traffic in the way (IDM), stops at a time, before the next crosswalk /
+   intersection or behind an object, ending at rest;
 3. positions and headings along the route at the planned arc lengths. Steps before the start step keep the
    log (or, with ``backfill``, run the start state backwards).
 
@@ -64,6 +64,8 @@ logger = logging.getLogger(__name__)
 
 #: Lateral distance within which another agent counts as on the route (leaders, objects to stop behind), m.
 ON_ROUTE_M = 2.5
+#: Traffic about to enter the route within this time blocks it where it will enter (crossing traffic), s.
+ANTICIPATE_S = 2.0
 #: Length of the ramp that eases a log path onto a lane path (turns), m.
 MERGE_M = 15.0
 #: Sideways shifts are eased in over this time at the cruise speed (at least ``MIN_RAMP_M``), s / m.
@@ -125,7 +127,7 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
         cruise = DEFAULT_CRUISE_MPS
     v_ref = _speed_reference(req, cruise, reverse=req.reverse)
     stop = _stop_target(req, route, s0, map_ctx)
-    leader = _leader_track(req, route, s0) if req.leader is not None else None
+    leader = _leader_track(req, route, s0)
     v0 = 0.0 if req.hold_until_s is not None and _first_step(req) else start.speed
     horizon = float(req.times[-1] - req.times[start.step])
     reach = s0 + max(abs(v0), cruise or 0.0, req.limits.max_speed_mps / 2) * horizon + 50.0
@@ -244,20 +246,37 @@ def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan
                           f"{reached - s0:.0f} m in the remaining {horizon:.1f} s", reason="infeasible_motion")
 
 
-def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderTrack:
-    lead = req.leader
-    assert lead is not None
-    s = np.zeros(len(req.times))
-    present = np.zeros(len(req.times), dtype=bool)
-    for k in np.flatnonzero(lead.valid):
-        s[k], lat = route.project(lead.xy[k])
-        present[k] = abs(lat) <= ON_ROUTE_M and s[k] > s0
-    if not present[req.start.step:].any():
-        raise EditRefused(f"{req.label} cannot follow {lead.label}: it is not ahead of {req.label} on its path",
-                          reason="infeasible_motion")
-    v = np.gradient(s, req.times) if len(s) > 1 else np.zeros(1)
-    gap = (lead.size[0] + req.size[0]) / 2.0 + req.follow_gap_m
-    return LeaderTrack(s=s, v=np.where(present, v, 0.0), present=present, gap_m=gap, headway_s=req.headway_s)
+def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderTrack | None:
+    """The followed leader and the traffic, where each is on the route ahead of the start; traffic that will
+    be on the route within ``ANTICIPATE_S`` already blocks it where it will enter, standing."""
+    agents = ([req.leader] if req.leader is not None else []) + list(req.traffic)
+    if not agents:
+        return None
+    t = len(req.times)
+    s = np.zeros((len(agents), t))
+    present = np.zeros((len(agents), t), dtype=bool)
+    for i, other in enumerate(agents):
+        for k in np.flatnonzero(other.valid):
+            s[i, k], lat = route.project(other.xy[k])
+            present[i, k] = abs(lat) <= ON_ROUTE_M and s[i, k] > s0
+    if req.leader is not None and not present[0, req.start.step:].any():
+        raise EditRefused(f"{req.label} cannot follow {req.leader.label}: it is not ahead of {req.label} on its "
+                          "path", reason="infeasible_motion")
+    v = np.where(present, np.gradient(s, req.times, axis=1) if t > 1 else 0.0, 0.0)
+    # anticipate: an agent about to enter the route (crossing traffic) already blocks where it will enter
+    window = max(int(round(ANTICIPATE_S / max(float(np.median(np.diff(req.times))), 1e-3))), 0) if t > 1 else 0
+    s_eff, v_eff, present_eff = s.copy(), v.copy(), present.copy()
+    for step in range(t):
+        upcoming = present[:, step:step + window + 1]
+        later = upcoming.any(axis=1) & ~present[:, step]
+        if later.any():
+            s_eff[later, step] = np.where(upcoming[later], s[later, step:step + window + 1], np.inf).min(axis=1)
+            v_eff[later, step] = 0.0
+            present_eff[later, step] = True
+    if req.leader is not None:  # the followed leader is followed where it is, not anticipated
+        s_eff[0], v_eff[0], present_eff[0] = s[0], v[0], present[0]
+    gap = np.array([(o.size[0] + req.size[0]) / 2.0 + req.follow_gap_m for o in agents])
+    return LeaderTrack(s=s_eff, v=v_eff, present=present_eff, gap_m=gap, headway_s=req.headway_s)
 
 
 # ------------------------------------------------------------------------------------------ pedestrians

@@ -190,7 +190,9 @@ class VehicleMotionRequest(_Common):
             :data:`REVERSE_MPS`.
         lane_change: ``"left"`` / ``"right"``; lane_change_s: its duration at the cruise speed, s.
         turn: ``"left"`` / ``"right"`` / ``"straight"`` at the next intersection.
-        leader: agent to follow; follow_gap_m: standstill gap to it, m; headway_s: time gap, s.
+        leader: agent to follow; follow_gap_m: standstill gap to it (and to traffic), m; headway_s: time gap, s.
+        traffic: other agents (replaying their logs) to keep a gap to whenever they are on the route ahead,
+            so the planned car brakes for what is in its way instead of driving through it.
     """
 
     reverse: bool = False
@@ -198,6 +200,7 @@ class VehicleMotionRequest(_Common):
     lane_change_s: float = 3.5
     turn: str | None = None
     leader: OtherAgent | None = None
+    traffic: tuple[OtherAgent, ...] = ()
     follow_gap_m: float = FOLLOW_GAP_M
     headway_s: float = 1.5
 
@@ -205,9 +208,11 @@ class VehicleMotionRequest(_Common):
     def from_behaviour(cls, behaviour: Behaviour, *, times: np.ndarray, frame_idx: np.ndarray, start: StartState,
                        size: tuple[float, float, float], log: LogTrajectory | None = None,
                        leader: OtherAgent | None = None, stop_behind: OtherAgent | None = None,
-                       backfill: bool = False, label: str = "the target") -> VehicleMotionRequest:
+                       traffic: tuple[OtherAgent, ...] = (), backfill: bool = False,
+                       label: str = "the target") -> VehicleMotionRequest:
         """Resolve ``behaviour`` for a vehicle; ``leader`` / ``stop_behind`` are the grounded agents of
-        ``behaviour.follow`` / ``behaviour.stop.behind``.
+        ``behaviour.follow`` / ``behaviour.stop.behind``; ``traffic`` the agents to keep a gap to
+        (:func:`traffic_from_states`).
 
         Raises:
             EditRefused: pedestrian-only fields (``wrong_category``); ``follow`` / ``stop.behind`` without
@@ -230,7 +235,7 @@ class VehicleMotionRequest(_Common):
                    size=size, log=log, target_speed_mps=target, backfill=backfill, label=label,
                    stop=shared.stop, hold_until_s=shared.hold_until_s, log_shift_s=shared.log_shift_s,
                    lateral_offset_m=shared.lateral_offset_m, reverse=behaviour.reverse,
-                   lane_change=behaviour.lane_change, turn=behaviour.turn, leader=leader)
+                   lane_change=behaviour.lane_change, turn=behaviour.turn, leader=leader, traffic=traffic)
 
 
 @dataclass(frozen=True)
@@ -279,6 +284,13 @@ class PedestrianMotionRequest(_Common):
                    stop=shared.stop, hold_until_s=shared.hold_until_s, log_shift_s=shared.log_shift_s,
                    lateral_offset_m=shared.lateral_offset_m, limits=PEDESTRIAN_LIMITS,
                    cross_street=behaviour.cross_street, jaywalk=behaviour.jaywalk)
+
+
+def traffic_from_states(states: AgentStates, exclude: tuple[str, ...] | list[str] = ()) -> tuple[OtherAgent, ...]:
+    """Every moving-kind agent of ``states`` (vehicles, cyclists, pedestrians and the ego; not static objects)
+    except ``exclude``, as traffic to keep a gap to."""
+    return tuple(OtherAgent.from_states(states, r) for r in range(states.num_agents)
+                 if states.object_ids[r] not in exclude and agent_kind(states.categories[r]) is not None)
 
 
 def motion_kind(category: str, label: str = "the target") -> str:

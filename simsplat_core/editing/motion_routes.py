@@ -180,6 +180,8 @@ def merge_onto(before: Route | None, s_join: float, after: Route, ramp_m: float,
     from ``lateral`` to ``final_offset_m`` over ``ramp_m`` metres (quintic), then held. The result's arc
     length equals ``before``'s up to ``s_join`` (``marks["join"] = s_join``); without ``before`` the route
     starts ``STEP_M * 4`` behind the join point along ``after`` and ``marks["join"]`` is the point's arc length.
+    ``after``'s marks move with it (a mark behind the join point, e.g. a turn already begun, lands before
+    ``marks["join"]``).
     """
     p = before.position(s_join) if before is not None else np.asarray(point, dtype=np.float64)[:2]
     s_a, lateral = after.project(p)
@@ -208,7 +210,7 @@ def merge_onto(before: Route | None, s_join: float, after: Route, ramp_m: float,
     heads = np.concatenate([heads[:1], heads[0] + np.cumsum(np.angle(np.exp(1j * np.diff(heads))))])
     route = polyline_route(pts, heads)
     marks = {k: v for k, v in before.marks.items() if v < s_join} | {"join": s_join}
-    return Route(route.path, route.headings, marks | {k: s_join + v for k, v in marks_after.items() if v >= 0})
+    return Route(route.path, route.headings, marks | {k: s_join + v for k, v in marks_after.items()})
 
 
 def offset_route(route: Route, s_from: float, offset_m: float, ramp_m: float) -> Route:

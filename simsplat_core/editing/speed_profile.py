@@ -9,7 +9,8 @@ substep the acceleration moves toward a wanted value by at most ``jerk * dt`` an
   ``a* = sign(dv) sqrt(2 jerk |dv|)`` (reaches the reference without overshoot);
 * speed caps ahead (``SpeedCaps``: e.g. curvature-limited speeds along the route) lower the reference to
   what comfortable braking still allows;
-* a leader (``LeaderTrack``) adds the Intelligent Driver Model's acceleration (the smaller one wins);
+* leaders (``LeaderTrack``: a followed agent, traffic on the route) add the Intelligent Driver Model's
+  acceleration towards the nearest one ahead (the smaller acceleration wins);
 * stops are planned, not tracked: once a comfortable jerk-limited braking profile (:func:`brake_segments`:
   jerk ramp to a peak deceleration, hold, ramp back to zero exactly at standstill) would need the distance
   (or time) that is left, the decelerations are solved so that the agent comes to rest exactly there, and it
@@ -170,21 +171,36 @@ class SpeedCaps:
 
 @dataclass(frozen=True)
 class LeaderTrack:
-    """A leader on the same route: its arc length and speed at the step times, where it is on the route.
+    """Agents on the same route to keep a gap to: their arc lengths and speeds at the step times, where they
+    are on the route. At each moment the nearest one ahead (centre beyond the planned agent's) leads.
 
     Attributes:
-        s: ``[T]`` arc length of the leader's centre along the route; v: ``[T]`` its speed along it.
-        present: ``[T]`` bool, the leader exists and is on the route.
-        gap_m: centre-to-centre distance at which the follower would touch it (half lengths summed) plus
-            the standstill gap to keep.
+        s: ``[L, T]`` arc length of each agent's centre along the route; v: ``[L, T]`` its speed along it.
+        present: ``[L, T]`` bool, the agent exists and is on the route.
+        gap_m: ``[L]`` centre-to-centre distance at which the planned agent would touch it (half lengths
+            summed) plus the standstill gap to keep.
         headway_s: time gap kept at speed.
     """
 
     s: np.ndarray
     v: np.ndarray
     present: np.ndarray
-    gap_m: float
+    gap_m: np.ndarray
     headway_s: float = 1.5
+
+    def ahead(self, times: np.ndarray, t: float, s_now: float) -> tuple[float, float] | None:
+        """``(net gap, speed)`` of the nearest agent ahead of ``s_now`` at time ``t`` (interpolated between
+        steps), ``None`` when none is."""
+        k = int(np.clip(np.searchsorted(times, t), 1, len(times) - 1))
+        w = float(np.clip((t - times[k - 1]) / (times[k] - times[k - 1]), 0.0, 1.0))
+        here = self.present[:, k - 1] & self.present[:, k]
+        s = (1 - w) * self.s[:, k - 1] + w * self.s[:, k]
+        ahead = here & (s > s_now)
+        if not ahead.any():
+            return None
+        gaps = np.where(ahead, s - s_now - self.gap_m, np.inf)
+        j = int(np.argmin(gaps))
+        return float(gaps[j]), float((1 - w) * self.v[j, k - 1] + w * self.v[j, k])
 
 
 @dataclass(frozen=True)
@@ -227,7 +243,7 @@ def plan_speed(times: np.ndarray, *, t0: float, s0: float, v0: float, a0: float 
         v_ref: wanted signed speed at a time (negative: backwards); held at 0 it keeps the agent at rest.
         stop: a stop to make (see :class:`StopTarget`); after it the agent stays at rest.
         caps: speed bounds ahead (forward motion only).
-        leader: a leader to keep a gap to (IDM).
+        leader: agents to keep a gap to (IDM to the nearest ahead).
 
     Raises:
         ValueError: a stop at a distance that even hard braking cannot make (message gives both distances).
@@ -286,15 +302,16 @@ def plan_speed(times: np.ndarray, *, t0: float, s0: float, v0: float, a0: float 
             target = min(target, caps.allowed(s, 0.8 * lim.comfort_decel_mps2))
         want = float(np.clip(_track(target - v, lim.jerk_mps3), -lim.comfort_decel_mps2, lim.max_accel_mps2))
         if leader is not None:
-            lead = _leader_at(leader, times, t)
+            lead = leader.ahead(times, t, s)
             if lead is not None:
-                want = min(want, _idm(v, max(target, 0.1), lead[0] - s - leader.gap_m, lead[1], leader, lim))
+                want = min(want, _idm(v, max(target, 0.1), lead[0], lead[1], leader, lim))
         jerk_lim = lim.hard_jerk_mps3 if want < -lim.comfort_decel_mps2 else lim.jerk_mps3
         a_new = float(np.clip(want, a - jerk_lim * dt, a + jerk_lim * dt))
         a_new = float(np.clip(a_new, -lim.hard_decel_mps2, lim.max_accel_mps2))
         v_new = v + 0.5 * (a + a_new) * dt
-        if (v > 0 >= v_new and target >= 0) or (v < 0 <= v_new and target <= 0):  # no creeping through zero
-            v_new, a_new = 0.0, 0.0
+        if (v >= 0 >= v_new and target >= 0) or (v <= 0 <= v_new and target <= 0):  # rest, not through zero
+            if v_new != 0.0 or a_new * target <= 0:
+                v_new, a_new = 0.0, 0.0
         s += 0.5 * (v + v_new) * dt
         v, a, t = v_new, a_new, t + dt
     return SpeedPlan(out_s, out_v, out_a, stopped_at)
@@ -343,12 +360,3 @@ def _window(segments: list[Segment], start: float, dt: float) -> tuple[list[Segm
             out.append((hi - lo, jerk))
         t0 += dur
     return out, t0 <= end + 1e-12
-
-
-def _leader_at(leader: LeaderTrack, times: np.ndarray, t: float) -> tuple[float, float] | None:
-    """Leader ``(s, v)`` at time ``t`` (interpolated between steps), ``None`` where it is absent."""
-    k = int(np.clip(np.searchsorted(times, t), 1, len(times) - 1))
-    if not (leader.present[k - 1] and leader.present[k]):
-        return None
-    w = float(np.clip((t - times[k - 1]) / (times[k] - times[k - 1]), 0.0, 1.0))
-    return ((1 - w) * leader.s[k - 1] + w * leader.s[k], (1 - w) * leader.v[k - 1] + w * leader.v[k])

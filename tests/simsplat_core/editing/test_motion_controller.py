@@ -24,6 +24,7 @@ from simsplat_core.editing.result import EditRefused
 from simsplat_core.editing.speed_profile import VEHICLE_LIMITS
 from simsplat_core.scenario import metrics as M
 from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.world import WorldConfig, generate_log, layout_from_log
@@ -68,10 +69,11 @@ def _accel_jerk(plan: PlannedTrajectory) -> tuple[np.ndarray, np.ndarray]:
     return a, np.diff(a) / np.diff(plan.times)[1:]
 
 
-def _within_limits(plan: PlannedTrajectory, decel: float = VEHICLE_LIMITS.comfort_decel_mps2) -> None:
+def _within_limits(plan: PlannedTrajectory, decel: float = VEHICLE_LIMITS.comfort_decel_mps2,
+                   jerk: float = VEHICLE_LIMITS.jerk_mps3) -> None:
     a, j = _accel_jerk(plan)
     assert a.max() <= VEHICLE_LIMITS.max_accel_mps2 + 1e-6 and a.min() >= -decel - 1e-6
-    assert np.abs(j).max() <= VEHICLE_LIMITS.jerk_mps3 * 1.02  # sampled at 0.1 s
+    assert np.abs(j).max() <= jerk * 1.02  # sampled at 0.1 s
     # positions agree with the speeds (no sliding), and the validation metrics see no infeasible motion
     step = np.linalg.norm(np.diff(plan.xy, axis=0), axis=1) / DT
     np.testing.assert_allclose(step, np.abs(0.5 * (plan.speed[1:] + plan.speed[:-1])), atol=0.05)
@@ -196,6 +198,26 @@ def test_follower_keeps_a_gap_to_its_leader(world) -> None:
     with pytest.raises(EditRefused, match="cannot follow the red car: it is not ahead"):
         behind = OtherAgent("lead", "the red car", lead.xy - [80.0, 0.0], lead.heading, lead.valid, CAR)
         _car(world, Behaviour(follow={"description": "the red car"}), before_stop_m=75.0, leader=behind)
+
+
+def test_traffic_in_the_way_is_given_room(world) -> None:
+    layout = world["layout"]
+    times, frames = _steps(80)
+    start = layout.arm_point("W", layout.stopline_s("W") + 75.0, layout.lane_offset("W", True, 0))
+    slow = OtherAgent("slow", "a slow car", start + [25.0, 0.0] + np.c_[3.0 * times, 0 * times], np.zeros(80),
+                      np.ones(80, bool), CAR)
+    # a person crossing the lane 40 m ahead, stepping onto it at 2.5 s
+    walk_y = start[1] - 6.0 + 1.4 * np.clip(times - 0.5, 0.0, None)
+    person = OtherAgent("ped", "a person", np.c_[np.full(80, start[0] + 40.0), walk_y], np.full(80, np.pi / 2),
+                        np.ones(80, bool), PERSON)
+    for other in (slow, person):
+        plan = _car(world, Behaviour(), before_stop_m=75.0, speed=10.0, n=80, traffic=(other,))
+        blind = _car(world, Behaviour(), before_stop_m=75.0, speed=10.0, n=80)
+        for traj, hits in ((plan, False), (blind, True)):
+            overlap = footprints_overlap(traj.xy, traj.heading, CAR[:2], other.xy, other.heading, other.size[:2])
+            assert overlap.any() == hits, other.label
+        # braking for what is in the way may use the hard limits
+        _within_limits(plan, decel=VEHICLE_LIMITS.hard_decel_mps2, jerk=VEHICLE_LIMITS.hard_jerk_mps3)
 
 
 def test_modify_keeps_the_log_where_the_behaviour_does_not_change_it(world) -> None:
