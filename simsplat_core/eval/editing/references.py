@@ -66,28 +66,34 @@ def object_phrase(truth: SceneTruth, object_id: str, rng: np.random.Generator) -
     return text.rstrip(".")
 
 
-def _static_sector(truth: SceneTruth, object_id: str) -> str:
-    """The ego-relative sector of a static object at the frame where it is seen most."""
+def _best_frame(truth: SceneTruth, object_id: str) -> int:
+    """The frame where the log shows the most pixels of ``object_id``."""
     counts = np.zeros(truth.log.num_frames)
     inst = truth.facts[object_id].instance_id
     for img in truth.log.images:
         if img.instance is not None:
             counts[img.frame_idx] += np.count_nonzero(img.instance == inst)
-    frame = int(np.argmax(counts))
+    return int(np.argmax(counts))
+
+
+def _sector_at(truth: SceneTruth, object_id: str, frame: int) -> str:
     xy = truth.agent(object_id).traj["xy"][frame]
     return location_sector(to_ego_frame(xy[None], truth.world.ego_poses[frame])[0], LabelThresholds())
 
 
 def static_phrase(truth: SceneTruth, object_id: str, rng: np.random.Generator) -> str | None:
-    """``"the stop sign"`` / ``"the traffic cone on the right"``: a static object or sign by kind (and side)."""
+    """``"the stop sign"`` / ``"the traffic cone on the right"``: a static object or sign by kind, with the side of
+    the ego it is on -- the same at the first frame and where it is seen best, and no other object of its kind
+    on that side at either -- when the kind alone is not unique."""
     agent = truth.agent(object_id)
-    same = [a for a in truth.world.agents if a.subtype == agent.subtype and a.object_id != object_id]
+    same = [a.object_id for a in truth.world.agents if a.subtype == agent.subtype and a.object_id != object_id]
     if not same:
         return f"the {agent.subtype}"
-    sector = _static_sector(truth, object_id)
-    if any(_static_sector(truth, a.object_id) == sector for a in same):
+    frames = (0, _best_frame(truth, object_id))
+    sectors = {_sector_at(truth, object_id, f) for f in frames}
+    if len(sectors) != 1 or any(_sector_at(truth, o, f) in sectors for o in same for f in frames):
         return None
-    return f"the {agent.subtype} {pick(rng, _SIDE_WORDS[sector])}"
+    return f"the {agent.subtype} {pick(rng, _SIDE_WORDS[sectors.pop()])}"
 
 
 def group_phrases(truth: SceneTruth, rng: np.random.Generator) -> list[tuple[str, tuple[str, ...]]]:
