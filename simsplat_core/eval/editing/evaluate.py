@@ -20,6 +20,7 @@ every frame).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 import traceback
@@ -36,10 +37,11 @@ from simsplat_core.eval.editing.checks import check_refusal, check_states
 from simsplat_core.eval.editing.fidelity import FidelityScore, edit_fidelity, render_fidelity
 from simsplat_core.eval.editing.observation import AssetLook, EditObservation, PixelEvidence, ViewSet, state_changes
 from simsplat_core.eval.editing.outcomes import PromptOutcome
-from simsplat_core.eval.editing.pixels import MIN_VIEW_PIXELS, check_pixels
+from simsplat_core.eval.editing.pixels import MIN_VIEW_PIXELS, check_pixels, object_crops
 from simsplat_core.eval.editing.prompts import EditPrompt
 from simsplat_core.eval.editing.truth import SceneTruth
 from simsplat_core.eval.editing.world_edit import EditedWorld, edit_world
+from simsplat_core.language.appearance.captioner import AppearanceCaption, describe_track
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.types import SceneLog
 from simsplat_core.world.agents import Agent
@@ -240,6 +242,31 @@ def pick_frames(scene: EvalScene, obs: EditObservation, world: WorldViews, confi
     return tuple(sorted(set(seen) | set(truth.test_frames)))
 
 
+def reference_captions(truth: SceneTruth, prompt: EditPrompt, obs: EditObservation, frames: tuple[int, ...],
+                       sources: SourceAgents) -> dict[str, AppearanceCaption]:
+    """The captioner's captions of the world's own rendering of each inserted / replacing object with the
+    *asked* colours (``PixelEvidence.reference_captions``); empty when no colour was asked."""
+    asset = prompt.intent.asset
+    if asset is None or (asset.color is None and asset.upper is None and asset.lower is None):
+        return {}
+    assert obs.before is not None and obs.after is not None
+    changes = state_changes(obs.before, obs.after)
+    objects = [o for o in (*changes.added, *changes.redrawn) if o in obs.looks]
+    if not objects:
+        return {}
+    asked = {o: dataclasses.replace(obs.looks[o], color=asset.upper or asset.color or obs.looks[o].color,
+                                    lower=asset.lower or obs.looks[o].lower) for o in objects}
+    world = edit_world(truth.world, obs.before, obs.after, {**obs.looks, **asked}, sources)
+    views = WorldViews(world, truth.log.cameras).views(frames)
+    out = {}
+    for o in objects:
+        row = obs.after.index(o)
+        crops = object_crops(views, world.instance[o], o, obs.after.categories[row], obs.after.size[row])
+        if crops:
+            out[o] = describe_track(crops)
+    return out
+
+
 def evaluate_prompt(scene: EvalScene, prompt: EditPrompt, method: Method, config: EvalConfig | None = None,
                     sources: SourceAgents | None = None) -> PromptOutcome:
     """Run and check one (method, prompt) (module docstring)."""
@@ -258,12 +285,14 @@ def evaluate_prompt(scene: EvalScene, prompt: EditPrompt, method: Method, config
     truth = scene.truth
     states = check_states(truth, prompt.intent, obs)
     assert obs.before is not None and obs.after is not None
-    world = edit_world(truth.world, obs.before, obs.after, obs.looks, sources or SourceAgents({truth.seq_id: truth}))
+    sources = sources or SourceAgents({truth.seq_id: truth})
+    world = edit_world(truth.world, obs.before, obs.after, obs.looks, sources)
     views = WorldViews(world, truth.log.cameras)
     frames = pick_frames(scene, obs, views, config)
     evidence = PixelEvidence(gaussian_views(edited.graph, truth.log, frames), views.views(frames),
                              log_views(truth.log, frames), dict(world.instance),
-                             {o: f.instance_id for o, f in truth.facts.items()}, world.native)
+                             {o: f.instance_id for o, f in truth.facts.items()}, world.native,
+                             reference_captions(truth, prompt, obs, frames, sources))
     pixels = check_pixels(prompt.intent, obs, evidence)
     fidelity: FidelityScore | None = None
     changes = state_changes(obs.before, obs.after)
@@ -301,4 +330,5 @@ def evaluate_editing(scenes: Sequence[EvalScene], prompts: Sequence[EditPrompt],
 
 
 __all__ = ["METHODS", "EvalConfig", "EvalScene", "Method", "SourceAgents", "WorldViews", "editing_methods",
-           "evaluate_editing", "evaluate_prompt", "gaussian_views", "log_views", "pick_frames", "run_edit"]
+           "evaluate_editing", "evaluate_prompt", "gaussian_views", "log_views", "pick_frames", "reference_captions",
+           "run_edit"]

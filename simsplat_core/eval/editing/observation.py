@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 
 #: Trajectories differing by more than this (metres / radians) at some valid step count as changed.
@@ -176,6 +177,8 @@ class PixelEvidence:
         world_instance, original_instance: ``object id -> instance id`` in those renders.
         native: object ids the world rendered as a world-native equivalent of what the editor drew
             (an object without one, e.g. a procedural asset the world cannot build, is drawn by a stand-in).
+        reference_captions: per inserted / replacing object, the captioner's caption of the world's own
+            rendering of an object with the *asked* colours at the same place (``pixels.check_appearance``).
     """
 
     edited: ViewSet
@@ -184,6 +187,7 @@ class PixelEvidence:
     world_instance: dict[str, int]
     original_instance: dict[str, int]
     native: frozenset[str] = frozenset()
+    reference_captions: dict[str, AppearanceCaption] = field(default_factory=dict)
 
 
 __all__ = ["CHANGE_TOL", "AssetLook", "EditObservation", "PixelEvidence", "StateChanges", "ViewSet",

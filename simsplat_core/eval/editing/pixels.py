@@ -7,12 +7,16 @@ of the unedited scene, at the same frames and cameras.
 * **visible**: an inserted, moved or redrawn object should be seen where the world's rendering of the
   edit shows it unoccluded (at least ``MIN_VIEW_PIXELS`` pixels of its instance in a view); there the
   rendered node must cover at least ``MIN_COVER`` of those pixels, in at least ``MIN_VIEW_SHARE`` of the
-  views. An inserted object the world never shows in the checked frames fails (it was put out of sight).
+  views. An object the world does not show in the checked frames (out of view, hidden behind others) has
+  nothing to check in pixels (its place is checked on the trajectories).
 * **appearance**: the built-in captioner (``language.appearance.captioner.describe_track``) captions the
-  rendered crops of an inserted or replacing object (views with at least ``MIN_CAPTION_PIXELS`` node
-  pixels, box size from the edited agent); its colour (vehicles, static objects: main or second colour;
-  pedestrians: top and trousers) and body style (vehicles, cones and barriers: the captioner names them
-  from the box) must be the asked ones.
+  rendered crops of an inserted or replacing object the world shows (views with at least
+  ``MIN_CAPTION_PIXELS`` node pixels, box size from the edited agent); its colour (vehicles, static objects:
+  main or second colour; pedestrians: top and trousers) must be the asked one -- or what the captioner says
+  of the world's own rendering of an object of the asked colour at the same place
+  (``PixelEvidence.reference_captions``: the captioner's lighting confusions, e.g. a sunlit silver body named
+  white, are no editing error) -- and the body style (vehicles, cones and barriers: the captioner names them
+  from the box) the asked one.
 * **removed**: in views where the log shows a removed object (``MIN_VIEW_PIXELS``), the edited render has
   no pixel of its node, and over the object's pixels it is closer (mean squared error) to the world's
   rendering without the object than to the log's image with it, in at least ``MIN_VIEW_SHARE`` of them.
@@ -24,7 +28,7 @@ import numpy as np
 
 from simsplat_core.eval.editing.checks import CheckResult, Verdict
 from simsplat_core.eval.editing.intents import EditIntent
-from simsplat_core.eval.editing.observation import EditObservation, PixelEvidence, state_changes
+from simsplat_core.eval.editing.observation import EditObservation, PixelEvidence, ViewSet, state_changes
 from simsplat_core.language.appearance.captioner import describe_track
 from simsplat_core.language.appearance.crops import ObjectCrop, crop_object
 from simsplat_core.language.appearance.subtypes import STATIC_SUBTYPES, VEHICLE_SUBTYPES
@@ -50,14 +54,16 @@ def expected_views(evidence: PixelEvidence, object_id: str) -> list[tuple[int, i
     return [(int(f), int(c)) for f, c in zip(*np.nonzero(counts >= MIN_VIEW_PIXELS))]
 
 
-def check_visible(evidence: PixelEvidence, object_id: str, node_id: int, must_show: bool, v: Verdict) -> None:
-    """``object_id`` drawn by ``node_id`` covers the world's pixels of it in enough views (module docstring)."""
+def check_visible(evidence: PixelEvidence, object_id: str, node_id: int, v: Verdict) -> bool:
+    """``object_id`` drawn by ``node_id`` covers the world's pixels of it in enough views (module docstring).
+
+    Returns whether the world shows the object at all in the checked frames (an object it does not show -- out
+    of view or hidden behind others -- has nothing to be checked in pixels; where it is, the state checks say).
+    """
     views = expected_views(evidence, object_id)
     if not views:
-        v.require(not must_show, f"{object_id} is out of sight in every checked frame")
-        if not must_show:
-            v.note(f"{object_id} out of sight")
-        return
+        v.note(f"{object_id} out of sight in the checked frames")
+        return False
     inst = evidence.world_instance[object_id]
     covered = []
     for f, c in views:
@@ -68,24 +74,25 @@ def check_visible(evidence: PixelEvidence, object_id: str, node_id: int, must_sh
     v.measured[f"visible_share_{object_id}"] = share
     v.require(share >= MIN_VIEW_SHARE, f"{object_id} drawn in {share:.0%} of the {len(views)} views where it should "
               f"be seen (median cover {np.median(covered):.0%})")
+    return True
 
 
-def object_crops(evidence: PixelEvidence, node_id: int, object_id: str, category: str,
+def object_crops(views: ViewSet, id_value: int, object_id: str, category: str,
                  box_size: np.ndarray) -> list[ObjectCrop]:
-    """Crops of the rendered node in every view with at least ``MIN_CAPTION_PIXELS`` of its pixels."""
-    ev = evidence.edited
+    """Crops of the pixels with id ``id_value`` in every view of ``views`` that has at least
+    ``MIN_CAPTION_PIXELS`` of them."""
     out = []
-    for f in range(len(ev.frames)):
-        for c, camera in enumerate(ev.cameras):
-            mask = ev.ids[f, c] == node_id
+    for f in range(len(views.frames)):
+        for c, camera in enumerate(views.cameras):
+            mask = views.ids[f, c] == id_value
             if mask.sum() < MIN_CAPTION_PIXELS:
                 continue
-            cut = crop_object(ev.rgb[f, c], mask)
+            cut = crop_object(views.rgb[f, c], mask)
             if cut is None:
                 continue
             rgb, m, bbox = cut
-            out.append(ObjectCrop(rgb, m, category, np.asarray(box_size, np.float64), ev.frames[f], camera, object_id,
-                                  bbox))
+            out.append(ObjectCrop(rgb, m, category, np.asarray(box_size, np.float64), views.frames[f], camera,
+                                  object_id, bbox))
     return out
 
 
@@ -95,21 +102,26 @@ def check_appearance(evidence: PixelEvidence, intent: EditIntent, object_id: str
     asset = intent.asset
     if asset is None:
         return
-    crops = object_crops(evidence, node_id, object_id, category, box_size)
+    crops = object_crops(evidence.edited, node_id, object_id, category, box_size)
     if not v.require(bool(crops), f"{object_id}: no view with {MIN_CAPTION_PIXELS}+ pixels to caption"):
         return
     caption = describe_track(crops)
-    v.note(f"{object_id} captioned {caption.text!r}")
+    reference = evidence.reference_captions.get(object_id)
+    v.note(f"{object_id} captioned {caption.text!r}"
+           + (f" (the asked look renders as {reference.text!r})" if reference is not None else ""))
     if category == "pedestrian":
-        if asset.upper is not None:
-            v.require(caption.upper_color == asset.upper,
-                      f"{object_id}: top {caption.upper_color}, asked {asset.upper}")
-        if asset.lower is not None:
-            v.require(caption.lower_color == asset.lower,
-                      f"{object_id}: trousers {caption.lower_color}, asked {asset.lower}")
+        for part, asked, got, ref in (
+                ("top", asset.upper, caption.upper_color, reference.upper_color if reference else None),
+                ("trousers", asset.lower, caption.lower_color, reference.lower_color if reference else None)):
+            if asked is not None:
+                v.require(got in (asked, ref), f"{object_id}: {part} {got}, asked {asked}"
+                          + (f" (renders as {ref})" if ref not in (None, asked) else ""))
         return
     if asset.color is not None:
-        v.require(asset.color in caption.colors, f"{object_id}: colour {'/'.join(caption.colors)}, asked {asset.color}")
+        ref_colors = reference.colors if reference is not None else ()
+        v.require(asset.color in caption.colors or (bool(ref_colors) and caption.colors[:1] == ref_colors[:1]),
+                  f"{object_id}: colour {'/'.join(caption.colors)}, asked {asset.color}"
+                  + (f" (renders as {'/'.join(ref_colors)})" if ref_colors and ref_colors[0] != asset.color else ""))
     if asset.subtype is not None and asset.subtype in CHECKABLE_SUBTYPES:
         v.require(caption.subtype == asset.subtype, f"{object_id}: a {caption.subtype}, asked a {asset.subtype}")
 
@@ -158,8 +170,8 @@ def check_pixels(intent: EditIntent, obs: EditObservation, evidence: PixelEviden
         node = int(after.node_ids[row])
         if not v.require(node >= 0, f"{object_id} has no scene-graph node after the edit"):
             continue
-        check_visible(evidence, object_id, node, must_show=object_id in changes.added, v=v)
-        if object_id in changes.added or object_id in changes.redrawn:
+        seen = check_visible(evidence, object_id, node, v)
+        if seen and (object_id in changes.added or object_id in changes.redrawn):
             check_appearance(evidence, intent, object_id, node, after.categories[row], after.size[row], v)
     return v.result()
 

@@ -508,14 +508,15 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
 
 
 def _near_kerb(truth: SceneTruth, agent: Agent) -> tuple[bool, bool]:
-    """``(on a sidewalk within 2.5 m of the kerb, also away from the crosswalks)`` at the first frame."""
+    """``(on a sidewalk within 2.5 m of the kerb by a crosswalk, ... away from the crosswalks)`` at the first
+    frame: where "cross the street" means crossing now, on the crosswalk or (jaywalking) off it."""
     pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
     if pos.arm is None or pos.region != "sidewalk":
         return False, False
     near = abs(pos.lateral) - truth.layout.half_width(pos.arm) <= 2.5
     c0, c1 = truth.layout.crosswalk_range(pos.arm)
-    away = abs(pos.along - 0.5 * (c0 + c1)) >= 0.5 * (c1 - c0) + 3.0
-    return near, near and away
+    off = abs(pos.along - 0.5 * (c0 + c1)) - 0.5 * (c1 - c0)
+    return near and off <= 3.0, near and off >= 3.0
 
 
 def plan_modify_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
@@ -545,8 +546,8 @@ def plan_modify_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.
             out.append(Draft("pedestrian_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
                              {**slot, "t": seconds_phrase(delay, rng)}))
         if label in (voc.STANDING, voc.WALKING_ALONG):
-            near, away = _near_kerb(truth, agent)
-            if near:
+            by_crosswalk, away = _near_kerb(truth, agent)
+            if by_crosswalk:
                 out.append(Draft("pedestrian_cross", EditIntent("modify", (oid,), motion=MotionIntent(
                     cross_street=True)), slot))
             if away:

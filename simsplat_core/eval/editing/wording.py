@@ -172,7 +172,6 @@ FORMS: dict[str, tuple[str, ...]] = {
         "Stop {T} before it reaches the crosswalk.",
     ),
     "vehicle_stop": (
-        "Stop {T}.",
         "Make {T} come to a stop.",
         "{T} should pull up and stop.",
         "Bring {T} to a halt.",

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from simsplat_core.eval.editing.checks import Verdict
@@ -29,17 +31,17 @@ def test_visible_needs_the_node_where_the_world_shows_the_object() -> None:
     world = _views(grey, _box(7, 0))
     drawn = PixelEvidence(_views(grey, _box(42, -1)), world, world, {"new_0": 7}, {})
     v = Verdict()
-    check_visible(drawn, "new_0", 42, must_show=True, v=v)
+    assert check_visible(drawn, "new_0", 42, v)
     assert v.result().passed
     elsewhere = np.full((H, W), -1, np.int32)
     elsewhere[0:4, 0:4] = 42
     v = Verdict()
-    check_visible(PixelEvidence(_views(grey, elsewhere), world, world, {"new_0": 7}, {}), "new_0", 42, True, v)
+    check_visible(PixelEvidence(_views(grey, elsewhere), world, world, {"new_0": 7}, {}), "new_0", 42, v)
     assert not v.result().passed and "drawn in 0%" in v.result().reason
-    v = Verdict()
-    check_visible(PixelEvidence(_views(grey, _box(42, -1)), _views(grey, np.zeros((H, W))), world, {"new_0": 7}, {}),
-                  "new_0", 42, must_show=True, v=v)
-    assert "out of sight" in v.result().reason and not v.result().passed
+    v = Verdict()  # the world does not show it (hidden / out of view): nothing to check in pixels
+    hidden = PixelEvidence(_views(grey, _box(42, -1)), _views(grey, np.zeros((H, W))), world, {"new_0": 7}, {})
+    assert not check_visible(hidden, "new_0", 42, v)
+    assert v.result().passed and "out of sight" in v.result().reason
 
 
 def test_removed_region_must_look_like_the_scene_without_it() -> None:
@@ -90,3 +92,12 @@ def test_caption_of_the_rendered_object_checks_colour_and_type(truths) -> None:
     assert ok.passed, ok.reason
     assert "colour yellow, asked blue" in check_pixels(intent("blue", "SUV"), obs, evidence).reason
     assert "a SUV, asked a van" in check_pixels(intent("yellow", "van"), obs, evidence).reason
+    # a colour the captioner names otherwise is accepted when the asked look renders the same way, not otherwise
+    from simsplat_core.language.appearance.captioner import AppearanceCaption
+
+    blue_reads_yellow = dataclasses.replace(evidence, reference_captions={
+        "new_0": AppearanceCaption("a yellow SUV", "vehicle", "SUV", ("yellow",))})
+    assert check_pixels(intent("blue", "SUV"), obs, blue_reads_yellow).passed
+    blue_reads_blue = dataclasses.replace(evidence, reference_captions={
+        "new_0": AppearanceCaption("a blue SUV", "vehicle", "SUV", ("blue",))})
+    assert not check_pixels(intent("blue", "SUV"), obs, blue_reads_blue).passed
