@@ -115,9 +115,10 @@ class _Scan:
 
 
 #: What ends an anchor's noun phrase: another placement's words, or the inserted object's own motion.
-_ANCHOR_EXCLUDE = ("at", "in front of", "behind", "next to", "ahead of", "in", "on", "to the left of", "to the right of",
-                   "left of", "right of", "before", "after", "by", "beside",
-                   *"facing heading pointing driving going travelling traveling moving walking running crossing".split())
+_ANCHOR_EXCLUDE = ("at", "in front of", "behind", "next to", "ahead of", "in", "on", "to the left of",
+                   "to the right of", "left of", "right of", "before", "after", "by", "beside",
+                   *"facing heading pointing driving going travelling traveling moving walking running crossing"
+                   .split())
 
 
 def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float, float]]) -> tuple[
