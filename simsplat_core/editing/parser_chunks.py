@@ -241,7 +241,7 @@ def _opening(tokens: Sequence[str], i: int) -> int:
 _CLAUSE_VERBS = frozenset({p.split()[0] for p in (*lex.REMOVE_VERBS, *lex.INSERT_VERBS, *lex.REPLACE_VERBS,
                                                   *lex.CAUSATIVES, *lex.TARGET_FIRST_VERBS)}
                           | {v for v in lex.PREDICATE_VERBS if not v.endswith("s") or v in ("cross", "pass")}
-                          | {"instead", "there", "i", "we", "let"}) - {"is", "are", "not", "no", "set", "have"}
+                          | {"instead", "there", "i", "we", "let"}) - {"is", "are", "not", "no", "set"}
 _KNOWN = frozenset(COLOR_SYNONYMS) | lex.HEAD_NOUNS | frozenset(p.split()[0] for p in NP_PREPOSITIONS)
 
 
@@ -264,6 +264,17 @@ def starts_clause(tokens: Sequence[str], i: int) -> bool:
             and tokens[i + 1] in ("the", "a", "an", "all", "every", "node", "object", "it", "them", "this"))
 
 
+def _needs_predicate(current: Sequence[str], tokens: Sequence[str], i: int) -> bool:
+    """Whether ``current`` is only a subject waiting for a predicate ("make the car", "the car") and the words
+    at ``i`` are another subject sharing it ("... and the bus stop"), not a clause of their own."""
+    i = _opening(tokens, i)
+    if i >= len(tokens) or tokens[i] in _CLAUSE_VERBS:
+        return False
+    start = _opening(current, 0)
+    start += match(current, start, lex.CAUSATIVES)
+    return start < len(current) and chunk_np(current, start, "target") == len(current)
+
+
 def split_clauses(tokens: Sequence[str]) -> list[list[str]]:
     """The clauses of a canonical prompt (module docstring), each with its openings dropped."""
     clauses: list[list[str]] = []
@@ -284,7 +295,7 @@ def split_clauses(tokens: Sequence[str]) -> list[list[str]]:
             i += k
             continue
         k = match(tokens, i, lex.SOFT_BREAKS)
-        if k and current and starts_clause(tokens, i + k):
+        if k and current and starts_clause(tokens, i + k) and not _needs_predicate(current, tokens, i + k):
             flush()
             i += k
             continue

@@ -25,6 +25,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from pydantic import ValidationError
+
 from simsplat_core.editing import parser_chunks as chunks
 from simsplat_core.editing import parser_lexicon as lex
 from simsplat_core.editing.commands import EGO, AssetSpec, Placement, TargetRef
@@ -46,9 +48,10 @@ _REMOVE_TAIL = re.compile(r"(?:(?:out|away|off|completely|entirely|too|as well|a
                           r"|from|out of|off of|of|the|this|whole|scene|road|image|picture|video|frame|frames|world"
                           r"|simulation|sim|street|clip|sequence|log|view|map|everywhere|all)\s*)*")
 #: Words an insert clause may hold that say nothing ("make a cone appear", "add a new car to the scene").
-_INSERT_FILLER = frozenset("appear appears show up there here new too as well also to into in the scene road please "
-                           "somewhere".split())
+_INSERT_FILLER = frozenset("appear appears show up there here new too as well also to into in the scene please "
+                           "somewhere a row line road".split())
 _INDEFINITE = ("a", "an", "another", "some", "one more")
+_SIDEWAYS = r"(?:over )?\d+(?:\.\d+)? m (?:to the |towards the |over to the |to its )?(?:left|right)"
 
 
 def _category(query_categories: Sequence[str]) -> str | None:
@@ -121,10 +124,16 @@ class PromptParser:
 
     def clause(self, tokens: list[str]) -> None:
         self.clause_text = " ".join(tokens)
-        for form in (self._replace, self._remove, self._insert, self._causative, self._target_first,
-                     self._subject_first, self._continuation, self._unknown_verb):
-            if form(tokens):
-                return
+        try:
+            for form in (self._replace, self._remove, self._insert, self._causative, self._target_first,
+                         self._subject_first, self._continuation, self._unknown_verb):
+                if form(tokens):
+                    return
+        except ValidationError as exc:  # a value the schema does not take ("500 km/h")
+            error = exc.errors()[0]
+            where = ".".join(str(p) for p in error["loc"])
+            raise EditRefused(f"{self.clause_text!r} asks for something out of range ({exc.title}"
+                              f"{'.' + where if where else ''}: {error['msg']})", reason="invalid_command") from exc
         raise self.not_understood(self.clause_text)
 
     def finish(self) -> list[Draft]:
@@ -151,6 +160,8 @@ class PromptParser:
             if not m:
                 continue
             old, new = (m.group(2), m.group(1)) if swapped else (m.group(1), m.group(2))
+            if not self._np_start(old.split(), 0) or old.split()[0] == "there":
+                continue
             if swapped and old.split()[0] in _INDEFINITE and new.split()[0] not in _INDEFINITE:
                 old, new = new, old  # "substitute the van for a bus"
             asset = parse_asset(new.split())
@@ -159,7 +170,7 @@ class PromptParser:
                     raise self.refuse(asset.refusal or f"I could not understand {new!r} as something to insert")
                 continue
             subject = self._subject(old.split())
-            self._add(Draft("replace", words, subject, asset=asset.spec))
+            self._add(Draft("replace", words, subject, asset=asset.spec.model_copy(update={"count": 1})))
             return True
         if tokens[0] == "replace":
             raise self.refuse(f"{words!r} does not say what to replace it with: say 'replace X with Y'")
@@ -168,7 +179,7 @@ class PromptParser:
     def _remove(self, tokens: list[str]) -> bool:
         k = chunks.match(tokens, 0, lex.REMOVE_VERBS)
         particle = False
-        if not k and tokens[0] in ("take", "get", "pull", "kick", "throw", "toss", "clear", "yank", "move"):
+        if not k and tokens[0] in ("take", "get", "pull", "kick", "throw", "toss", "clear", "move"):
             spans = chunks.chunk_targets(tokens, 1, "target", exclude=("out", "away", "off"))
             particle = bool(spans) and tokens[spans[-1][1] : spans[-1][1] + 1] in (["out"], ["away"], ["off"])
             k = 1 if particle else 0
@@ -263,17 +274,23 @@ class PromptParser:
 
     def _target_first(self, tokens: list[str]) -> bool:
         verb = tokens[0]
-        if verb not in lex.TARGET_FIRST_VERBS or not self._np_start(tokens, 1):
+        start = 2 if tokens[1:2] and tokens[1] in lex.PARTICLES else 1  # "slow down the bus"
+        if verb not in lex.TARGET_FIRST_VERBS or not self._np_start(tokens, start):
             return False
         placing = verb in lex.PLACING_VERBS
-        spans = chunks.chunk_targets(tokens, 1, "target",
+        spans = chunks.chunk_targets(tokens, start, "target",
                                      exclude=PLACEMENT_PREPOSITIONS if placing else COMPLEMENT_PREPOSITIONS)
         if not spans:
             return False
         j = spans[-1][1]
-        particle = tokens[j : j + 1] if tokens[j : j + 1] and tokens[j] in lex.PARTICLES else []
-        rest = tokens[j + len(particle) :]
+        if start == 1 and tokens[j : j + 1] and tokens[j] in lex.PARTICLES:  # "slow the bus down"
+            particle, j = [tokens[j]], j + 1
+        else:
+            particle = tokens[1:start]
+        rest = tokens[j:]
         placement: PlacementParse | None = None
+        if placing and re.fullmatch(_SIDEWAYS, " ".join(rest)):
+            placing, verb = False, "shift"  # "move the car 1 m to the left": sideways, not left of the ego
         if placing:
             placement, rest = find_placement(rest, self.positions)
             if verb in ("put", "place", "position") and placement is None and not rest:
@@ -409,12 +426,14 @@ class PromptParser:
             raise self.refuse(parse.refusal[0].upper() + parse.refusal[1:])
         fields = dict(parse.fields)
         if parse.residual:
-            if fields or parse.refs or parse.op:
-                raise self.not_understood(parse.residual)
             match = nearest_intent(words, self.encoder)
-            if match.intent is None or match.intent not in INTENT_FIELDS:
+            if fields or parse.refs or parse.op:  # accepted only when E5 reads the words as what the rules found
+                if match.intent not in INTENT_FIELDS or not set(INTENT_FIELDS[match.intent]) <= set(fields):
+                    raise self.not_understood(parse.residual)
+            elif match.intent is None or match.intent not in INTENT_FIELDS:
                 raise self.not_understood(words)
-            fields.update(INTENT_FIELDS[match.intent])
+            else:
+                fields.update(INTENT_FIELDS[match.intent])
         if "follow" in parse.refs:
             fields["follow"] = self._reference(parse.refs["follow"], subject, ego_as_none=False)
         if "stop_behind" in parse.refs:

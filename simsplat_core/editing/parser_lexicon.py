@@ -20,7 +20,7 @@ REMOVE_VERBS: tuple[str, ...] = (
     "remove", "delete", "erase", "eliminate", "get rid of", "take out", "take away", "drop", "ditch", "discard",
     "clear", "clear out", "clear away", "wipe out", "wipe", "scrub", "cut", "axe", "lose", "strip out", "zap",
     "nuke", "kill", "exclude", "omit", "purge", "dispose of", "do away with", "throw out", "toss out", "hide",
-    "despawn", "un-spawn", "unspawn", "yank out", "pull out",
+    "despawn", "un-spawn", "unspawn", "pull out",
 )
 #: Verbs that insert an indefinite noun phrase ("add a cone"); with a definite one ("put the van ...") they move it.
 INSERT_VERBS: tuple[str, ...] = (
@@ -46,7 +46,7 @@ TARGET_FIRST_VERBS: tuple[str, ...] = (
     "hurry", "freeze", "relocate", "reposition", "put", "place", "position",
 )
 #: Verbs whose object is placed, not described ("move the van 5 m behind the bus").
-PLACING_VERBS: tuple[str, ...] = ("move", "put", "place", "position", "relocate", "reposition", "shift", "nudge")
+PLACING_VERBS: tuple[str, ...] = ("move", "put", "place", "position", "relocate", "reposition")
 #: Particles a target-first verb may take after its object ("slow the bus down").
 PARTICLES: tuple[str, ...] = ("down", "up", "over", "off", "out", "away", "around", "back", "in")
 

@@ -56,11 +56,11 @@ _LANES: tuple[tuple[str, str], ...] = (
      r"|in (?:our|my|its) lane|in the lane of the ego(?: vehicle| car)?|in (?:the |this )?lane(?= |$)", "same"),
 )
 _AREAS: tuple[tuple[str, str], ...] = (
-    (r"(?:on|onto|at|in|across|along|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"
+    (r"(?:on|onto|at|in|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"
      r"|pedestrian crossing|crossing)", "on_crosswalk"),
     (r"(?:on|onto|along|at|up on|in) (?:the |a )?(?:sidewalk|pavement|footpath|walkway|footway|curb|kerb)",
      "on_sidewalk"),
-    (r"(?:on|onto|in|into|in the middle of|at|across|along) (?:the |a )?(?:road|street|roadway|carriageway"
+    (r"(?:on|onto|in|into|in the middle of|at) (?:the |a )?(?:road|street|roadway|carriageway"
      r"|middle of the road|intersection|junction)|(?:by|at|next to|along|near|on) (?:the )?(?:curb|kerb|roadside"
      r"|side of the road|edge of the road|shoulder)", "on_road"),
 )
@@ -150,7 +150,7 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
         for rx, deg in ((r"facing (?:backwards?|the other way|the opposite (?:way|direction)|the wrong way|us"
                          r"|towards? us|the camera|oncoming traffic)|the wrong way", 180.0),
                         (r"facing (?:to the )?left", 90.0), (r"facing (?:to the )?right", -90.0),
-                        (r"(?:facing )?sideways|across the (?:road|street|lane)", 90.0),
+                        (r"(?:facing )?sideways", 90.0),
                         (r"facing (?:forwards?|ahead|the same way|the same direction)", 0.0)):
             m = s.find(rx)
             if m:
