@@ -245,6 +245,7 @@ def _timing_rules(w: _Work) -> None:
            r"(?: (?:it|its start|the start|their start|its departure|start|them))?(?: by| for)? " + _N + r" s"
            r"|with a " + _N + r" s delay|(?:a )?delay of " + _N + r" s",
            lambda m: w.set("delay_s", float(next(g for g in m.groups() if g))))
+    w.take(r"before(?= (?:crossing|cross|it crosses|they cross|walking))")
     then_go = (r"(?: (?:before|then|and then|until|and)(?: it| they| he| she)? (?:moving|driving|going|starting"
                r"|starts|start|moves|move|goes|go|drives|drive|walks|walk|leaving|leaves|pulling away|setting off"
                r"|sets off|start(?:ing|s)? (?:to move|moving|driving|walking|off)))?")
@@ -276,7 +277,8 @@ def _lateral_rules(w: _Work) -> None:
     w.take(verbs + r"(?: over| across| in| back)?(?: (?:a |one )?lanes?)?(?: (?:to|into|in to|onto|towards|"
                    r"toward|over to"
            r"|across to|in)(?: the)?)? (left|right)(?:[- ]hand)?(?: side)?(?: lane)?", lane)
-    w.take(r"(?:into|to|in to|onto|over to) the (left|right)(?:[- ]hand)? lane|lane[- ]change (?:to the )?(left|right)"
+    w.take(r"(?:(?:turn|turns|go|goes|get|gets|head|heads|drive|drives|pull|pulls|come|comes)(?: over)? )?"
+           r"(?:into|to|in to|onto|over to) the (left|right)(?:[- ]hand)? lane|lane[- ]change (?:to the )?(left|right)"
            r"|(left|right) lane[- ]change", lambda m: w.set("lane_change", next(g for g in m.groups() if g)))
     if w.take(r"(?:overtake|overtakes|overtaking|pass|passes|passing|get past|gets past|go around|goes around)"):
         w.set("lane_change", "left")
@@ -294,7 +296,8 @@ def _turn_rules(w: _Work) -> None:
     if w.take(r"u[- ]?turn|u[- ]?turns|turn(?:s)? (?:it |them )?(?:around|back)|do a 180|pull a 180"):
         w.out.refusal = "U-turns are not supported (turn left or right, or go straight, at the next intersection)"
         w.out.refusal_field = "turn"
-    w.take(r"(?:do not|does not|not|never|no|without) turn(?:ing)?|(?:go|goes|going|drive|drives|driving|continue"
+    w.take(r"(?:do not|does not|not|never|no|without) turn(?:ing)?(?: (?:left|right))?"
+           r"|(?:go|goes|going|drive|drives|driving|continue"
            r"|continues|continuing|keep|keeps|keep going|keep driving|carry on|carries on|head|heads|proceed|proceeds"
            r"|stay|stays|travel|travels|run)(?: on)? straight(?: on| ahead| through| across)?|"
            r"straight (?:through|across"
@@ -376,8 +379,12 @@ def _op_rules(w: _Work) -> None:
 
 
 def _neutral_rules(w: _Work) -> None:
+    w.take(r"than (?:now|before|it (?:is|was)|it does now|currently|usual|normal|normally|in the log|originally"
+           r"|its current speed|the others?|other cars)|towards? (?:us|me|the ego(?: vehicle| car)?)|the other way"
+           r"|in the opposite direction|against (?:the )?traffic", repeat=True)
     if w.take(r"go|goes|drive|drives|move|moves|continue|continues|proceed|proceeds|keep going|carry on|keep driving"
-              r"|resume|resumes|start moving|get going|go on|drive on|move on|set off", repeat=True):
+              r"|resume|resumes|start moving|get going|go on|drive on|move on|set off|ride|rides|riding|cycling"
+              r"|biking|cycle|cycles", repeat=True):
         w.out.neutral = True
 
 

@@ -19,7 +19,7 @@ import functools
 from collections.abc import Iterable, Sequence
 
 from simsplat_core.editing import parser_lexicon as lex
-from simsplat_core.language.query_parse import COLOR_SYNONYMS
+from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS
 
 PUNCT = frozenset({",", ";", ".", "!", "?", ":"})
 #: Prepositions that attach a phrase to the noun before them ("the van *on* the left").
@@ -129,7 +129,7 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
         return i + k
     j = i
     while True:  # determiners and counts
-        k = match(tokens, j, lex.DETERMINERS) or match(tokens, j, lex.QUANTITY_PHRASES)
+        k = max(match(tokens, j, lex.DETERMINERS), match(tokens, j, lex.QUANTITY_PHRASES))
         if not k and j < n and (is_number(tokens[j]) and not is_quantity(tokens, j)):
             k = 1
         if not k:
@@ -137,10 +137,10 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
         j += k
     head = False
     start = j
-    while j < n:  # modifiers, then the head noun (and nouns compounded with it)
+    while j < n:  # modifiers, then the head noun (and object nouns compounded with it)
         t = tokens[j]
         k = head_noun(tokens, j)
-        if k:
+        if k and not (head and tokens[j] in ("left", "right", "front", "back")):  # "turn the car *left*"
             j += k
             head = True
             continue
@@ -151,7 +151,8 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
             continue
         if j > start and (_predicate_start(tokens, j) or match(tokens, j, NP_PREPOSITIONS)):
             break
-        if j == start and (match(tokens, j, NP_PREPOSITIONS) or t in lex.MODALS or t in ("and", "then")):
+        if j == start and (match(tokens, j, NP_PREPOSITIONS) or t in lex.MODALS or t in ("and", "then")
+                           or (j == i and _predicate_start(tokens, j))):  # "to *walk* across": a verb
             break
         j += 1
     if j == i or mode == "inner":
@@ -174,7 +175,7 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
             end = chunk_np(tokens, j + k, "inner")
             if prep == "between" and end < n - 1 and tokens[end] == "and":
                 end = max(end, chunk_np(tokens, end + 1, "inner"))
-            if end > j + k and not (mode == "asset" and _names_place(tokens[j + k : end])):
+            if end > j + k and not (mode == "asset" and prep != "of" and _names_place(tokens[j + k : end])):
                 j = end
                 continue
         if mode != "target":
@@ -189,9 +190,7 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
 
 def _names_place(words: Sequence[str]) -> bool:
     """An appearance phrase that is a place ("in *the left lane*", "with *the bus*") and so not appearance."""
-    text = " ".join(words)
-    return any(w in lex.PLACE_NOUNS or w in lex.NON_OBJECTS for w in words) or any(
-        f" {noun} " in f" {text} " for noun in ("car", "bus", "truck", "van", "cone", "pedestrian", "vehicle"))
+    return any(w in lex.PLACE_NOUNS or w in lex.NON_OBJECTS or w in NOUNS for w in words)
 
 
 def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:

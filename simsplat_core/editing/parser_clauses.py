@@ -20,6 +20,8 @@ on one subject merge into one command when their fields do not clash.
 
 from __future__ import annotations
 
+import difflib
+import logging
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -38,6 +40,8 @@ from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS, parse_query
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 
+logger = logging.getLogger(__name__)
+
 #: Prepositions a target-first verb's complements start with (not part of its object).
 COMPLEMENT_PREPOSITIONS = ("before", "behind", "until", "till", "to", "into", "onto", "by", "after", "at", "for",
                            "over", "from", "in front of", "ahead of")
@@ -51,6 +55,9 @@ _REMOVE_TAIL = re.compile(r"(?:(?:out|away|off|completely|entirely|too|as well|a
 _INSERT_FILLER = frozenset("appear appears show up there here new too as well also to into in the scene please "
                            "somewhere a row line road".split())
 _INDEFINITE = ("a", "an", "another", "some", "one more")
+#: Clause-opening verbs a typo may be corrected to.
+_KNOWN_VERBS = sorted({v for v in (*lex.REMOVE_VERBS, *lex.INSERT_VERBS, *lex.REPLACE_VERBS, *lex.CAUSATIVES,
+                                   *lex.TARGET_FIRST_VERBS) if " " not in v})
 _SIDEWAYS = r"(?:over )?\d+(?:\.\d+)? m (?:to the |towards the |over to the |to its )?(?:left|right)"
 
 
@@ -124,6 +131,13 @@ class PromptParser:
 
     def clause(self, tokens: list[str]) -> None:
         self.clause_text = " ".join(tokens)
+        if tokens[0] in ("can", "could", "will", "would", "should", "shall") and self._np_start(tokens, 1):
+            tokens = tokens[1:]  # "can the bus go slower?"
+        if tokens[0] not in _KNOWN_VERBS:
+            close = difflib.get_close_matches(tokens[0], _KNOWN_VERBS, n=1, cutoff=0.8)
+            if close and len(tokens[0]) > 3:
+                logger.debug("reading %r as %r", tokens[0], close[0])
+                tokens = [close[0], *tokens[1:]]  # a typo: "remvoe the car"
         try:
             for form in (self._replace, self._remove, self._insert, self._causative, self._target_first,
                          self._subject_first, self._continuation, self._unknown_verb):
@@ -164,8 +178,10 @@ class PromptParser:
                 continue
             if swapped and old.split()[0] in _INDEFINITE and new.split()[0] not in _INDEFINITE:
                 old, new = new, old  # "substitute the van for a bus"
+            if self._definite(new.split(), 0) or re.search(r"\blanes?\b", new):
+                continue  # "turn into the left lane" is a lane change, not a replacement
             asset = parse_asset(new.split())
-            if asset.spec is None or re.search(r"\blanes?\b", new):
+            if asset.spec is None:
                 if rx.startswith("(?:replace") or rx.startswith("(?:change|turn|convert"):
                     raise self.refuse(asset.refusal or f"I could not understand {new!r} as something to insert")
                 continue
@@ -259,7 +275,8 @@ class PromptParser:
             draft.placement = draft.placement or last
 
     def _causative(self, tokens: list[str]) -> bool:
-        k = chunks.match(tokens, 0, lex.CAUSATIVES)
+        negated = chunks.match(tokens, 0, ("do not let", "never let", "do not allow", "do not make"))
+        k = negated or chunks.match(tokens, 0, lex.CAUSATIVES)
         if not k or not self._np_start(tokens, k):
             return False
         spans = chunks.chunk_targets(tokens, k, "target")
@@ -269,7 +286,7 @@ class PromptParser:
         j += 1 if tokens[j : j + 1] == ["to"] else 0
         if j >= len(tokens):
             raise self.refuse(f"{self.clause_text!r} does not say what {' '.join(tokens[k:j])!r} should do")
-        self._modify([self._subject(tokens[a:b]) for a, b in spans], tokens[j:])
+        self._modify([self._subject(tokens[a:b]) for a, b in spans], (["not"] if negated else []) + tokens[j:])
         return True
 
     def _target_first(self, tokens: list[str]) -> bool:
@@ -353,7 +370,8 @@ class PromptParser:
         t = tokens[i]
         if chunks.match(tokens, i, lex.DETERMINERS) or chunks.match(tokens, i, lex.PRONOUNS):
             return not (t in ("that", "this") and i + 1 < len(tokens) and tokens[i + 1] in ("is", "was"))
-        if t in ("node", "object", "obj") or t in COLOR_SYNONYMS or chunks.match(tokens, i, lex.EGO_WORDS):
+        if t in ("node", "object", "obj", "everyone", "everybody", "everything") or t in COLOR_SYNONYMS \
+                or chunks.match(tokens, i, lex.EGO_WORDS):
             return True
         k = chunks.head_noun(tokens, i)
         return k > 0 and (" ".join(tokens[i : i + k]) in NOUNS or " ".join(tokens[i : i + k]) in lex.EXTRA_ASSET_NOUNS)
@@ -382,7 +400,8 @@ class PromptParser:
             if not query.categories and head in lex.NON_OBJECTS:
                 raise self.refuse(f"{phrase!r} is not an object: only vehicles, pedestrians, cyclists and static "
                                   "objects (cones, barriers, signs) can be edited")
-            subject = Subject(TargetRef(description=phrase, group=query.group), _category(query.categories), phrase)
+            group = query.group or phrase in ("everyone", "everybody", "everything", "all agents", "all objects")
+            subject = Subject(TargetRef(description=phrase, group=group), _category(query.categories), phrase)
         self.mentions.append(subject)
         return subject
 
@@ -397,10 +416,10 @@ class PromptParser:
                 raise self.refuse(f"{phrase!r} in {self.clause_text!r} does not refer to an object of the scene: "
                                   "name it")
             return other.ref
-        query = parse_query(phrase)
-        ref = TargetRef(description=phrase)
-        self.mentions.append(Subject(ref, _category(query.categories), phrase))
-        return ref
+        subject = self._subject(phrase.split())  # ids read, non-objects refused; noted as a mention
+        if subject.ref is None:  # pragma: no cover - only pronouns resolve to inserted objects
+            raise self.refuse(f"{phrase!r} cannot be an anchor")
+        return subject.ref
 
     def _placement(self, p: PlacementParse, subject: Subject | None) -> Placement | None:
         if p.refusal:

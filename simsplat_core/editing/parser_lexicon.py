@@ -28,7 +28,7 @@ INSERT_VERBS: tuple[str, ...] = (
     "stick", "plant", "set up", "set down", "set", "bring in", "bring", "generate", "park", "include", "throw in",
     "toss in", "pop in", "pop", "deploy", "station", "stand", "line up", "lay out", "lay", "build", "make", "have",
     "i want", "i need", "we need", "we want", "i would like", "we would like", "give me", "there should be",
-    "there is", "there are", "let there be", "there needs to be", "i want to see", "show",
+    "there is", "there are", "let there be", "there needs to be", "i want to see", "show", "see",
 )
 #: Verbs of a replacement ("replace X with Y", "swap X for Y", "turn X into Y").
 REPLACE_VERBS: tuple[str, ...] = ("replace", "swap out", "swap", "exchange", "switch out", "switch", "substitute",
@@ -140,18 +140,21 @@ NON_OBJECTS: tuple[str, ...] = (
     "intersection", "junction", "lighting", "light", "lights", "night", "day", "time of day", "season", "scene",
     "world", "city", "house", "houses", "wall", "walls", "camera", "image", "picture", "video", "map", "asphalt",
 )
-#: Nouns of places and parts (end a noun phrase like object nouns do).
+#: Nouns of places and parts of the road (a phrase holding one is a place, not an appearance).
 PLACE_NOUNS: tuple[str, ...] = (
     "street", "road", "lane", "lanes", "sidewalk", "pavement", "footpath", "walkway", "crosswalk", "zebra crossing",
     "zebra", "pedestrian crossing", "intersection", "junction", "crossroads", "crossroad", "curb", "kerb", "side",
     "left", "right", "front", "back", "rear", "middle", "centre", "center", "corner", "shoulder", "roadside",
     "light", "lights", "traffic light", "traffic lights", "stop line", "scene", "lot", "parking lot", "spot", "edge",
-    "one", "ones", "thing", "things", "object", "objects", "guy", "hat", "cap", "helmet", "backpack", "bag",
-    "umbrella", "stroller", "dog", "block", "road work", "queue", "line", "traffic", "stripe", "stripes",
+    "block", "road work", "queue", "line", "traffic", "ego",
 )
-#: Every noun that may head a noun phrase (word tuples, longest first for matching).
+#: Other nouns that may head or end a noun phrase ("the red *one*", "a man with a *stroller*").
+OTHER_NOUNS: tuple[str, ...] = ("one", "ones", "thing", "things", "object", "objects", "guy", "hat", "cap", "helmet",
+                                "backpack", "bag", "umbrella", "stroller", "pram", "dog", "stripe", "stripes",
+                                "everyone", "everybody", "everything", "agents")
+#: Every noun that may head a noun phrase.
 HEAD_NOUNS: frozenset[str] = frozenset((*NOUNS, *UPPER_GARMENTS, *LOWER_GARMENTS, *EXTRA_ASSET_NOUNS, *PLACE_NOUNS,
-                                        *NON_OBJECTS))
+                                        *OTHER_NOUNS, *NON_OBJECTS))
 HEAD_NOUN_MAX_WORDS = max(len(n.split()) for n in HEAD_NOUNS)
 
 # ------------------------------------------------------------------------------------------------ intents

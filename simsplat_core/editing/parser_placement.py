@@ -28,7 +28,7 @@ from simsplat_core.editing.parser_text import number_word
 from simsplat_core.language.query_parse import NOUNS, parse_query
 
 _N = r"(\d+(?:\.\d+)?)"
-_D = r"(?:" + _N + r" m )?"
+_D = r"(?:(?P<d>\d+(?:\.\d+)?) m )?"
 _EGO = r"(?:us|me|ego|the ego(?: vehicle| car)?|our (?:car|vehicle)|my (?:car|vehicle))"
 #: ``(regex up to the anchor noun phrase, relation)``; group 1 is the distance, a ``side`` group left/right.
 _RELATIVE: tuple[tuple[str, str], ...] = (
@@ -42,7 +42,7 @@ _RELATIVE: tuple[tuple[str, str], ...] = (
 _EGO_RELATIVE: tuple[tuple[str, str], ...] = (
     (_D + r"(?:ahead|in front|forward|down the road|up the road|further(?: ahead| up| down)?|away)(?! of)",
      "in_front_of"),
-    (_N + r" m (?:behind|back)(?! of)", "behind"),
+    (r"(?P<d>\d+(?:\.\d+)?) m (?:behind|back)(?! of)", "behind"),
     (r"(?:to|on|at) (?:the|our|my) (?P<side>left|right)(?:[- ]hand)?(?: side)?(?! of| lane)", "side"),
 )
 _LANES: tuple[tuple[str, str], ...] = (
@@ -58,9 +58,10 @@ _LANES: tuple[tuple[str, str], ...] = (
 _AREAS: tuple[tuple[str, str], ...] = (
     (r"(?:on|onto|at|in|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"
      r"|pedestrian crossing|crossing)", "on_crosswalk"),
-    (r"(?:on|onto|along|at|up on|in) (?:the |a )?(?:sidewalk|pavement|footpath|walkway|footway|curb|kerb)",
-     "on_sidewalk"),
-    (r"(?:on|onto|in|into|in the middle of|at) (?:the |a )?(?:road|street|roadway|carriageway"
+    (r"(?:on|onto|along|at|up on|in) (?:the |a )?(?:sidewalk|pavement|footpath|walkway|footway)"
+     r"|(?:on|onto|up on) (?:the |a )?(?:curb|kerb)", "on_sidewalk"),
+    (r"(?:on|at|to) the (?:left|right)(?:[- ]hand)? side of the (?:road|street)"
+     r"|(?:on|onto|in|into|in the middle of|at) (?:the |a )?(?:road|street|roadway|carriageway"
      r"|middle of the road|intersection|junction)|(?:by|at|next to|along|near|on) (?:the )?(?:curb|kerb|roadside"
      r"|side of the road|edge of the road|shoulder)", "on_road"),
 )
@@ -184,10 +185,15 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
     elif out.lane is not None and relative in (None, "in_front_of"):
         out.relation = "in_lane"
     elif out.lane is not None:
-        out.relation, out.lane = relative, None
+        out.refusal = (f"a lane placement is measured ahead of its anchor ('in the left lane 20 m ahead'); "
+                       f"{relative.replace('_', ' ')} in a given lane is not supported")
     elif out.relation is None:
         out.relation = relative
     return (out if found else None), s.residual()
+
+
+def _distance(m: re.Match[str]) -> float | None:
+    return float(m.group("d")) if "d" in m.re.groupindex and m.group("d") else None
 
 
 def _relative(s: _Scan) -> tuple[str | None, float | None, str | None]:
@@ -202,13 +208,13 @@ def _relative(s: _Scan) -> tuple[str | None, float | None, str | None]:
             s.blank(m.start(), end)
             rel = relation if relation != "side" else f"{_side(m)}_of"
             ego = re.fullmatch(_EGO, phrase) is not None
-            return rel, float(m.group(1)) if m.group(1) else None, None if ego else phrase
+            return rel, _distance(m), None if ego else phrase
     for rx, relation in _EGO_RELATIVE:
         found = s.find(rx)
         if found:
             s.blank(found.start(), found.end())
             rel = relation if relation != "side" else f"{_side(found)}_of"
-            return rel, float(found.group(1)) if found.lastindex and found.group(1) else None, None
+            return rel, _distance(found), None
     found = s.find(_N + r" m")
     if found:
         s.blank(found.start(), found.end())

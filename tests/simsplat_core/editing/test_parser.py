@@ -285,7 +285,47 @@ MULTI: list[tuple[str, list[dict[str, Any]]]] = [
      [{"op": REM}, {"op": MOD, SP_VAL: 30.0, "behaviour.turn": "right"}]),
 ]
 
-TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI
+#: Wordings met while trying the parser by hand (each once failed).
+TYPED: list[tuple[str, list[dict[str, Any]]]] = [
+    ("add a parked car on the right side of the road", [{"op": INS, PR: "on_road", "placement.anchor": None}]),
+    ("Make the white SUV drive 10 km/h faster than now", [{"op": MOD, SP_MODE: "delta", SP_VAL: 10.0}]),
+    ("Get the pedestrian to walk across the street",
+     [{"op": MOD, "target.description": "the pedestrian", "behaviour.cross_street": True}]),
+    ("Make the pedestrian wait 3 seconds before crossing",
+     [{"op": MOD, "behaviour.start_time_s": 3.0, "behaviour.cross_street": True}]),
+    ("add a cyclist riding on the right", [{"op": INS, AS: "bicycle", PR: "right_of", "behaviour": None}]),
+    ("I'd like to see a red bus in front of the white van",
+     [{"op": INS, AS: "bus", PR: "in_front_of", PA: "white van"}]),
+    ("add a woman with a stroller on the sidewalk",
+     [{"op": INS, "asset.description": "a woman with a stroller", PR: "on_sidewalk", "behaviour": None}]),
+    ("add an SUV next to node 12", [{"op": INS, PR: "next_to", "placement.anchor.node_id": 12}]),
+    ("remvoe the red car", [{"op": REM, "target.description": "the red car"}]),
+    ("don't let the car turn left", [{"op": MOD, "behaviour.turn": "straight"}]),
+    ("can the bus go 10 mph slower?", [{"op": MOD, TD: "bus", SP_MODE: "delta", SP_VAL: -10.0, SP_UNIT: "mph"}]),
+    ("turn the white car left at the intersection",
+     [{"op": MOD, "target.description": "the white car", "behaviour.turn": "left"}]),
+    ("make everyone stop", [{"op": MOD, "target.description": "everyone", TG: True}]),
+    ("add some barrels along the curb", [{"op": INS, AS: "barrel", AN: 3, PR: "on_road"}]),
+    ("add a bus in the oncoming lane driving towards us", [{"op": INS, PR: "in_lane", PL: "opposite"}]),
+    ("make the car turn into the left lane", [{"op": MOD, "behaviour.lane_change": "left", "behaviour.turn": None}]),
+    ("the car in the left lane should stop", [{"op": MOD, "target.description": "the car in the left lane"}]),
+    ("the red car: stop", [{"op": MOD, "target.description": "the red car", "behaviour.stop": "set"}]),
+    ("Node 4 should stop at 3s", [{"op": MOD, "target.node_id": 4, "behaviour.stop.at_time_s": 3.0}]),
+    ("make object ped_2 run across the road", [{"op": MOD, "target.object_id": "ped_2", "behaviour.gait": "run"}]),
+    ("slow the white car down by 5 km/h", [{"op": MOD, TD: "white car", SP_MODE: "delta", SP_VAL: -5.0}]),
+    ("make the truck go at 80% of its speed", [{"op": MOD, SP_MODE: "factor", SP_VAL: 0.8}]),
+    ("bring the black SUV to a stop", [{"op": MOD, TD: "black suv", "behaviour.stop": "set"}]),
+    ("make the car stop in 2 seconds", [{"op": MOD, "behaviour.stop.at_time_s": 2.0}]),
+    ("have the motorcycle shadow the bus", [{"op": MOD, "behaviour.follow.description": "the bus"}]),
+    ("steer the bus into the right lane", [{"op": MOD, TD: "bus", "behaviour.lane_change": "right"}]),
+    ("get all the pedestrians to stop", [{"op": MOD, TG: True, "behaviour.stop": "set"}]),
+    ("put a construction sign in front of the van", [{"op": INS, AC: "static", PR: "in_front_of", PA: "van"}]),
+    ("insert a man crossing the road 10 m ahead",
+     [{"op": INS, AC: "pedestrian", PR: "in_front_of", PD: 10.0, "behaviour.cross_street": True}]),
+    ("make the van follow the car in front", [{"op": MOD, "behaviour.follow.description": "the car in front"}]),
+]
+
+TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI + TYPED
 
 
 def test_the_table_is_large_and_distinct() -> None:
@@ -333,6 +373,7 @@ REFUSALS: list[tuple[str, str, tuple[str, ...]]] = [
     ("make the car grow wings", "unsupported", ("grow wings",)),
     ("remove it", "unsupported", ("'it'",)),
     ("add 30 cones", "unsupported", ("at most 20",)),
+    ("Spawn a police car 20m behind us in the right lane", "unsupported", ("lane placement",)),
 ]
 
 
