@@ -186,7 +186,7 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
         out.relation = "in_lane"
     elif out.lane is not None:
         out.refusal = (f"a lane placement is measured ahead of its anchor ('in the left lane 20 m ahead'); "
-                       f"{relative.replace('_', ' ')} in a given lane is not supported")
+                       f"{str(relative).replace('_', ' ')} in a given lane is not supported")
     elif out.relation is None:
         out.relation = relative
     return (out if found else None), s.residual()
