@@ -12,10 +12,12 @@ How (one module per step):
 2. ``parser_chunks`` -- clauses ("... and make the red car stop" starts a new one; "between the bus and the
    truck" does not) and noun phrases, on the grounding lexicon's nouns and colours;
 3. ``parser_clauses`` -- each clause's form (replace / remove / insert / "make X ..." / "stop X ..." / "X
-   should ..." / a bare predicate on the previous subject), pronouns, merging;
-4. ``parser_placement`` / ``parser_behaviour`` -- placements, assets and behaviours by rule; a predicate
-   no rule knows is matched to the scenario vocabulary through the grounding lexicon's motion keywords,
-   then by E5 (``parser_semantic``) to the nearest supported intent, or refused.
+   should ..." / a bare predicate on the previous subject); ``parser_state`` -- subjects, pronouns,
+   references, category checks, merging;
+4. ``parser_placement`` (placements, assets), ``parser_speed`` and ``parser_behaviour`` (behaviours, on
+   ``parser_predicate``) by rule; a predicate no rule knows is matched to the scenario vocabulary through
+   the grounding lexicon's motion keywords, then by E5 (``parser_semantic``) to the nearest supported
+   intent, or refused. The edit language's own words are in ``parser_lexicon``.
 
 Target and anchor descriptions keep the whole noun phrase ("the white van on the left", "the pedestrian
 crossing the street") for the grounding engine; plurals and "all" / "every" set ``group``. Whether the
