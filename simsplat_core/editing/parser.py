@@ -36,8 +36,9 @@ from pydantic import ValidationError
 
 from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, StopSpec
 from simsplat_core.editing.parser_chunks import split_clauses
-from simsplat_core.editing.parser_clauses import Draft, PromptParser
+from simsplat_core.editing.parser_clauses import PromptParser
 from simsplat_core.editing.parser_lexicon import SUPPORTED
+from simsplat_core.editing.parser_state import Draft
 from simsplat_core.editing.parser_text import canonical
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.text import TextEncoder
