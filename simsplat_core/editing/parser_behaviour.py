@@ -129,6 +129,7 @@ def _longitudinal_rules(w: PredicateWork) -> None:
     w.take(r"speed(?:s|ing)? (?:it |them )?up|accelerat\w*|(?:go|goes|drive|drives|move|moves|walk|walks)"
            r"(?: a (?:bit|little|lot))? (?:faster|quicker)|faster|quicker|pick(?:s)? up (?:the )?(?:speed|pace)"
            r"|hurry(?: up)?|hurries(?: up)?|(?:step|steps) on (?:it|the gas)|floor it|put (?:the|its) foot down|gun it"
+           r"|pull(?:s)? (?:out|away)|move(?:s)? off"
            r"|increase (?:its |the )?speed",
            lambda m: w.set("longitudinal", "accelerate") if "longitudinal" not in w.out.fields else None)
 

@@ -46,8 +46,8 @@ _EGO_RELATIVE: tuple[tuple[str, str], ...] = (
     (r"(?:to|on|at) (?:the|our|my) (?P<side>left|right)(?:[- ]hand)?(?: side)?(?! of| lane)", "side"),
 )
 _LANES: tuple[tuple[str, str], ...] = (
-    (r"in (?:the |our |my )?(?P<side>left|right)(?:[- ]hand)?(?:[- ]?most)? lane|in the lane (?:to|on) (?:the |"
-     r"our |my )?"
+    (r"(?:in|along|down|into) (?:the |our |my )?(?P<side>left|right)(?:[- ]hand)?(?:[- ]?most)? lane"
+     r"|in the lane (?:to|on) (?:the |our |my )?"
      r"(?P<side2>left|right)|(?:one|1) lane (?:to the |over to the |over on the )?(?P<side3>left|right)|in the (?:next"
      r"|adjacent|neighbouring|neighboring) lane (?:to|on) the (?P<side4>left|right)", "side"),
     (r"in (?:the )?(?:oncoming|opposite|opposing|other|contraflow) (?:lane|direction|traffic)|in oncoming traffic"
@@ -59,8 +59,8 @@ _AREAS: tuple[tuple[str, str], ...] = (
     (r"(?:on|onto|at|in|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"
      r"|pedestrian crossing|crossing)", "on_crosswalk"),
     (r"(?:on|onto|along|at|up on|in) (?:the |a )?(?:sidewalk|pavement|footpath|walkway|footway)"
-     r"|(?:on|onto|up on) (?:the |a )?(?:curb|kerb)", "on_sidewalk"),
-    (r"(?:on|at|to) the (?:left|right)(?:[- ]hand)? side of the (?:road|street)"
+     r"|(?:on|onto|up on) (?:the |a )?(?:curb|kerb)|(?:at|on) the (?:street )?corner", "on_sidewalk"),
+    (r"(?:on|at|to|by) the (?:(?:left|right)(?:[- ]hand)? )?side of the (?:road|street|lane)"
      r"|(?:on|onto|in|into|in the middle of|at) (?:the |a )?(?:road|street|roadway|carriageway"
      r"|middle of the road|intersection|junction)|(?:by|at|next to|along|near|on) (?:the )?(?:curb|kerb|roadside"
      r"|side of the road|edge of the road|shoulder)", "on_road"),

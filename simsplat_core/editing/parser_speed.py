@@ -96,10 +96,10 @@ def stop_rules(w: PredicateWork) -> None:
     stopped = w.take(
         r"(?:come|comes|coming|bring|brake|brakes|pull|pulls|roll|rolls|slow|slows|grind|grinds|glide|glides)"
         r"(?: down| up| itself)? to a (?:complete |full |dead |gentle |smooth |sudden |quick )?(?:stop|halt|standstill)"
-        r"|(?:stop|stops|stopping|halt|halts|pull over|pulls over|pull up|pulls up|park|parks|freeze|freezes"
-        r"|stand still|stay still|stays still|stay put|keep still|remain still|remain stationary|stay stationary"
-        r"|stop moving|cease moving|yield|yields|give way|gives way|wait|waits)(?! sign| line)", lambda m: w.stop(),
-        repeat=True) or "stop" in w.out.fields
+        r"|(?:stop (?:moving|walking|running|driving)|stop|stops|stopping|halt|halts|pull over|pulls over|pull up"
+        r"|pulls up|park|parks|freeze|freezes|stand still|stay still|stays still|stay put|keep still|remain still"
+        r"|remain stationary|stay stationary|cease moving|yield|yields|give way|gives way|wait|waits)(?! sign| line)",
+        lambda m: w.stop(), repeat=True) or "stop" in w.out.fields
     if not stopped:
         return
     w.take(r"(?:at|after|in|within|by|around) " + _N + r" s|" + _N + r" s (?:later|from now|into the \w+)",

@@ -323,6 +323,18 @@ TYPED: list[tuple[str, list[dict[str, Any]]]] = [
     ("insert a man crossing the road 10 m ahead",
      [{"op": INS, AC: "pedestrian", PR: "in_front_of", PD: 10.0, "behaviour.cross_street": True}]),
     ("make the van follow the car in front", [{"op": MOD, "behaviour.follow.description": "the car in front"}]),
+    ("put a barrier on the right side of the lane", [{"op": INS, AS: "barrier", PR: "on_road"}]),
+    ("add a stop sign at the corner", [{"op": INS, AS: "stop sign", AC: "static", PR: "on_sidewalk"}]),
+    ("put a row of cones along the left lane", [{"op": INS, AN: 5, PR: "in_lane", PL: "left", "behaviour": None}]),
+    ("add a person standing on the corner",
+     [{"op": INS, AC: "pedestrian", PR: "on_sidewalk", "behaviour.stop": "set"}]),
+    ("make the man on the left stop walking", [{"op": MOD, "behaviour.stop": "set", "behaviour.gait": None}]),
+    ("make the parked car pull out and drive away",
+     [{"op": MOD, "behaviour.longitudinal": "accelerate", "behaviour.stop": None}]),
+    ("have the truck in front of us brake suddenly",
+     [{"op": MOD, "target.description": "the truck in front of us", "behaviour.longitudinal": "brake_hard"}]),
+    ("have the pedestrian wait 2 seconds and then cross",
+     [{"op": MOD, "behaviour.start_time_s": 2.0, "behaviour.cross_street": True}]),
 ]
 
 TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI + TYPED
