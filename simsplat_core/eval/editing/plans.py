@@ -57,7 +57,9 @@ from simsplat_core.eval.editing.wording import (
 )
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.geometry import footprints_overlap
+from simsplat_core.scenario.path import Path
 from simsplat_core.world.agents import EGO_SIZE, Agent
+from simsplat_core.world.paths import route
 from simsplat_core.world.road import connector_points, target_lane
 
 #: Seconds the logs last (40 frames at 10 Hz); edits must show within them.
@@ -175,6 +177,25 @@ def _free(truth: SceneTruth, xy: np.ndarray, heading: float, size: tuple[float, 
                                       np.array([h]), (float(sz[0]), float(sz[1])), margin)[0] for c, h, sz in boxes)
 
 
+def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, size: tuple[float, ...], skip: str = "",
+               lateral: float = 0.0, accel: float = 2.0, margin: float = 0.3) -> bool:
+    """Driving ``path`` from arc length ``s0`` at ``v0`` m/s, changing to ``v1`` at ``accel`` m/s^2 (shifted
+    ``lateral`` metres to the left), overlaps no agent but ``skip`` (nor the ego, ahead of it) over the log:
+    the requested motion is possible without running into traffic that replays its log."""
+    t = truth.world.times
+    dv = v1 - v0
+    ta = abs(dv) / accel
+    a = np.sign(dv) * accel
+    s = s0 + np.where(t < ta, v0 * t + 0.5 * a * t * t, v0 * ta + 0.5 * a * ta * ta + v1 * (t - ta))
+    xy, heading = path.position(s), path.heading(s)
+    xy = xy + lateral * np.stack([-np.sin(heading), np.cos(heading)], axis=1)
+    foot = (float(size[0]), float(size[1]))
+    others = [(truth.ego_xy, truth.ego_heading, EGO_SIZE)] + [
+        (o.traj["xy"], o.traj["heading"], o.size) for o in truth.world.agents if o.object_id != skip]
+    return not any(footprints_overlap(xy, heading, foot, oxy, oh, (float(osz[0]), float(osz[1])), margin).any()
+                   for oxy, oh, osz in others)
+
+
 def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> tuple[np.ndarray, float] | None:
     """``(world point, lane heading)`` ``distance`` ahead of the ego along its lane (``side`` lanes to the left,
     +1, or right, -1); ``None`` when that lane does not exist or ends before."""
@@ -256,6 +277,9 @@ def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Genera
                 if kind == "vehicle_lane_speed":
                     unit = pick(rng, ("km/h", "km/h", "m/s", "mph"))
                     said, value, mps = speed_words(float(rng.uniform(5.0, 11.0)), unit, rng)
+                    lane = truth.lanes.follow(found[0], found[1], "straight")
+                    if not _clear_run(truth, lane.path, lane.start_s, mps, mps, CAR_FOOTPRINT):
+                        continue
                     motion = MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit))
                     slots["v"] = said
                 out.append(Draft(kind, EditIntent("insert", asset=asset, motion=motion,
@@ -411,6 +435,15 @@ def _turn_reachable(truth: SceneTruth, agent: Agent, turn: str) -> bool:
     return to_stop + 0.6 * conn_len <= 0.8 * v * LOG_SPAN_S
 
 
+def _route_clear(truth: SceneTruth, agent: Agent, turn: str) -> bool:
+    """The agent's lane route making ``turn`` at the junction, at its speed, runs into no traffic."""
+    pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
+    assert pos.arm is not None and pos.lane is not None  # _turn_reachable holds
+    path = route(truth.layout, pos.arm, pos.lane, turn)
+    v0 = _speed0(agent)
+    return _clear_run(truth, path, path.project(agent.traj["xy"][0]), v0, v0, agent.size, agent.object_id)
+
+
 def _lane_change_room(truth: SceneTruth, agent: Agent, side: str) -> bool:
     pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
     v = _speed0(agent)
@@ -453,17 +486,23 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
         steady = float(np.std(agent.traj["speed"])) < 0.3
         moving = v0 >= 3.0
         slot = {"T": phrase()}
+        own, s0 = agent.motion.path, float(agent.traj["s"][0])
+
+        def clear(v1: float, _own: Path = own, _s0: float = s0, _v0: float = v0, _a: Agent = agent) -> bool:
+            """A speed-up to ``v1`` on its own path stays clear of traffic (slowing down always does)."""
+            return v1 <= _v0 or _clear_run(truth, _own, _s0, _v0, v1, _a.size, _a.object_id)
+
         if moving and label in _CRUISING:
             unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))
             delta = float(rng.uniform(2.5, 5.5)) * (1 if rng.random() < 0.5 or v0 < 6.5 else -1)
             words, value, mps = speed_words(v0 + delta, unit, rng)
-            if abs(mps - v0) >= 2.0 and mps >= 3.0:
+            if abs(mps - v0) >= 2.0 and mps >= 3.0 and clear(mps):
                 out.append(Draft("vehicle_speed_abs", EditIntent("modify", (oid,), motion=MotionIntent(
                     speed_mps=mps, speed=SpeedWords("absolute", value, unit))), {**slot, "v": words}))
         if moving and steady and label in _CRUISING:
             rel, mode, value, unit = VEHICLE_RELATIVE_SPEEDS[int(rng.integers(len(VEHICLE_RELATIVE_SPEEDS)))]
             target = v0 * value if mode == "factor" else v0 + value * SPEED_UNITS[unit]
-            if 1.5 <= target <= 17.0 and abs(target - v0) <= 7.5:
+            if 1.5 <= target <= 17.0 and abs(target - v0) <= 7.5 and clear(target):
                 out.append(Draft("vehicle_speed_rel", EditIntent("modify", (oid,), motion=MotionIntent(
                     speed_mps=target, speed=SpeedWords(mode, value, unit))), {**slot, "rel": rel}))
         if moving and label not in (voc.STOPPING, voc.SLOWING_DOWN):
@@ -481,21 +520,23 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
                 longitudinal="brake_hard")), slot))
             out.append(Draft("vehicle_decelerate", EditIntent("modify", (oid,), motion=MotionIntent(
                 longitudinal="decelerate")), slot))
-        if moving and label not in (voc.SPEEDING_UP, *_TURNING) and v0 <= 12.0:
+        if moving and label not in (voc.SPEEDING_UP, *_TURNING) and v0 <= 12.0 and clear(v0 + 3.0):
             out.append(Draft("vehicle_accelerate", EditIntent("modify", (oid,), motion=MotionIntent(
                 longitudinal="accelerate")), slot))
         if label in _STATIONARY and _room_behind(truth, agent):
             out.append(Draft("vehicle_reverse", EditIntent("modify", (oid,), motion=MotionIntent(reverse=True)), slot))
         if label not in (voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT, *_TURNING):
             for side in ("left", "right"):
-                if _lane_change_room(truth, agent, side):
+                width = truth.layout.lane_w_h * (1 if side == "left" else -1)
+                if _lane_change_room(truth, agent, side) and _clear_run(truth, own, s0, v0, v0, agent.size, oid,
+                                                                          lateral=width):
                     out.append(Draft("vehicle_lane_change", EditIntent("modify", (oid,), motion=MotionIntent(
                         lane_change=side)), {**slot, "side": side}))
         for turn in ("left", "right"):
-            if label != f"turning_{turn}" and _turn_reachable(truth, agent, turn):
+            if label != f"turning_{turn}" and _turn_reachable(truth, agent, turn) and _route_clear(truth, agent, turn):
                 out.append(Draft("vehicle_turn", EditIntent("modify", (oid,), motion=MotionIntent(turn=turn)),
                                  {**slot, "side": turn}))
-        if label in _TURNING and _turn_reachable(truth, agent, "straight"):
+        if label in _TURNING and _turn_reachable(truth, agent, "straight") and _route_clear(truth, agent, "straight"):
             out.append(Draft("vehicle_straight", EditIntent("modify", (oid,), motion=MotionIntent(turn="straight")),
                              slot))
         if moving:
