@@ -2,16 +2,18 @@
 
 Every planner returns :class:`Draft` s -- an intent kind (a ``wording.FORMS`` key), the edit in
 ground-truth terms and the phrases that fill the sentence forms -- for one category of SIMSplat Table 3
-or for the infeasible set. A feasible draft is one a competent editor can carry out within the 4 s of
-the log, judged from the world itself:
+or for the infeasible set. A feasible draft is one a competent editor can carry out within the log's span
+(4 s), judged from the world itself:
 
 * targets and anchors are well visible (``truth.well_visible``) and have a description that singles them
   out (``references.py``);
-* motion edits suit the target's state: speeds and stops for moving vehicles with room to brake,
-  turns for vehicles approaching the junction in a lane that has the turn and close enough to make it
-  before the log ends, lane changes where a lane of the same direction lies on that side and the arm is
-  long enough, reversing for standing vehicles with free road behind, crossing the street for people
-  standing or walking near the kerb;
+* motion edits suit the target's state: speeds and stops for moving vehicles with room to brake; turns
+  for vehicles approaching the junction in a lane that has the turn, close enough to make it before the
+  log ends; lane changes where a lane of the same direction lies on that side and the arm is long enough;
+  reversing for standing vehicles with free road behind; crossing the street for people standing or
+  walking near the kerb (by a crosswalk, or away from one to jaywalk);
+* the asked motion runs into no traffic replaying its log (speed-ups, turns, lane changes, inserted cars
+  driving at a speed): an editor that keeps its distance would otherwise rightly not do it;
 * insert spots are free of every agent at the first frame.
 
 Infeasible drafts are what the issue names: an object that is not in the scene ("the purple bus"), a car
@@ -62,8 +64,6 @@ from simsplat_core.world.agents import EGO_SIZE, Agent
 from simsplat_core.world.paths import route
 from simsplat_core.world.road import connector_points, target_lane
 
-#: Seconds the logs last (40 frames at 10 Hz); edits must show within them.
-LOG_SPAN_S = 3.9
 #: Comfortable deceleration used to judge whether a stop is reachable (m/s^2).
 COMFORT_DECEL = 3.5
 #: Footprints (length, width) of the objects a spot must have room for: a car and a traffic cone.
@@ -130,6 +130,11 @@ class AssetPools:
 
 
 # ---------------------------------------------------------------------------------------------- helpers
+def _span(truth: SceneTruth) -> float:
+    """Seconds the log lasts: edits must show within them."""
+    return float(truth.world.times[-1] - truth.world.times[0])
+
+
 def _speed0(agent: Agent) -> float:
     return float(agent.traj["speed"][0])
 
@@ -432,7 +437,7 @@ def _turn_reachable(truth: SceneTruth, agent: Agent, turn: str) -> bool:
     if conn is None or to_stop < -0.5:
         return False
     conn_len = float(np.linalg.norm(np.diff(conn, axis=0), axis=1).sum())
-    return to_stop + 0.6 * conn_len <= 0.8 * v * LOG_SPAN_S
+    return to_stop + 0.6 * conn_len <= 0.8 * v * _span(truth)
 
 
 def _route_clear(truth: SceneTruth, agent: Agent, turn: str) -> bool:
@@ -454,7 +459,7 @@ def _lane_change_room(truth: SceneTruth, agent: Agent, side: str) -> bool:
         return False
     if pos.inbound:
         return pos.along - truth.layout.stopline_s(pos.arm) >= v * 3.5 + 5.0
-    return pos.along + v * LOG_SPAN_S < truth.layout.arm_length
+    return pos.along + v * _span(truth) < truth.layout.arm_length
 
 
 def _crosswalk_stop_room(truth: SceneTruth, agent: Agent) -> bool:
@@ -464,7 +469,7 @@ def _crosswalk_stop_room(truth: SceneTruth, agent: Agent) -> bool:
         return False
     front_to_crosswalk = pos.along - agent.size[0] / 2 - truth.layout.crosswalk_range(pos.arm)[1]
     # room to brake comfortably, and close enough that braking all the way ends within the log
-    return v * v / (2 * COMFORT_DECEL) + 1.0 <= front_to_crosswalk <= v * LOG_SPAN_S / 2
+    return v * v / (2 * COMFORT_DECEL) + 1.0 <= front_to_crosswalk <= v * _span(truth) / 2
 
 
 def _room_behind(truth: SceneTruth, agent: Agent, metres: float = 8.0) -> bool:
@@ -509,7 +514,7 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
             if _crosswalk_stop_room(truth, agent):
                 out.append(Draft("vehicle_stop_crosswalk", EditIntent(
                     "modify", (oid,), motion=MotionIntent(stop=True, stop_before="crosswalk")), slot))
-            if v0 / COMFORT_DECEL <= LOG_SPAN_S - 1.0:  # a comfortable stop ends within the log
+            if v0 / COMFORT_DECEL <= _span(truth) - 1.0:  # a comfortable stop ends within the log
                 out.append(Draft("vehicle_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)),
                                  slot))
             by = float(pick(rng, ("2", "2.5", "3")))
@@ -660,4 +665,4 @@ PLANNERS: dict[str, Planner] = {
     "infeasible": plan_infeasible,
 }
 
-__all__ = ["AssetPools", "Draft", "LOG_SPAN_S", "PLANNERS", "STATIC_ASSETS"]
+__all__ = ["AssetPools", "Draft", "PLANNERS", "STATIC_ASSETS"]
