@@ -1,0 +1,302 @@
+"""The four edit ops on a working copy of a scene (``Draft``), used by ``editing.apply``.
+
+A :class:`Draft` holds the agents as they stand after the commands so far (``AgentStates``), the nodes
+removed, the nodes added (asset references on their own pose tracks) and the new pose tracks of existing
+nodes; :meth:`Draft.delta` is the :class:`~simsplat_core.editing.result.EditDelta` of it all. Each op
+grounds what it needs, changes the draft and returns a :class:`~simsplat_core.editing.result.CommandOutcome`,
+or raises :class:`~simsplat_core.editing.result.EditRefused`.
+
+Heights: a box centre sits half the box height above the ground; the ground under a new object is the
+height of the map's nearest lane / area vertex (the ego's height where the map has none).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+import torch
+
+from simsplat_core.editing.asset_nodes import asset_node
+from simsplat_core.editing.assets import Asset
+from simsplat_core.editing.commands import AssetSpec, Behaviour, EditCommand, Placement
+from simsplat_core.editing.grounding import Grounder
+from simsplat_core.editing.motion_glue import (
+    PlannedMotion,
+    anchor_pose,
+    changed_motion,
+    plan_inserted,
+    plan_modified,
+    resolve,
+)
+from simsplat_core.editing.options import EditorOptions
+from simsplat_core.editing.result import AddedNode, CommandOutcome, EditDelta, EditRefused
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.trajectory import agent_kind
+from simsplat_core.scene.nodes import ObjectNode
+from simsplat_core.scene.pose_track import PoseTrack
+from simsplat_core.scene.transforms import poses_from_boxes
+
+if TYPE_CHECKING:
+    from simsplat_core.editing.apply import EditContext
+
+logger = logging.getLogger(__name__)
+
+#: ``object_id`` prefix of inserted agents (``inserted_00``, ``inserted_01``, ...).
+INSERTED_PREFIX = "inserted_"
+#: Map kinds whose vertices give the ground height.
+GROUND_KINDS = ("lane", "drivable_area", "crosswalk", "sidewalk", "road_edge")
+#: Default gap between the objects of a row, by asset category (metres between box edges).
+ROW_GAP_M = {"static": 1.5, "vehicle": 3.0, "pedestrian": 0.8}
+
+
+def asset_category(category: str) -> str:
+    """The asset category (``vehicle`` / ``pedestrian`` / ``static``) of a log object category."""
+    kind = agent_kind(category)
+    return kind if kind is not None else "static"
+
+
+def track_from_states(states: AgentStates, row: int, z: np.ndarray | None = None) -> PoseTrack:
+    """The box pose track of agent ``row`` on the states' frames (``z [T]`` overrides the box-centre heights);
+    present where the agent is valid."""
+    zz = states.z[row] if z is None else np.broadcast_to(np.asarray(z, np.float64), states.z[row].shape)
+    center = np.concatenate([states.xy[row], zz[:, None]], axis=1)
+    poses = torch.as_tensor(poses_from_boxes(center, states.heading[row]), dtype=torch.float32)
+    return PoseTrack(states.frame_idx.astype(np.float64), poses, torch.as_tensor(states.valid[row]))
+
+
+def node_factory(assets: Mapping[str, Asset], graph_frames: np.ndarray) -> Callable[[AddedNode], ObjectNode]:
+    """``AddedNode -> ObjectNode``: the asset's Gaussians on the added node's track (``asset_nodes.asset_node``)."""
+
+    def build(added: AddedNode) -> ObjectNode:
+        try:
+            asset = assets[added.asset_id]
+        except KeyError:
+            raise KeyError(f"no asset {added.asset_id!r} for added node {added.node_id} ({added.object_id})") from None
+        return asset_node(asset, node_id=added.node_id, object_id=added.object_id, track=added.track,
+                          arc_length=added.arc_length, graph_frames=graph_frames)
+
+    return build
+
+
+@dataclass
+class Draft:
+    """The scene as it stands after the commands so far (module docstring). Mutable; private to one edit.
+
+    ``removed`` / ``retracked`` / ``added`` make the delta; ``gone`` are the stored nodes a ``remove`` dropped
+    (not grounded again); ``replaced`` maps a stored node a ``replace`` swapped to its new node, so later
+    commands naming the same object act on the new one.
+    """
+
+    ctx: EditContext
+    grounder: Grounder
+    options: EditorOptions
+    states: AgentStates
+    next_node_id: int
+    removed: list[int] = field(default_factory=list)
+    added: list[AddedNode] = field(default_factory=list)
+    retracked: dict[int, PoseTrack] = field(default_factory=dict)
+    assets: dict[str, Asset] = field(default_factory=dict)
+    gone: set[int] = field(default_factory=set)
+    replaced: dict[int, int] = field(default_factory=dict)
+    ground_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+
+    @classmethod
+    def start(cls, ctx: EditContext, grounder: Grounder, options: EditorOptions) -> Draft:
+        points = [np.asarray(f.points, np.float64) for f in ctx.log.map_features if f.kind in GROUND_KINDS]
+        return cls(ctx=ctx, grounder=grounder, options=options, states=ctx.states,
+                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1,
+                   ground_points=np.concatenate(points) if points else np.zeros((0, 3)))
+
+    def delta(self) -> EditDelta:
+        return EditDelta(removed_node_ids=tuple(self.removed), added=tuple(self.added), retracked=dict(self.retracked))
+
+    # ------------------------------------------------------------------ helpers
+    def ground_height(self, xy: np.ndarray, step: int) -> float:
+        """Ground height (m) at ``xy [2]``: the nearest map vertex's, else the ego's at ``step``."""
+        if len(self.ground_points):
+            d = np.linalg.norm(self.ground_points[:, :2] - np.asarray(xy)[None], axis=1)
+            k = int(np.argmin(d))
+            if d[k] < 30.0:
+                return float(self.ground_points[k, 2])
+        return float(self.ctx.log.ego_poses[step][2, 3])
+
+    def new_object_id(self) -> str:
+        taken = set(self.states.object_ids) | {a.object_id for a in self.added}
+        k = 0
+        while f"{INSERTED_PREFIX}{k:02d}" in taken:
+            k += 1
+        return f"{INSERTED_PREFIX}{k:02d}"
+
+    def take_node_id(self) -> int:
+        self.next_node_id += 1
+        return self.next_node_id - 1
+
+    def retrieve(self, spec: AssetSpec, index: int) -> Asset:
+        bank = self.ctx.bank
+        if bank is None:
+            raise EditRefused("the store has no asset bank to insert or replace objects from: run "
+                              "`simsplat assets build --store DIR` first", reason="no_asset", command_index=index)
+        try:
+            asset = bank.retrieve(spec, self.ctx.engine.text_encoder)
+        except EditRefused as exc:
+            raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
+        self.assets[asset.asset_id] = asset
+        return asset
+
+    def row_of(self, object_id: str) -> int:
+        return self.states.index(object_id)
+
+    def drop_stored(self, node_id: int) -> None:
+        """Take a stored node out of the edited graph (a replaced one: its new node instead)."""
+        if node_id in self.replaced:
+            new_id = self.replaced.pop(node_id)
+            self.added = [a for a in self.added if a.node_id != new_id]
+        else:
+            self.removed.append(node_id)
+            self.retracked.pop(node_id, None)
+
+    def set_track(self, node_id: int, track: PoseTrack) -> None:
+        """New pose track of a stored node (of its new node when it was replaced)."""
+        if node_id in self.replaced:
+            new_id = self.replaced[node_id]
+            self.added = [dataclasses.replace(a, track=track, arc_length=None) if a.node_id == new_id else a
+                          for a in self.added]
+        else:
+            self.retracked[node_id] = track
+
+    def describe(self, node_id: int) -> str:
+        return self.grounder.describe(node_id)
+
+
+# ---------------------------------------------------------------------------------------------- ops
+def remove(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
+    """Drop every node the target grounds to, and its agent."""
+    assert command.target is not None
+    found = draft.grounder.ground(command.target, removed=draft.gone, command_index=index)
+    for node_id, object_id in zip(found.node_ids, found.object_ids):
+        draft.drop_stored(node_id)
+        draft.gone.add(node_id)
+        if object_id in draft.states.object_ids:
+            draft.states = draft.states.without([object_id])
+    summary = "removed " + "; ".join(draft.describe(n) for n in found.node_ids)
+    return CommandOutcome(command, target_node_ids=found.node_ids, changed_object_ids=found.object_ids,
+                          summary=summary)
+
+
+def replace(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
+    """Each target keeps its trajectory and gets the asset's appearance and box size, kept on the ground."""
+    assert command.target is not None and command.asset is not None
+    found = draft.grounder.ground(command.target, removed=draft.gone, command_index=index)
+    lines, changed = [], []
+    for node_id, object_id in zip(found.node_ids, found.object_ids):
+        row = draft.row_of(object_id)
+        kind = asset_category(draft.states.categories[row])
+        spec = command.asset if command.asset.category is not None else command.asset.model_copy(
+            update={"category": kind})
+        asset = draft.retrieve(spec, index)
+        if asset.category != kind:
+            raise EditRefused(f"cannot replace {draft.describe(node_id)} with {asset.caption!r}: replace keeps the "
+                              f"trajectory, so the new object must be a {kind} too", reason="wrong_category",
+                              command_index=index)
+        old_h, new_h = float(draft.states.size[row, 2]), float(asset.size[2])
+        z = draft.states.z[row] - old_h / 2.0 + new_h / 2.0  # same ground, the asset's own height
+        track = track_from_states(draft.states, row, z)
+        new_id = draft.take_node_id()
+        draft.drop_stored(node_id)
+        draft.replaced[node_id] = new_id
+        draft.added.append(AddedNode(node_id=new_id, object_id=object_id, asset_id=asset.asset_id,
+                                     category=asset.category, track=track, arc_length=None))
+        draft.states = draft.states.with_agent(
+            object_id, draft.states.categories[row], "edited", xy=draft.states.xy[row],
+            heading=draft.states.heading[row], speed=draft.states.speed[row], valid=draft.states.valid[row],
+            size=np.asarray(asset.size, np.float64), z=z, node_id=new_id)
+        lines.append(f"replaced {draft.describe(node_id)} with {asset.caption} (asset {asset.asset_id}, node {new_id})")
+        changed.append(object_id)
+    return CommandOutcome(command, target_node_ids=found.node_ids, changed_object_ids=tuple(changed),
+                          summary="; ".join(lines))
+
+
+def _default_placement(category: str) -> Placement:
+    if category == "pedestrian":
+        return Placement(relation="on_sidewalk")
+    return Placement(relation="in_lane", lane="same")
+
+
+def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
+    """Add the asset (a row of ``count``) at the placement, moving as the behaviour says (module docstring)."""
+    assert command.asset is not None
+    if command.asset.category is not None:
+        draft.options.check_insert_category(command.asset.category, index)
+    asset = draft.retrieve(command.asset, index)
+    draft.options.check_insert_category(asset.category, index)
+    placement = command.placement or _default_placement(asset.category)
+    anchor_ids: tuple[int, ...] = ()
+    anchor = None
+    step = draft.states.frame_idx.searchsorted(placement.frame or 0)
+    step = int(min(step, draft.states.num_steps - 1))
+    if placement.anchor is not None and not placement.anchor.is_ego:
+        found = draft.grounder.ground(placement.anchor, removed=draft.gone, command_index=index, role="anchor")
+        anchor_ids = found.node_ids[:1]
+        anchor = anchor_pose(draft.states, draft.row_of(found.object_ids[0]), step)
+    count = command.asset.count
+    new_ids, lines = [], []
+    gap = command.asset.spacing_m or (asset.size[0] + ROW_GAP_M[asset.category])
+    placed = resolve(draft, placement, asset, anchor, step, index)
+    for k in range(count):
+        motion: PlannedMotion = plan_inserted(draft, command.behaviour, asset, placed, k * gap, step, index)
+        object_id = draft.new_object_id()
+        node_id = draft.take_node_id()
+        z = np.full(draft.states.num_steps, draft.ground_height(motion.xy[step], step) + asset.size[2] / 2.0)
+        draft.added.append(AddedNode(node_id=node_id, object_id=object_id, asset_id=asset.asset_id,
+                                     category=asset.category, track=motion.track(draft.states.frame_idx, z),
+                                     arc_length=motion.arc_length))
+        draft.states = draft.states.with_agent(object_id, asset.category, "inserted", xy=motion.xy,
+                                               heading=motion.heading, speed=motion.speed, valid=motion.valid,
+                                               size=np.asarray(asset.size, np.float64), z=z, node_id=node_id)
+        new_ids.append(object_id)
+        lines.append(f"{object_id} (node {node_id})")
+    where = placement.relation.replace("_", " ") + (f" {draft.describe(anchor_ids[0])}" if anchor_ids else "")
+    summary = f"inserted {asset.caption} (asset {asset.asset_id}) as {', '.join(lines)}: {where}"
+    return CommandOutcome(command, anchor_node_ids=anchor_ids, new_object_ids=tuple(new_ids),
+                          changed_object_ids=tuple(new_ids), summary=summary)
+
+
+def modify(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
+    """Re-plan each target's trajectory from its log trajectory by the behaviour (and/or move it)."""
+    assert command.target is not None
+    found = draft.grounder.ground(command.target, removed=draft.gone, command_index=index)
+    lines, changed = [], []
+    behaviour = command.behaviour or Behaviour()
+    for node_id, object_id in zip(found.node_ids, found.object_ids):
+        row = draft.row_of(object_id)
+        category = draft.states.categories[row]
+        if agent_kind(category) is None:
+            raise EditRefused(f"{draft.describe(node_id)} is a {category}, which does not move; motion edits "
+                              "apply to vehicles and pedestrians", reason="wrong_category", command_index=index)
+        motion = plan_modified(draft, row, behaviour, command.placement, index)
+        if not changed_motion(draft.states, row, motion):
+            raise EditRefused(f"the edit would not change how {draft.describe(node_id)} moves", reason="infeasible_motion",
+                              command_index=index)
+        z = draft.states.z[row]
+        draft.set_track(node_id, motion.track(draft.states.frame_idx, z))
+        draft.states = draft.states.with_agent(object_id, category, "edited", xy=motion.xy, heading=motion.heading,
+                                               speed=motion.speed, valid=motion.valid, size=draft.states.size[row],
+                                               z=z, node_id=int(draft.states.node_ids[row]))
+        lines.append(f"{draft.describe(node_id)}: {motion.description}")
+        changed.append(object_id)
+    return CommandOutcome(command, target_node_ids=found.node_ids, changed_object_ids=tuple(changed),
+                          summary="modified " + "; ".join(lines))
+
+
+OPS: dict[str, Callable[[Draft, EditCommand, int], CommandOutcome]] = {
+    "insert": insert, "remove": remove, "replace": replace, "modify": modify}
+
+
+def apply_command(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
+    """Apply one command to ``draft`` (raises ``EditRefused`` with ``command_index = index``)."""
+    return OPS[command.op](draft, command, index)
