@@ -280,8 +280,8 @@ def modify(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
                               "apply to vehicles and pedestrians", reason="wrong_category", command_index=index)
         motion = plan_modified(draft, row, behaviour, command.placement, index)
         if not changed_motion(draft.states, row, motion):
-            raise EditRefused(f"the edit would not change how {draft.describe(node_id)} moves", reason="infeasible_motion",
-                              command_index=index)
+            raise EditRefused(f"the edit would not change how {draft.describe(node_id)} moves",
+                              reason="infeasible_motion", command_index=index)
         z = draft.states.z[row]
         draft.set_track(node_id, motion.track(draft.states.frame_idx, z))
         draft.states = draft.states.with_agent(object_id, category, "edited", xy=motion.xy, heading=motion.heading,
