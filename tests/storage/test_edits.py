@@ -241,3 +241,26 @@ def test_trajectories_of_an_old_schema_version_are_refused(tmp_path):
     pq.write_table(table, str(tmp_path / "t.parquet"))
     with pytest.raises(SchemaError, match="older than the oldest readable"):
         store.read_table("t.parquet", "trajectories")
+
+
+def _append_many(root: str, edit_id: str, n: int) -> None:
+    store = ArtifactStore(root)
+    for _ in range(n):
+        append_edit_record(store, _record(edit_id))
+
+
+def test_concurrent_appends_lose_no_row(tmp_path):
+    """Two processes appending at once: the store's lock serialises the read-modify-write."""
+    import multiprocessing
+
+    ctx = multiprocessing.get_context("fork")
+    workers = [ctx.Process(target=_append_many, args=(str(tmp_path), f"e{k}", 8)) for k in range(2)]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join(60)
+    assert [w.exitcode for w in workers] == [0, 0]
+    rows = read_edit_records(ArtifactStore(str(tmp_path)), "run1")
+    assert len(rows) == 16
+    for k in range(2):
+        assert sorted(r.attempt for r in rows if r.edit_id == f"e{k}") == list(range(1, 9))
