@@ -22,8 +22,10 @@ import numpy as np
 import pydantic
 
 from simsplat_core.editing.apply import EditContext, apply_edit
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.assets import Asset, AssetBank
 from simsplat_core.editing.commands import EditProgram, program_from_json
+from simsplat_core.editing.delta import apply_delta
+from simsplat_core.editing.edit_ops import node_factory
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
 from simsplat_core.editing.parser import parse_prompt
 from simsplat_core.editing.renders import FrameRender, frame_views, render_frame, render_frames
@@ -41,6 +43,7 @@ from storage.edits import (
     EditRecord,
     command_json,
     edit_dir,
+    read_edit_delta,
     read_edit_manifest,
     record_failure,
     staged_edit,
@@ -122,13 +125,35 @@ def load_edit_context(store: ArtifactStore, seq_id: str, *, engine: QueryEngine 
     graph = SceneGraph.from_records(read_scene(store, seq_id, scene_hash).records)
     if bank is None:
         try:
-            bank, bank_hash = read_asset_bank(store)
+            bank = read_asset_bank(store)
         except FileNotFoundError as exc:
             logger.warning("%s; inserts and replacements will be refused", exc)
-            bank, bank_hash = None, ""
     engine = engine or QueryEngine(default_text_encoder())
     ctx = EditContext.create(log, graph, loaded.scene, engine, bank)
-    return LoadedEdit(ctx, scene_hash, loaded.language_hash, bank_hash or "", time.perf_counter() - started)
+    return LoadedEdit(ctx, scene_hash, loaded.language_hash, bank.bank_hash if bank is not None else "",
+                      time.perf_counter() - started)
+
+
+def rebuild_edit(store: ArtifactStore, run_id: str, seq_id: str, edit_id: str) -> SceneGraph:
+    """The edited graph of a stored edit, rebuilt from its delta, the stored scene and the asset bank it names
+    (``apply_delta``: the same function the editor used).
+
+    Raises:
+        FileNotFoundError: the edit, its scene or its asset bank is not in the store.
+        ValueError: the delta does not apply to the stored scene.
+    """
+    stored = read_edit_delta(store, run_id, seq_id, edit_id)
+    base = stored.base
+    graph = SceneGraph.from_records(read_scene(store, base.seq_id, base.scene_hash).records)
+    if tuple(int(f) for f in graph.frame_indices) != base.frame_indices:
+        raise ValueError(f"edit {edit_id}: scene {base.scene_hash[:12]} has other frames than the edit was made on")
+    bank = read_asset_bank(store, base.bank_hash) if stored.delta.added else None
+    return apply_delta(graph, stored.delta, node_factory(bank.get if bank is not None else _no_asset,
+                                                         graph.frame_indices))
+
+
+def _no_asset(asset_id: str) -> Asset:
+    raise KeyError(f"no asset bank to build {asset_id!r} from")
 
 
 def edit_key(loaded: LoadedEdit, prompt: str, program: EditProgram | None, options: EditorOptions,

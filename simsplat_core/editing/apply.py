@@ -108,7 +108,7 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
     delta = draft.delta()
     if delta.is_empty:
         raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
-    graph = apply_delta(ctx.graph, delta, node_factory(draft.assets, ctx.graph.frame_indices))
+    graph = apply_delta(ctx.graph, delta, node_factory(draft.assets.__getitem__, ctx.graph.frame_indices))
     rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
     validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
     logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -69,16 +69,13 @@ def track_from_states(states: AgentStates, row: int, z: np.ndarray | None = None
     return PoseTrack(states.frame_idx.astype(np.float64), poses, torch.as_tensor(states.valid[row]))
 
 
-def node_factory(assets: Mapping[str, Asset], graph_frames: np.ndarray) -> Callable[[AddedNode], ObjectNode]:
-    """``AddedNode -> ObjectNode``: the asset's Gaussians on the added node's track (``asset_nodes.asset_node``)."""
+def node_factory(asset_of: Callable[[str], Asset], graph_frames: np.ndarray) -> Callable[[AddedNode], ObjectNode]:
+    """``AddedNode -> ObjectNode``: the asset ``asset_of(added.asset_id)`` (the assets an edit retrieved, or
+    ``AssetBank.get`` when rebuilding a stored edit) on the added node's track (``asset_nodes.asset_node``)."""
 
     def build(added: AddedNode) -> ObjectNode:
-        try:
-            asset = assets[added.asset_id]
-        except KeyError:
-            raise KeyError(f"no asset {added.asset_id!r} for added node {added.node_id} ({added.object_id})") from None
-        return asset_node(asset, node_id=added.node_id, object_id=added.object_id, track=added.track,
-                          arc_length=added.arc_length, graph_frames=graph_frames)
+        return asset_node(asset_of(added.asset_id), node_id=added.node_id, object_id=added.object_id,
+                          track=added.track, arc_length=added.arc_length, graph_frames=graph_frames)
 
     return build
 
