@@ -26,7 +26,7 @@ from simsplat_core.editing.assets import Asset
 from simsplat_core.editing.commands import AssetSpec, Behaviour, EditCommand, Placement
 from simsplat_core.editing.grounding import Grounder
 from simsplat_core.editing.motion_glue import (
-    PlannedMotion,
+    Motion,
     anchor_pose,
     changed_motion,
     plan_inserted,
@@ -245,7 +245,7 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
     gap = command.asset.spacing_m or (asset.size[0] + ROW_GAP_M[asset.category])
     placed = resolve(draft, placement, asset, anchor, step, index)
     for k in range(count):
-        motion: PlannedMotion = plan_inserted(draft, command.behaviour, asset, placed, k * gap, step, index)
+        motion: Motion = plan_inserted(draft, command.behaviour, asset, placed, k * gap, step, index)
         object_id = draft.new_object_id()
         node_id = draft.take_node_id()
         z = np.full(draft.states.num_steps, draft.ground_height(motion.xy[step], step) + asset.size[2] / 2.0)
