@@ -9,7 +9,8 @@ Layout (``DESIGN.md``)::
         delta/delta.json                         the edit on the stored scene: base scene and asset bank,
                                                  removed node ids, added nodes (asset references), re-tracked nodes
         delta/pose_tracks.parquet                the pose tracks of the added and re-tracked nodes
-        renders/<camera>/<frame:06d>.exr         R, G, B, A (half floats) + id (float32 node id, -1 = nothing)
+        renders/<camera>/<frame:06d>.exr         R, G, B, A (half floats, rounded to 1/1024) + id (float32 node
+                                                 id, -1 = nothing); zip compressed, ~100 KB at 240 x 160
         bev.png, before_after.png                pictures for people
         validation.json                          collisions / off-road / kinematics of the edited agents
         _SUCCESS.json                            key, byte counts per part
@@ -301,6 +302,16 @@ def read_edit_program(store: ArtifactStore, run_id: str, seq_id: str, edit_id: s
 
 
 # ----------------------------------------------------------------------------- writing one edit
+#: Colour / alpha step of stored edit renders: 1/1024 (error <= 0.0005, an eighth of an 8-bit step). The
+#: rasterizer's low bits are noise that zip cannot compress: rounding them saves ~20 % of the bytes.
+RENDER_STEP = 1.0 / 1024.0
+
+
+def quantised(values: np.ndarray, step: float = RENDER_STEP) -> np.ndarray:
+    """``values`` rounded to multiples of ``step`` (float32)."""
+    return (np.round(np.asarray(values, np.float32) / step) * step).astype(np.float32)
+
+
 class EditWriter:
     """Writes the files of one edit into its staged directory (see :func:`staged_edit`); counts bytes per part."""
 
@@ -330,9 +341,10 @@ class EditWriter:
     def render(self, camera: str, frame_idx: int, rgb: np.ndarray, alpha: np.ndarray, node_id: np.ndarray,
                depth: np.ndarray | None = None) -> None:
         """One camera's render (``rgb [H, W, 3]``, ``alpha [H, W]``, ``node_id [H, W]`` int, optional
-        ``depth [H, W]``) as a half-float EXR (``id`` float32)."""
+        ``depth [H, W]``) as a half-float EXR (``id`` float32). Colours and alpha are first rounded to
+        multiples of :data:`RENDER_STEP` (module docstring)."""
         rel = render_relpath(camera, frame_idx)
-        channels = render_channels(rgb=rgb, alpha=alpha, depth=depth, node_id=node_id)
+        channels = render_channels(rgb=quantised(rgb), alpha=quantised(alpha), depth=depth, node_id=node_id)
         write_exr(self.store, join_relpath(self.relpath, rel), channels, half=True)
         self._count("renders", rel)
         self.renders += 1

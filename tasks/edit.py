@@ -31,11 +31,13 @@ from simsplat_core.editing.parser import parse_prompt
 from simsplat_core.editing.renders import FrameRender, frame_views, render_frame, render_frames
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import SceneGraph
 from simsplat_core.types import SceneLog
-from simsplat_core.viz.before_after import FramePair, before_after_picture, busiest_camera, sample_steps
+from simsplat_core.viz.before_after import FramePair, before_after_picture, pick_views, sample_steps
 from simsplat_core.viz.bev import edit_bev
+from simsplat_core.viz.images import to_uint8
 from storage import ArtifactStore, content_key, read_scene, read_scene_log
 from storage.assets import read_asset_bank
 from storage.edits import (
@@ -259,44 +261,89 @@ def schema_error_message(exc: Exception, source: str) -> str:
     return f"{source}: {len(parts)} schema error(s): " + "; ".join(parts)
 
 
-def _changed_nodes(edited: EditedScene) -> tuple[set[int], set[int]]:
+def _changed_nodes(edited: EditedScene) -> tuple[np.ndarray, np.ndarray]:
     """Node ids to outline: in the original (removed, replaced, re-tracked) and in the edit (added, re-tracked)."""
     delta = edited.delta
-    return set(delta.removed_node_ids) | set(delta.retracked), {a.node_id for a in delta.added} | set(delta.retracked)
+    before = sorted(set(delta.removed_node_ids) | set(delta.retracked))
+    after = sorted({a.node_id for a in delta.added} | set(delta.retracked))
+    return np.asarray(before, np.int32), np.asarray(after, np.int32)
 
 
-def _before_after(log: SceneLog, edited: EditedScene, renders: dict[int, FrameRender], title: str) -> np.ndarray:
-    before_nodes, after_nodes = _changed_nodes(edited)
+def _original_pixels(language: LanguageScene, frames: list[int], cameras: tuple[str, ...], nodes: np.ndarray
+                     ) -> np.ndarray:
+    """``[F, C]`` pixels of ``nodes`` in the stored scene's node-id maps (zeros where it has none)."""
+    out = np.zeros((len(frames), len(cameras)), np.int64)
+    maps = language.node_id_maps
+    if maps is None or not language.maps_valid or not len(nodes):
+        return out
+    rows = {int(f): k for k, f in enumerate(language.frame_indices)}
+    cols = {c: k for k, c in enumerate(language.cameras)}
+    for i, f in enumerate(frames):
+        for j, c in enumerate(cameras):
+            if f in rows and c in cols:
+                out[i, j] = int(np.isin(maps[rows[f], cols[c]], nodes).sum())
+    return out
+
+
+@dataclass
+class _Shown:
+    """What the before/after picture needs of the edited renders: per frame the uint8 images and the edited
+    objects' pixels (kept for every frame: which ones show the edit is known only at the end)."""
+
+    frames: list[int] = field(default_factory=list)
+    cameras: tuple[str, ...] = ()
+    images: list[list[np.ndarray]] = field(default_factory=list)
+    masks: list[list[np.ndarray]] = field(default_factory=list)
+
+    def add(self, frame: FrameRender, nodes: np.ndarray) -> None:
+        assert frame.node_id is not None
+        self.frames.append(frame.frame_idx)
+        self.cameras = frame.cameras
+        self.images.append([to_uint8(np.clip(rgb, 0.0, 1.0)) for rgb in frame.rgb])
+        self.masks.append([np.isin(ids, nodes) for ids in frame.node_id])
+
+    def pixels(self) -> np.ndarray:
+        return np.array([[int(m.sum()) for m in row] for row in self.masks], np.int64).reshape(len(self.frames), -1)
+
+
+def _before_after(log: SceneLog, edited: EditedScene, language: LanguageScene, shown: _Shown, title: str,
+                  active: np.ndarray) -> np.ndarray:
+    """Original over edited at up to :data:`BEFORE_AFTER_FRAMES` frames that show the edit (the original rendered
+    here, at those frames only)."""
+    before_nodes, _ = _changed_nodes(edited)
+    pixels = shown.pixels() + _original_pixels(language, shown.frames, shown.cameras, before_nodes)
+    views = pick_views(pixels, BEFORE_AFTER_FRAMES)
+    if not views:  # nothing visible: the frames where the edited agents exist, first camera
+        steps = sample_steps(active, BEFORE_AFTER_FRAMES)
+        wanted = {int(edited.states.frame_idx[s]) for s in steps}
+        views = [(row, 0) for row, f in enumerate(shown.frames) if f in wanted]
     pairs = []
-    for frame_idx, after in sorted(renders.items()):
+    for row, cam in views:
+        frame_idx = shown.frames[row]
         before = render_frame(edited.original, frame_idx, frame_views(log, frame_idx))
-        assert before.node_id is not None and after.node_id is not None
-        masks = [np.isin(b, list(before_nodes)) | np.isin(a, list(after_nodes))
-                 for b, a in zip(before.node_id, after.node_id)]
-        c = busiest_camera(np.stack(masks)) if len({m.shape for m in masks}) == 1 else 0
+        assert before.node_id is not None
+        k = before.cameras.index(shown.cameras[cam])
         t = float(edited.states.times[int(np.searchsorted(edited.states.frame_idx, frame_idx))])
-        pairs.append(FramePair(f"t={t:.1f}s {after.cameras[c]}", before.rgb[c], after.rgb[c],
-                               np.isin(before.node_id[c], list(before_nodes)),
-                               np.isin(after.node_id[c], list(after_nodes))))
+        pairs.append(FramePair(f"t={t:.1f}s {shown.cameras[cam]}", before.rgb[k], shown.images[row][cam],
+                               np.isin(before.node_id[k], before_nodes), shown.masks[row][cam]))
     return before_after_picture(pairs, title=title)
 
 
 def write_edit(store: ArtifactStore, record: EditRecord, key: str, loaded: LoadedEdit, program: EditProgram,
                edited: EditedScene, seconds: dict[str, float], progress: Progress | None = None) -> dict[str, int]:
     """Render and write the edit directory atomically (``storage.edits.staged_edit``); returns bytes per part.
-    Adds ``render`` and ``write`` to ``seconds``."""
+    Adds ``render`` (rasterizing, edited and original) and ``write`` (encoding, pictures, files) to ``seconds``."""
     ctx = loaded.ctx
     log = ctx.log
     frames = sorted({img.frame_idx for img in log.images})
     before, after = edited.original_states, edited.states
-    changed = [r for r, s in enumerate(after.sources) if s in ("edited", "inserted")]
-    removed = [before.index(o) for o in before.object_ids if o not in after.object_ids]
     active = np.zeros(after.num_steps, bool)
-    for r in changed:
-        active |= after.valid[r]
-    for r in removed:
-        active |= before.valid[r]
-    sampled = {int(after.frame_idx[s]) for s in sample_steps(active, BEFORE_AFTER_FRAMES)}
+    for r, source in enumerate(after.sources):
+        if source in ("edited", "inserted"):
+            active |= after.valid[r]
+    for oid in set(before.object_ids) - set(after.object_ids):
+        active |= before.valid[before.index(oid)]
+    _, after_nodes = _changed_nodes(edited)
     info = {"scene_hash": loaded.scene_hash, "language_hash": loaded.language_hash, "bank_hash": loaded.bank_hash,
             "prompt": record.prompt}
     render_s = 0.0
@@ -306,20 +353,19 @@ def write_edit(store: ArtifactStore, record: EditRecord, key: str, loaded: Loade
         writer.trajectories(record.edit_id, after)
         writer.delta(edited.delta, DeltaBase(log.seq_id, loaded.scene_hash, loaded.bank_hash,
                                              tuple(int(f) for f in ctx.graph.frame_indices)))
-        kept: dict[int, FrameRender] = {}
+        shown = _Shown()
         r0 = time.perf_counter()
         for frame in render_frames(edited.graph, log, frames, progress=progress):
             render_s += time.perf_counter() - r0
             assert frame.node_id is not None
             for c, camera in enumerate(frame.cameras):
                 writer.render(camera, frame.frame_idx, frame.rgb[c], frame.alpha[c], frame.node_id[c])
-            if frame.frame_idx in sampled:
-                kept[frame.frame_idx] = frame
+            shown.add(frame, after_nodes)
             r0 = time.perf_counter()
         title = record.prompt or "; ".join(edited.summary_lines())
         writer.png("bev.png", edit_bev(log.map_features, before, after, title=title))
         r0 = time.perf_counter()
-        picture = _before_after(log, edited, kept, title)
+        picture = _before_after(log, edited, ctx.language, shown, title, active)
         render_s += time.perf_counter() - r0
         writer.png("before_after.png", picture)
         writer.validation(edited.validation.as_dict())

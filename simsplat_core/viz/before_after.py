@@ -3,7 +3,8 @@
     pairs = [FramePair("t=1.0s front", orig_rgb, edit_rgb, orig_mask, edit_mask), ...]
     picture = before_after_picture(pairs, title=prompt)     # uint8 [H', W', 3]
 
-Each column is one sampled frame (in the camera where the edit shows most, :func:`busiest_camera`); the
+Each column is one sampled frame (frames where the edit shows, each in the camera where it shows most:
+:func:`pick_views`); the
 pixels of the changed objects are outlined (removed / modified ones in the original row, inserted /
 modified ones in the edited row). Pure numpy + OpenCV.
 """
@@ -46,10 +47,15 @@ def sample_steps(active: np.ndarray, count: int = 4) -> list[int]:
     return [int(steps[i]) for i in dict.fromkeys(picks.tolist())]
 
 
-def busiest_camera(masks: np.ndarray) -> int:
-    """The camera whose ``masks [C, H, W]`` bool cover most pixels (0 when none covers any)."""
-    counts = np.asarray(masks).reshape(masks.shape[0], -1).sum(axis=1)
-    return int(np.argmax(counts)) if counts.size and counts.max() > 0 else 0
+def pick_views(pixels: np.ndarray, count: int = 4, min_pixels: int = 30) -> list[tuple[int, int]]:
+    """``(frame row, camera)`` of up to ``count`` views that show the edit: frames where some camera sees at least
+    ``min_pixels`` changed pixels (``pixels [F, C]`` counts), spread evenly over them, each in its busiest
+    camera. ``[]`` when no frame shows the edit."""
+    pixels = np.asarray(pixels)
+    shown = pixels.max(axis=1) >= min_pixels
+    if not shown.any():
+        return []
+    return [(row, int(np.argmax(pixels[row]))) for row in sample_steps(shown, count)]
 
 
 def _panel(image: np.ndarray, mask: np.ndarray | None, scale: float) -> np.ndarray:

@@ -7,7 +7,7 @@ import pytest
 
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.types import MapFeature
-from simsplat_core.viz.before_after import FramePair, before_after_picture, busiest_camera, sample_steps
+from simsplat_core.viz.before_after import FramePair, before_after_picture, pick_views, sample_steps
 from simsplat_core.viz.bev import EDITED_COLOR, INSERTED_COLOR, REMOVED_COLOR, edit_bev
 
 T = 20
@@ -50,7 +50,11 @@ def test_sample_steps_spread_over_the_active_steps():
     active[10:31] = True
     assert sample_steps(active, 4) == [10, 17, 23, 30]
     assert sample_steps(np.zeros(3, bool), 4) == [0, 1, 2]  # nothing active: every step, no repeats
-    assert busiest_camera(np.stack([np.zeros((4, 4), bool), np.ones((4, 4), bool)])) == 1
+    pixels = np.zeros((10, 3), int)
+    pixels[2:8, 1] = 50
+    pixels[4, 2] = 80
+    assert pick_views(pixels, 3) == [(2, 1), (4, 2), (7, 1)]  # frames showing the edit, busiest camera
+    assert pick_views(np.full((10, 3), 5), 3) == []  # too few pixels anywhere
 
 
 def test_before_after_puts_original_above_edited():
