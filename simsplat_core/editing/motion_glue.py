@@ -139,12 +139,23 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
 
 
 def describe_behaviour(behaviour: Behaviour | None) -> str:
-    """A short phrase for a behaviour ("speed 30 km/h, stop before crosswalk")."""
+    """A short phrase for a behaviour ("speed 30 km/h, stop (before crosswalk), delay 2 s")."""
     if behaviour is None or behaviour.is_empty:
         return "default motion"
     parts = []
-    for name, value in behaviour.model_dump(exclude_defaults=True).items():
-        parts.append(name.replace("_", " ") if value is True else f"{name.replace('_', ' ')} {value}")
+    if behaviour.speed is not None:
+        spec = behaviour.speed
+        parts.append({"absolute": f"speed {spec.value:g} {spec.unit}", "factor": f"speed x{spec.value:g}",
+                      "delta": f"speed {spec.value:+g} {spec.unit}"}[spec.mode])
+    for name, value in behaviour.model_dump(exclude_defaults=True, exclude={"speed"}, mode="json").items():
+        words = name.replace("_", " ").replace(" s", "")
+        if value is True:
+            parts.append(words)
+        elif isinstance(value, dict):
+            inner = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in value.items() if v not in (None, False))
+            parts.append(f"{words} ({inner})" if inner else words)
+        else:
+            parts.append(f"{words} {value}" + (" s" if name.endswith("_s") else ""))
     return ", ".join(parts)
 
 

@@ -26,8 +26,8 @@ GAP = 4
 
 @dataclass(frozen=True)
 class FramePair:
-    """One column: ``original`` / ``edited`` ``[H, W, 3]`` float RGB in ``[0, 1]``; ``*_mask [H, W]`` bool pixels
-    of the changed objects (``None``: nothing outlined)."""
+    """One column: ``original`` / ``edited`` ``[H, W, 3]`` float RGB in ``[0, 1]`` (or uint8); ``*_mask [H, W]``
+    bool pixels of the changed objects (``None``: nothing outlined)."""
 
     label: str
     original: np.ndarray
@@ -59,7 +59,8 @@ def pick_views(pixels: np.ndarray, count: int = 4, min_pixels: int = 30) -> list
 
 
 def _panel(image: np.ndarray, mask: np.ndarray | None, scale: float) -> np.ndarray:
-    out = to_uint8(np.clip(image, 0.0, 1.0)).copy()
+    image = np.asarray(image)
+    out = (image if image.dtype == np.uint8 else to_uint8(np.clip(image, 0.0, 1.0))).copy()
     if mask is not None and mask.any():
         contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
         cv2.drawContours(out, contours, -1, OUTLINE, 1)

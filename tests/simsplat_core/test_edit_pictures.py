@@ -64,7 +64,8 @@ def test_before_after_puts_original_above_edited():
     blue[..., 2] = 1.0
     mask = np.zeros((16, 24), bool)
     mask[4:10, 5:15] = True
-    img = before_after_picture([FramePair("f0", red, blue, None, mask), FramePair("f1", red, blue)], scale=1.0)
+    blue8 = (blue * 255).astype(np.uint8)  # uint8 images are taken as they are
+    img = before_after_picture([FramePair("f0", red, blue8, None, mask), FramePair("f1", red, blue)], scale=1.0)
     red_rows = np.flatnonzero(np.all(img == (255, 0, 0), axis=-1).any(axis=1))
     blue_rows = np.flatnonzero(np.all(img == (0, 0, 255), axis=-1).any(axis=1))
     assert red_rows.size == 16 and blue_rows.size == 16 and red_rows.max() < blue_rows.min()
