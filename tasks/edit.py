@@ -22,7 +22,8 @@ import numpy as np
 import pydantic
 
 from simsplat_core.editing.apply import EditContext, apply_edit
-from simsplat_core.editing.assets import Asset, AssetBank
+from simsplat_core.editing.asset_record import Asset
+from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import EditProgram, program_from_json
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import node_factory

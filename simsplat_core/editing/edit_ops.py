@@ -22,7 +22,7 @@ import numpy as np
 import torch
 
 from simsplat_core.editing.asset_nodes import asset_node
-from simsplat_core.editing.assets import Asset
+from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import AssetSpec, Behaviour, EditCommand, Placement
 from simsplat_core.editing.grounding import Grounder
 from simsplat_core.editing.motion_glue import (

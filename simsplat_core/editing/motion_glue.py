@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import torch
 
-from simsplat_core.editing.assets import Asset
+from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import Behaviour, Placement, TargetRef
 from simsplat_core.editing.motion_controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
 from simsplat_core.editing.motion_requests import (
