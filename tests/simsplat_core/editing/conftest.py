@@ -16,7 +16,7 @@ from simsplat_core.scene.init import initial_graph
 from simsplat_core.types import SceneLog
 from simsplat_core.world import WorldConfig, generate_log
 
-#: Seed of the edited world (10 vehicles incl. a blue van, 8 pedestrians, 3 signs, 2 cones).
+#: Seed of the edited world (the demo world: 10 vehicles incl. a white van, 8 pedestrians, 3 signs, 2 cones).
 EDIT_SEED = 0
 
 

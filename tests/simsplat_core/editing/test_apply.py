@@ -19,7 +19,7 @@ from simsplat_core.scene import GaussianSet
 from simsplat_core.scene.nodes import OFFSETS
 
 #: The moving vehicle the tests modify, and the van they remove / replace (seed 0 of the world).
-VAN = "veh_03"
+VAN = "veh_02"
 
 
 def _program(*commands: dict, prompt: str = "") -> EditProgram:
@@ -67,13 +67,13 @@ def _moving_vehicle(ctx: EditContext) -> str:
 
 
 def test_remove_is_by_value(ctx):
-    edited = apply_edit(ctx, _program({"op": "remove", "target": {"description": "the blue van"}}))
+    edited = apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}}))
     van = _node(ctx, VAN)
     assert edited.delta.removed_node_ids == (van,) and not edited.delta.added and not edited.delta.retracked
     assert van not in {n.node_id for n in edited.graph.nodes}
     assert VAN not in edited.states.object_ids and VAN in ctx.states.object_ids
     assert van in {n.node_id for n in ctx.graph.nodes} and ctx.graph.revision == ""  # the stored graph unchanged
-    assert edited.outcomes[0].target_node_ids == (van,) and "blue van" in edited.outcomes[0].summary
+    assert edited.outcomes[0].target_node_ids == (van,) and "white van" in edited.outcomes[0].summary
     assert edited.validation.as_dict()["checked"] == 0
     # unchanged nodes are shared, not copied
     kept = next(n for n in ctx.graph.object_nodes if n.node_id != van)
@@ -88,7 +88,7 @@ def test_remove_a_group(ctx):
 
 def test_not_found_is_refused_with_the_command_index(ctx):
     with pytest.raises(EditRefused) as info:
-        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the blue van"}},
+        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}},
                                  {"op": "remove", "target": {"description": "the purple bus"}}))
     assert info.value.reason == "not_found" and info.value.command_index == 1
     assert "purple bus" in str(info.value)
@@ -96,13 +96,13 @@ def test_not_found_is_refused_with_the_command_index(ctx):
 
 def test_a_removed_object_cannot_be_edited_again(ctx):
     with pytest.raises(EditRefused, match="already removed") as info:
-        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the blue van"}},
+        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}},
                                  {"op": "modify", "target": {"object_id": VAN}, "behaviour": {"stop": {}}}))
     assert info.value.command_index == 1
 
 
 def test_replace_keeps_the_trajectory_and_fits_the_box_on_the_ground(ctx, bank):
-    edited = apply_edit(ctx, _program({"op": "replace", "target": {"description": "the blue van"},
+    edited = apply_edit(ctx, _program({"op": "replace", "target": {"description": "the white van"},
                                        "asset": {"description": "a yellow sedan"}}))
     van = _node(ctx, VAN)
     (added,) = edited.delta.added
@@ -124,7 +124,7 @@ def test_replace_keeps_the_trajectory_and_fits_the_box_on_the_ground(ctx, bank):
 
 def test_replace_across_categories_is_refused(ctx):
     with pytest.raises(EditRefused) as info:
-        apply_edit(ctx, _program({"op": "replace", "target": {"description": "the blue van"},
+        apply_edit(ctx, _program({"op": "replace", "target": {"description": "the white van"},
                                   "asset": {"description": "a pedestrian in a red top", "category": "pedestrian"}}))
     assert info.value.reason == "wrong_category"
 
@@ -205,7 +205,7 @@ def test_inserting_a_car_on_the_sidewalk_is_refused(ctx):
 
 
 def test_the_delta_rebuilds_the_edited_graph(ctx, bank):
-    edited = apply_edit(ctx, _program({"op": "replace", "target": {"description": "the blue van"},
+    edited = apply_edit(ctx, _program({"op": "replace", "target": {"description": "the white van"},
                                        "asset": {"description": "a yellow sedan"}},
                                       {"op": "modify", "target": {"object_id": _moving_vehicle(ctx)},
                                        "behaviour": {"stop": {}}},
@@ -221,7 +221,7 @@ def test_the_delta_rebuilds_the_edited_graph(ctx, bank):
 
 def test_omnire_like_takes_ids_only(ctx):
     with pytest.raises(EditRefused, match="object ids") as info:
-        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the blue van"}}), OMNIRE_LIKE)
+        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}}), OMNIRE_LIKE)
     assert info.value.reason == "unsupported"
     edited = apply_edit(ctx, _program({"op": "remove", "target": {"object_id": VAN}}), OMNIRE_LIKE)
     assert edited.delta.removed_node_ids == (_node(ctx, VAN),)

@@ -20,9 +20,9 @@ def _node(graph, object_id: str) -> int:
 
 
 def test_description_grounds_to_the_described_object(grounder, edit_graph):
-    found = grounder.ground(TargetRef(description="the blue van"))
-    assert found.object_ids == ("veh_03",)
-    assert found.node_ids == (_node(edit_graph, "veh_03"),)
+    found = grounder.ground(TargetRef(description="the white van"))
+    assert found.object_ids == ("veh_02",)
+    assert found.node_ids == (_node(edit_graph, "veh_02"),)
 
 
 def test_group_grounds_every_match_and_skips_removed_nodes(grounder, edit_graph):
@@ -42,20 +42,20 @@ def test_not_found_names_what_the_scene_has(grounder):
 
 
 def test_removed_target_is_not_found_again(grounder, edit_graph):
-    van = _node(edit_graph, "veh_03")
+    van = _node(edit_graph, "veh_02")
     with pytest.raises(EditRefused, match="already removed"):
-        grounder.ground(TargetRef(description="the blue van"), removed={van})
+        grounder.ground(TargetRef(description="the white van"), removed={van})
     with pytest.raises(EditRefused, match="already removed"):
         grounder.ground(TargetRef(node_id=van), removed={van})
 
 
 def test_ids_resolve_in_every_mode_and_descriptions_not_in_ids_mode(edit_language, engine, edit_graph):
     ids_only = Grounder(edit_language, engine, edit_graph, mode="ids")
-    van = _node(edit_graph, "veh_03")
-    assert ids_only.ground(TargetRef(object_id="veh_03")).node_ids == (van,)
-    assert ids_only.ground(TargetRef(node_id=van)).object_ids == ("veh_03",)
+    van = _node(edit_graph, "veh_02")
+    assert ids_only.ground(TargetRef(object_id="veh_02")).node_ids == (van,)
+    assert ids_only.ground(TargetRef(node_id=van)).object_ids == ("veh_02",)
     with pytest.raises(EditRefused, match="object ids, not descriptions") as info:
-        ids_only.ground(TargetRef(description="the blue van"))
+        ids_only.ground(TargetRef(description="the white van"))
     assert info.value.reason == "unsupported"
     with pytest.raises(EditRefused, match="no node 999") as missing:
         ids_only.ground(TargetRef(node_id=999))
@@ -66,12 +66,12 @@ def test_attribute_mode_ignores_motion_words(edit_language, engine, edit_graph):
     """ChatSim-like grounding matches colour and type; the full engine also scores the motion part."""
     attributes = Grounder(edit_language, engine, edit_graph, mode="attributes")
     assert attributes.engine.config.use_motion is False and attributes.engine.config.use_location is False
-    assert attributes.ground(TargetRef(description="the blue van")).object_ids == ("veh_03",)
+    assert attributes.ground(TargetRef(description="the white van")).object_ids == ("veh_02",)
 
 
 def test_editor_options_refuse_what_the_baselines_cannot_do():
-    remove = EditCommand(op="remove", target=TargetRef(description="the blue van"))
-    modify = EditCommand(op="modify", target=TargetRef(description="the blue van"),
+    remove = EditCommand(op="remove", target=TargetRef(description="the white van"))
+    modify = EditCommand(op="modify", target=TargetRef(description="the white van"),
                          behaviour={"speed": {"value": 5}})
     crosswalk = EditCommand(op="insert", asset={"description": "a cone"},
                             placement=Placement(relation="on_crosswalk"))
