@@ -179,11 +179,11 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
-def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Placement | None, index: int) -> Motion:
+def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Placement | None, index: int,
+                  label: str) -> Motion:
     """Agent ``row`` 's new motion from its current trajectory by ``behaviour`` (moved to ``placement`` first when
-    given)."""
+    given); ``label`` names it in messages."""
     states = draft.states
-    label = draft.describe(int(states.node_ids[row])) if states.node_ids[row] >= 0 else states.object_ids[row]
     kind = motion_kind(states.categories[row], label)
     log = LogTrajectory.from_states(states, row)
     start = StartState.from_log(log, states.times)
