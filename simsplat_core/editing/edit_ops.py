@@ -275,6 +275,9 @@ def modify(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
         if agent_kind(category) is None:
             raise EditRefused(f"{draft.describe(node_id)} is a {category}, which does not move; motion edits "
                               "apply to vehicles and pedestrians", reason="wrong_category", command_index=index)
+        if behaviour.is_empty and command.placement is None:
+            raise EditRefused(f"the edit would not change how {draft.describe(node_id)} moves: give a speed, stop, "
+                              "turn, lane change, delay, ...", reason="infeasible_motion", command_index=index)
         motion = plan_modified(draft, row, behaviour, command.placement, index, draft.describe(node_id))
         if not changed_motion(draft.states, row, motion):
             raise EditRefused(f"the edit would not change how {draft.describe(node_id)} moves",
