@@ -27,6 +27,9 @@ ingest_app = typer.Typer(help="Decode real driving logs into the artifact store.
 app.add_typer(ingest_app, name="ingest")
 eval_app = typer.Typer(help="Evaluate stored results and write the run's tables.", no_args_is_help=True)
 app.add_typer(eval_app, name="eval")
+assets_app = typer.Typer(help="The asset bank of scene editing: build it, list it, draw its contact sheet.",
+                         no_args_is_help=True)
+app.add_typer(assets_app, name="assets")
 console = Console()
 logger = logging.getLogger("flows.cli")
 
@@ -441,6 +444,108 @@ def _print_grounding(result) -> None:
     console.print(table)
     for name, uri in result.tables.items():
         console.print(f"{name}: {uri}")
+
+
+BankOption = Annotated[str | None, typer.Option("--bank", help="Bank hash (or unique prefix); default: the newest.")]
+
+
+@assets_app.command("build")
+def assets_build(
+    store: Annotated[str, typer.Option(help="Artifact store root with reconstructed scenes (scenes/<seq_id>/...).")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence to cut assets out of (repeatable; default: every "
+                                                  "reconstructed one).")] = None,
+    sheet: Annotated[bool, typer.Option(help="Draw the contact sheet into the bank directory.")] = True,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Build the asset bank: vehicles and pedestrians cut out of every reconstructed scene (those good enough;
+    pedestrians keep their gait) plus procedural static objects, under STORE/assets/<bank_hash>/. The same
+    inputs give the same bank hash: a built bank is not built again."""
+    from flows.progress import StepBars
+    from tasks.assets import build_asset_bank
+
+    try:
+        with StepBars(headline=""):
+            built = build_asset_bank.fn(store, list(seq) if seq else None, sheet=sheet)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--seq") from exc
+    if as_json:
+        typer.echo(json.dumps({"bank_hash": built.bank_hash, "uri": built.uri, "assets": built.assets,
+                               "by_category": built.by_category, "gaussians": built.gaussians, "bytes": built.bytes,
+                               "skipped": built.skipped, "sheet": built.sheet_uri or None,
+                               "seconds": round(built.seconds, 3), "report": built.report}))
+        return
+    for line in built.report:
+        console.print(line, markup=False, highlight=False)
+    counts = ", ".join(f"{n} {c}" for c, n in sorted(built.by_category.items()))
+    status = "already built, skipped" if built.skipped else f"built in {built.seconds:.1f} s"
+    console.print(f"asset bank {built.bank_hash[:12]}: {built.assets} assets ({counts}), {built.gaussians} Gaussians, "
+                  f"{built.bytes / 1e6:.1f} MB; {status}\n  {built.uri}")
+    if built.sheet_uri:
+        console.print(f"contact sheet: {built.sheet_uri}")
+
+
+@assets_app.command("list")
+def assets_list(
+    store: Annotated[str, typer.Option(help="Artifact store root.")],
+    bank: BankOption = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the banks and the assets as one JSON object.")] = False,
+) -> None:
+    """List the stored asset banks and the assets of one (the newest unless --bank)."""
+    from storage import ArtifactStore
+    from storage.assets import list_asset_banks, read_asset_index, read_bank_manifest
+
+    artifacts = ArtifactStore(store)
+    try:
+        bank_hash, rows = read_asset_index(artifacts, bank)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--bank") from exc
+    banks = [{"bank_hash": h, **{k: (read_bank_manifest(artifacts, h) or {}).get(k) for k in
+                                  ("assets", "by_category", "written_at")}} for h in list_asset_banks(artifacts)]
+    if as_json:
+        typer.echo(json.dumps({"banks": banks, "bank_hash": bank_hash, "assets": rows}))
+        return
+    listing = Table(title=f"Asset banks in {artifacts.uri('assets')}")
+    for col in ("bank", "assets", "by category", "written"):
+        listing.add_column(col, no_wrap=True)
+    for b in banks:
+        listing.add_row(b["bank_hash"][:12] + (" *" if b["bank_hash"] == bank_hash else ""), str(b["assets"]),
+                        ", ".join(f"{n} {c}" for c, n in sorted((b["by_category"] or {}).items())),
+                        str(b["written_at"] or ""))
+    console.print(listing)
+    table = Table(title=f"Assets of bank {bank_hash[:12]}")
+    for col in ("asset", "category", "subtype", "colour", "caption", "size m", "Gaussians", "source"):
+        table.add_column(col)
+    for r in rows:
+        source = f"{r['source_seq']} {r['source_object']}".strip() or "procedural"
+        table.add_row(r["asset_id"], r["category"], r["subtype"], r["color"], r["caption"],
+                      " x ".join(f"{v:.2f}" for v in r["size"]), str(r["num_gaussians"]), source)
+    console.print(table)
+
+
+@assets_app.command("sheet")
+def assets_sheet(
+    store: Annotated[str, typer.Option(help="Artifact store root.")],
+    out: Annotated[str, typer.Option(help="PNG to write.")],
+    bank: BankOption = None,
+    columns: Annotated[int, typer.Option(min=1, help="Tiles per row.")] = 8,
+) -> None:
+    """Draw a bank's contact sheet: every asset rendered alone from the same 3/4 view, with its caption."""
+    from flows.progress import StepBars
+    from simsplat_core.viz.asset_sheet import asset_contact_sheet
+    from storage import ArtifactStore
+    from storage.assets import read_asset_bank
+    from storage.png import write_png
+    from tasks.progress import StepProgress
+
+    try:
+        assets_bank = read_asset_bank(ArtifactStore(store), bank)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--bank") from exc
+    tiles = StepProgress("contact sheet", headline="")
+    with StepBars(headline=""):
+        picture = asset_contact_sheet(assets_bank.assets, columns=columns, progress=lambda done, n: tiles(done, n))
+    uri = write_png(out, picture)
+    console.print(f"contact sheet of bank {assets_bank.bank_hash[:12]} ({len(assets_bank)} assets): {uri}")
 
 
 @app.command()

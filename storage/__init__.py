@@ -8,11 +8,13 @@
 * ``logs``, ``scenes``: scene logs (``logs/<seq_id>``) and reconstructed scenes (``scenes/<seq_id>/<hash>``).
 * ``alignment``, ``language_scenes``: the motion aligner models and language scenes (``alignment/``).
 * ``runs``: run directories and evaluation tables (``runs/<run_id>/tables``).
+* ``assets``: asset banks for scene editing (``assets/<bank_hash>``).
 
 Imports ``simsplat_core`` (types, scene records, language scenes); never prefect or ray.
 ``simsplat_core`` never imports this.
 """
 
+from storage.assets import list_asset_banks, read_asset_bank, write_asset_bank
 from storage.errors import CorruptArtifactError, SchemaError, StorageError, UnsafePathError
 from storage.exr import (
     BASE_CHANNELS,
@@ -51,6 +53,7 @@ from storage.scenes import (
     write_scene,
 )
 from storage.schemas import (
+    ASSETS_SCHEMA,
     DEFORMATIONS_SCHEMA,
     EDITS_SCHEMA,
     EGO_POSES_SCHEMA,
@@ -77,6 +80,10 @@ from storage.schemas import (
 from storage.store import ArtifactStore, join_relpath, normalize_relpath
 
 __all__ = [
+    "list_asset_banks",
+    "read_asset_bank",
+    "write_asset_bank",
+    "ASSETS_SCHEMA",
     "BASE_CHANNELS",
     "DEFORMATIONS_SCHEMA",
     "EDITS_SCHEMA",

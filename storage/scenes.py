@@ -275,7 +275,7 @@ def write_scene(
         deform_bytes = 0
         for node_id, (frames, offsets) in deformations.items():
             path = join_relpath(tmp, deform_relpath(node_id))
-            store.write_table(path, _deformation_table(scene_id, node_id, frames, offsets), DEFORMATIONS_SCHEMA)
+            store.write_table(path, deformation_table(scene_id, node_id, frames, offsets), DEFORMATIONS_SCHEMA)
             deform_bytes += store.size(path)
         render_bytes = 0
         for r in renders:
@@ -428,7 +428,8 @@ def _deformations(records: Any) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     return result
 
 
-def _deformation_table(scene_id: str, node_id: int, frames: np.ndarray, offsets: np.ndarray) -> pa.Table:
+def deformation_table(scene_id: str, node_id: int, frames: np.ndarray, offsets: np.ndarray) -> pa.Table:
+    """The ``deformations`` table of one non-rigid node: ``frames [T]``, ``offsets [T, N_h, 3]``."""
     t, n_h, _ = offsets.shape
     values = vectors_to_arrow(offsets.reshape(t * n_h, 3), 3)
     row_offsets = pa.array(np.arange(t + 1, dtype=np.int32) * n_h)
@@ -546,18 +547,25 @@ def _read_deformations(
     offsets: dict[int, np.ndarray] = {}
     frames: dict[int, np.ndarray] = {}
     for node_id, uri in uris.items():
-        path = join_relpath(rel, uri)
-        table = store.read_table(path, DEFORMATIONS_SCHEMA).sort_by("frame_idx")
-        column = table.column("offsets").combine_chunks()
-        counts = set(np.diff(column.offsets.to_numpy()).tolist())
-        if len(counts) > 1:
-            raise CorruptArtifactError(f"{store.uri(path)}: column 'offsets' has rows of different lengths "
-                                       f"{sorted(counts)}")
-        n_h = counts.pop() if counts else 0
-        values = arrow_to_vectors(column.values) if len(column) else np.zeros((0, 3), np.float32)
-        offsets[node_id] = values.reshape(len(column), n_h, 3)
-        frames[node_id] = table.column("frame_idx").to_numpy().astype(np.int64)
+        frames[node_id], offsets[node_id] = read_deformation_table(store, join_relpath(rel, uri))
     return offsets, frames
+
+
+def read_deformation_table(store: ArtifactStore, path: str) -> tuple[np.ndarray, np.ndarray]:
+    """``(frame_idx [T] int64, offsets [T, N_h, 3] float32)`` of one ``deformations`` file, by frame.
+
+    Raises:
+        CorruptArtifactError: rows of different lengths in column ``offsets`` (naming the file).
+    """
+    table = store.read_table(path, DEFORMATIONS_SCHEMA).sort_by("frame_idx")
+    column = table.column("offsets").combine_chunks()
+    counts = set(np.diff(column.offsets.to_numpy()).tolist())
+    if len(counts) > 1:
+        raise CorruptArtifactError(f"{store.uri(path)}: column 'offsets' has rows of different lengths "
+                                   f"{sorted(counts)}")
+    n_h = counts.pop() if counts else 0
+    values = arrow_to_vectors(column.values) if len(column) else np.zeros((0, 3), np.float32)
+    return table.column("frame_idx").to_numpy().astype(np.int64), values.reshape(len(column), n_h, 3)
 
 
 def read_scene_render(store: ArtifactStore, seq_id: str, scene_hash: str, camera: str,

@@ -18,6 +18,7 @@ Type decisions:
 * ``map_features.points`` is ``list<FixedSizeList<float32, 3>>`` (one variable-length polyline).
 * ``deformations.offsets`` is ``list<FixedSizeList<float32, 3>>`` too: the ``[N_h, 3]`` offsets of one
   non-rigid node's Gaussians at one frame (one file per node, ``node_poses.deform_uri`` points at it).
+  The asset bank stores a deformable asset's offsets the same way (``assets.deform_uri``).
 * Strings are never null: "absent" is the empty string (``image_uri``, ``deform_uri``,
   ``failure_reason``, ``caption``). Every column is non-nullable.
 """
@@ -203,6 +204,29 @@ DEFORMATIONS_SCHEMA = _schema(
     ],
 )
 
+# ----------------------------------------------------------------------------- asset bank
+ASSETS_SCHEMA = _schema(
+    "assets",
+    1,
+    [
+        ("bank_hash", pa.string()),
+        ("asset_id", pa.string()),
+        ("category", pa.string()),  # "vehicle" | "pedestrian" | "static"
+        ("subtype", pa.string()),
+        ("caption", pa.string()),
+        ("color", pa.string()),
+        ("size", vec(3)),  # box length, width, height (metres)
+        ("source_seq", pa.string()),  # "" for procedural assets
+        ("source_object", pa.string()),  # "" for procedural assets
+        ("num_gaussians", pa.int64()),
+        ("gaussians_uri", pa.string()),  # gaussians/<asset_id>.parquet, relative to the bank directory
+        ("deform_uri", pa.string()),  # deform/<asset_id>.parquet for deformable assets, else ""
+        ("deform_frames", pa.list_(pa.int64())),  # [T_h] source frames of the offsets (empty when rigid)
+        ("deform_arc_length", pa.list_(pa.float32())),  # [T_h] metres walked up to each (empty when rigid)
+        ("attributes", pa.map_(pa.string(), pa.string())),
+    ],
+)
+
 # ----------------------------------------------------------------------------- run tables
 EDITS_SCHEMA = _schema(
     "edits",
@@ -300,6 +324,7 @@ TABLES: dict[str, TableSpec] = {
         TableSpec("node_poses", _fixed(NODE_POSES_SCHEMA)),
         TableSpec("node_language", _fixed(NODE_LANGUAGE_SCHEMA)),
         TableSpec("deformations", _fixed(DEFORMATIONS_SCHEMA)),
+        TableSpec("assets", _fixed(ASSETS_SCHEMA)),
         TableSpec("edits", _fixed(EDITS_SCHEMA)),
         TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA), min_version=2),
         TableSpec("edit_pose_tracks", _fixed(EDIT_POSE_TRACKS_SCHEMA)),

@@ -1,0 +1,173 @@
+"""Task that builds the asset bank of a store: cut-outs of every reconstructed scene + procedural statics.
+
+Thin: find the sources (each sequence's newest reconstructed scene and the language scene built from it,
+if any), key the bank by them and the config, skip when a complete bank with that key is stored, else
+load each scene, cut its assets out (``editing.asset_cutout``), add the procedural statics
+(``editing.procedural_assets``), draw the contact sheet and write it all with ``storage.assets``.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import asdict, dataclass, field
+
+from prefect import task
+from prefect.cache_policies import NO_CACHE
+
+from simsplat_core.editing.asset_cutout import CutoutConfig, cutout_assets
+from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.procedural_assets import STATIC_KINDS, procedural_assets
+from simsplat_core.scene import SceneGraph
+from simsplat_core.viz.asset_sheet import asset_contact_sheet
+from simsplat_core.viz.images import encode_png
+from storage import ArtifactStore, config_settings, content_key, list_logs, list_scenes, read_scene, read_scene_log
+from storage.assets import ASSET_BANK_FORMAT_VERSION, bank_dir, read_bank_manifest, write_asset_bank
+from storage.language_scenes import list_language_scenes, read_language_manifest, read_language_scene
+from tasks.progress import StepProgress
+
+logger = logging.getLogger(__name__)
+
+#: Version of the bank-building stage; bump it to rebuild every bank.
+BANK_VERSION = "assets-v1"
+SHEET_FILE = "contact_sheet.png"
+
+
+@dataclass(frozen=True)
+class AssetSource:
+    """One scene the bank cuts assets out of.
+
+    Attributes:
+        seq_id: the sequence.
+        scene_hash: its newest reconstructed scene.
+        language: ``(model_hash, language_hash)`` of the newest language scene built from that scene, or
+            ``None`` (captions then come from the log or the built-in captioner).
+    """
+
+    seq_id: str
+    scene_hash: str
+    language: tuple[str, str] | None = None
+
+
+@dataclass(frozen=True)
+class BuiltBank:
+    """What ``build_asset_bank`` returns (small).
+
+    Attributes:
+        bank_hash: the content key of the sources and config; the bank's directory name.
+        uri: ``<store>/assets/<bank_hash>``.
+        assets: number of assets; by_category: per category.
+        gaussians, bytes: totals stored.
+        skipped: True when a complete bank with this hash was already stored.
+        report: the cut-out filter's lines per scene (empty when skipped).
+        sheet_uri: the contact sheet (``""`` when none was drawn).
+        seconds: wall time (0 when skipped).
+    """
+
+    bank_hash: str
+    uri: str
+    assets: int
+    by_category: dict[str, int]
+    gaussians: int
+    bytes: int
+    skipped: bool
+    report: list[str] = field(default_factory=list)
+    sheet_uri: str = ""
+    seconds: float = 0.0
+
+
+def asset_sources(store: ArtifactStore, seq_ids: list[str] | None = None) -> list[AssetSource]:
+    """The newest reconstructed scene (and its language scene) of each of ``seq_ids`` (default: every log
+    with a reconstructed scene).
+
+    Raises:
+        ValueError: a chosen sequence has no complete reconstructed scene (naming it and those that do).
+    """
+    with_scene = [s for s in list_logs(store) if list_scenes(store, s)]
+    chosen = list(seq_ids) if seq_ids else with_scene
+    missing = [s for s in chosen if s not in with_scene]
+    if missing:
+        raise ValueError(f"no reconstructed scene of {missing} in {store.uri('scenes')}; reconstructed: {with_scene}")
+    sources = []
+    for seq_id in chosen:
+        scene_hash = list_scenes(store, seq_id)[-1]
+        language = next(((m, h) for m, h in list_language_scenes(store, seq_id)
+                         if (read_language_manifest(store, m, seq_id, h) or {}).get("scene_hash") == scene_hash), None)
+        sources.append(AssetSource(seq_id, scene_hash, language))
+    return sources
+
+
+def bank_key(sources: list[AssetSource], config: CutoutConfig) -> str:
+    """Content key of a bank: its sources, the cut-out filter, the procedural catalogue and the versions."""
+    return content_key("asset-bank", BANK_VERSION, ASSET_BANK_FORMAT_VERSION, [asdict(s) for s in sources],
+                       config_settings(config), sorted(STATIC_KINDS.values(), key=lambda k: k.subtype))
+
+
+def _cut_out(store: ArtifactStore, source: AssetSource, config: CutoutConfig) -> tuple[list, list[str]]:
+    graph = SceneGraph.from_records(read_scene(store, source.seq_id, source.scene_hash).records)
+    log = read_scene_log(store, source.seq_id, load_images=False)
+    language = None
+    if source.language is not None:
+        model_hash, language_hash = source.language
+        language = read_language_scene(store, source.seq_id, model_hash, language_hash, with_records=False).scene
+    assets, report = cutout_assets(graph, log.objects, log.tracks, seq_id=source.seq_id, language=language,
+                                   config=config, scene_hash=source.scene_hash)
+    return assets, report.lines()
+
+
+def _stored(store: ArtifactStore, key: str, manifest: dict) -> BuiltBank:
+    files = manifest.get("files", [])
+    return BuiltBank(key, store.uri(bank_dir(key)), int(manifest.get("assets", 0)),
+                     dict(manifest.get("by_category", {})), int(manifest.get("gaussians", 0)),
+                     int(manifest.get("bytes", 0)), True,
+                     sheet_uri=store.uri(f"{bank_dir(key)}/{SHEET_FILE}") if SHEET_FILE in files else "")
+
+
+@task(name="build-asset-bank", retries=0, cache_policy=NO_CACHE)
+def build_asset_bank(store_root: str, seq_ids: list[str] | None = None, config: CutoutConfig | None = None,
+                     sheet: bool = True) -> BuiltBank:
+    """Build (or find) the asset bank of ``<store>``'s reconstructed scenes under ``<store>/assets/<bank_hash>``.
+
+    Args:
+        seq_ids: sequences to cut assets out of (default: every one with a reconstructed scene).
+        config: the cut-out filter (default ``CutoutConfig()``).
+        sheet: also draw the contact sheet (``contact_sheet.png`` in the bank directory).
+
+    Progress (``tasks.progress``): ``"asset bank: cut out"`` per scene, ``"asset bank: contact sheet"`` per tile.
+
+    Raises:
+        ValueError: a chosen sequence has no reconstructed scene.
+    """
+    store = ArtifactStore(store_root)
+    config = config or CutoutConfig()
+    sources = asset_sources(store, seq_ids)
+    key = bank_key(sources, config)
+    manifest = read_bank_manifest(store, key)
+    if manifest is not None:
+        logger.info("asset bank %s already built, skipping", key[:12])
+        return _stored(store, key, manifest)
+    start = time.perf_counter()
+    assets, report = [], []
+    cut_progress = StepProgress("asset bank: cut out", headline="")
+    for k, source in enumerate(sources):
+        cut, lines = _cut_out(store, source, config)
+        assets += cut
+        report += lines
+        cut_progress(k + 1, len(sources))
+    assets += procedural_assets()
+    bank = AssetBank.from_assets(assets, key)
+    extra = {}
+    if sheet:
+        tiles = StepProgress("asset bank: contact sheet", headline="")
+        extra[SHEET_FILE] = encode_png(asset_contact_sheet(bank.assets, progress=lambda done, n: tiles(done, n)))
+    provenance = {"sources": [asdict(s) for s in sources], "cutout": config_settings(config),
+                  "bank_version": BANK_VERSION}
+    write_asset_bank(store, bank, provenance=provenance, extra_files=extra)
+    built = _stored(store, key, read_bank_manifest(store, key) or {})
+    seconds = time.perf_counter() - start
+    logger.info("built asset bank %s: %d assets in %.1f s", key[:12], len(bank), seconds)
+    return BuiltBank(built.bank_hash, built.uri, built.assets, built.by_category, built.gaussians, built.bytes,
+                     False, report, built.sheet_uri, seconds)
+
+
+__all__ = ["BANK_VERSION", "AssetSource", "BuiltBank", "asset_sources", "bank_key", "build_asset_bank"]
