@@ -6,8 +6,8 @@ nodes; :meth:`Draft.delta` is the :class:`~simsplat_core.editing.result.EditDelt
 grounds what it needs, changes the draft and returns a :class:`~simsplat_core.editing.result.CommandOutcome`,
 or raises :class:`~simsplat_core.editing.result.EditRefused`.
 
-Heights: a box centre sits half the box height above the ground; the ground under a new object is the
-height of the map's nearest lane / area vertex (the ego's height where the map has none).
+Heights: a box centre sits half the box height above the ground (an inserted object stands on its anchor's
+ground, ``editing.placement``; a replacement on the replaced object's).
 """
 
 from __future__ import annotations
@@ -26,7 +26,6 @@ from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import AssetSpec, Behaviour, EditCommand, Placement
 from simsplat_core.editing.grounding import Grounder
 from simsplat_core.editing.motion_glue import (
-    Motion,
     anchor_pose,
     changed_motion,
     plan_inserted,
@@ -34,6 +33,7 @@ from simsplat_core.editing.motion_glue import (
     resolve,
 )
 from simsplat_core.editing.options import EditorOptions
+from simsplat_core.editing.placement import place_row
 from simsplat_core.editing.result import AddedNode, CommandOutcome, EditDelta, EditRefused
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.trajectory import agent_kind
@@ -48,8 +48,6 @@ logger = logging.getLogger(__name__)
 
 #: ``object_id`` prefix of inserted agents (``inserted_00``, ``inserted_01``, ...).
 INSERTED_PREFIX = "inserted_"
-#: Map kinds whose vertices give the ground height.
-GROUND_KINDS = ("lane", "drivable_area", "crosswalk", "sidewalk", "road_edge")
 #: Default gap between the objects of a row, by asset category (metres between box edges).
 ROW_GAP_M = {"static": 1.5, "vehicle": 3.0, "pedestrian": 0.8}
 
@@ -100,28 +98,16 @@ class Draft:
     assets: dict[str, Asset] = field(default_factory=dict)
     gone: set[int] = field(default_factory=set)
     replaced: dict[int, int] = field(default_factory=dict)
-    ground_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     @classmethod
     def start(cls, ctx: EditContext, grounder: Grounder, options: EditorOptions) -> Draft:
-        points = [np.asarray(f.points, np.float64) for f in ctx.log.map_features if f.kind in GROUND_KINDS]
         return cls(ctx=ctx, grounder=grounder, options=options, states=ctx.states,
-                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1,
-                   ground_points=np.concatenate(points) if points else np.zeros((0, 3)))
+                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1)
 
     def delta(self) -> EditDelta:
         return EditDelta(removed_node_ids=tuple(self.removed), added=tuple(self.added), retracked=dict(self.retracked))
 
     # ------------------------------------------------------------------ helpers
-    def ground_height(self, xy: np.ndarray, step: int) -> float:
-        """Ground height (m) at ``xy [2]``: the nearest map vertex's, else the ego's at ``step``."""
-        if len(self.ground_points):
-            d = np.linalg.norm(self.ground_points[:, :2] - np.asarray(xy)[None], axis=1)
-            k = int(np.argmin(d))
-            if d[k] < 30.0:
-                return float(self.ground_points[k, 2])
-        return float(self.ctx.log.ego_poses[step][2, 3])
-
     def new_object_id(self) -> str:
         taken = set(self.states.object_ids) | {a.object_id for a in self.added}
         k = 0
@@ -239,16 +225,15 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
     if placement.anchor is not None and not placement.anchor.is_ego:
         found = draft.grounder.ground(placement.anchor, removed=draft.gone, command_index=index, role="anchor")
         anchor_ids = found.node_ids[:1]
-        anchor = anchor_pose(draft.states, draft.row_of(found.object_ids[0]), step)
-    count = command.asset.count
+        anchor = anchor_pose(draft, found.object_ids[0], draft.describe(anchor_ids[0]), step, index)
+    gap = command.asset.spacing_m if command.asset.spacing_m is not None else ROW_GAP_M[asset.category]
+    first = resolve(draft, placement, asset, anchor, step, index)
     new_ids, lines = [], []
-    gap = command.asset.spacing_m or (asset.size[0] + ROW_GAP_M[asset.category])
-    placed = resolve(draft, placement, asset, anchor, step, index)
-    for k in range(count):
-        motion: Motion = plan_inserted(draft, command.behaviour, asset, placed, k * gap, step, index)
+    for placed in place_row(first, count=command.asset.count, spacing_m=gap, size=asset.size, lanes=draft.ctx.lanes):
+        motion = plan_inserted(draft, command.behaviour, asset, placed, step, index)
         object_id = draft.new_object_id()
         node_id = draft.take_node_id()
-        z = np.full(draft.states.num_steps, draft.ground_height(motion.xy[step], step) + asset.size[2] / 2.0)
+        z = np.full(draft.states.num_steps, placed.z)
         draft.added.append(AddedNode(node_id=node_id, object_id=object_id, asset_id=asset.asset_id,
                                      category=asset.category, track=motion.track(draft.states.frame_idx, z),
                                      arc_length=motion.arc_length))
@@ -256,9 +241,10 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
                                                heading=motion.heading, speed=motion.speed, valid=motion.valid,
                                                size=np.asarray(asset.size, np.float64), z=z, node_id=node_id)
         new_ids.append(object_id)
-        lines.append(f"{object_id} (node {node_id})")
+        lines.append(f"{object_id} (node {node_id}, {placed.area}{', ' + placed.note if placed.note else ''}, "
+                     f"{motion.description})")
     where = placement.relation.replace("_", " ") + (f" {draft.describe(anchor_ids[0])}" if anchor_ids else "")
-    summary = f"inserted {asset.caption} (asset {asset.asset_id}) as {', '.join(lines)}: {where}"
+    summary = f"inserted {asset.caption} (asset {asset.asset_id}) {where} as {'; '.join(lines)}"
     return CommandOutcome(command, anchor_node_ids=anchor_ids, new_object_ids=tuple(new_ids),
                           changed_object_ids=tuple(new_ids), summary=summary)
 

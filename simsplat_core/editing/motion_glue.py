@@ -84,9 +84,14 @@ def changed_motion(states: AgentStates, row: int, motion: Motion) -> bool:
     return bool(dxy > UNCHANGED_TOL or dv > UNCHANGED_TOL)
 
 
-def anchor_pose(states: AgentStates, row: int, step: int) -> AnchorPose:
-    """The pose of agent ``row`` at ``step`` as a placement anchor."""
-    return AnchorPose.from_states(states, row, step)
+def anchor_pose(draft: Draft, object_id: str, label: str, step: int, index: int) -> AnchorPose:
+    """Agent ``object_id`` at ``step`` as a placement anchor (``EditRefused`` when it is not there then)."""
+    try:
+        return AnchorPose.from_states(draft.states, draft.row_of(object_id), step, label)
+    except ValueError:
+        frame = int(draft.states.frame_idx[step])
+        raise EditRefused(f"{label} is not in the scene at frame {frame}, where the object is to be placed",
+                          reason="infeasible_placement", command_index=index) from None
 
 
 def resolve(draft: Draft, placement: Placement, asset: Asset, anchor: AnchorPose | None, step: int,
@@ -159,12 +164,11 @@ def describe_behaviour(behaviour: Behaviour | None) -> str:
     return ", ".join(parts)
 
 
-def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, placed: PlacedPose, offset_m: float,
-                  step: int, index: int) -> Motion:
-    """The motion of an inserted object placed at ``placed`` (moved ``offset_m`` along its heading: the k-th
-    object of a row), planned from ``step`` (module docstring)."""
+def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, placed: PlacedPose, step: int,
+                  index: int) -> Motion:
+    """The motion of an inserted object placed at ``placed``, planned from ``step`` (module docstring)."""
     heading = float(placed.heading)
-    xy = np.asarray(placed.xy, np.float64) + offset_m * np.array([np.cos(heading), np.sin(heading)])
+    xy = np.asarray(placed.xy, np.float64)
     steps = draft.states.num_steps
     if asset.category == "static":
         if behaviour is not None and not behaviour.is_empty:
@@ -188,25 +192,24 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     log = LogTrajectory.from_states(states, row)
     start = StartState.from_log(log, states.times)
     if placement is not None:
-        size = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
-        placed = _resolve_for_agent(draft, placement, states.categories[row], size, start.step, index)
+        placed = _resolve_for_agent(draft, placement, row, start.step, index)
         start = StartState(start.step, np.asarray(placed.xy, np.float64), float(placed.heading), start.speed)
     size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
     plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False)
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
-def _resolve_for_agent(draft: Draft, placement: Placement, category: str, size: tuple[float, float, float],
-                       step: int, index: int) -> PlacedPose:
-    ctx = draft.ctx
+def _resolve_for_agent(draft: Draft, placement: Placement, row: int, step: int, index: int) -> PlacedPose:
+    """Where ``placement`` moves agent ``row`` at ``step`` (its own box ignored when checking for room)."""
+    ctx, states = draft.ctx, draft.states
     anchor = None
     if placement.anchor is not None and not placement.anchor.is_ego:
         found = draft.grounder.ground(placement.anchor, removed=draft.gone, command_index=index, role="anchor")
-        anchor = anchor_pose(draft.states, draft.row_of(found.object_ids[0]), step)
-    kind = "static" if category not in ("vehicle", "pedestrian") else category
+        anchor = anchor_pose(draft, found.object_ids[0], draft.describe(found.node_ids[0]), step, index)
     try:
-        return resolve_placement(placement, category=kind, size=size, anchor=anchor, ego_pose=ctx.log.ego_poses[step],
-                                 lanes=ctx.lanes, map_ctx=ctx.map_ctx, frame=int(draft.states.frame_idx[step]),
-                                 occupied=draft.states)
+        return resolve_placement(placement, category=states.categories[row], size=tuple(states.size[row]),
+                                 anchor=anchor, ego_pose=ctx.log.ego_poses[step], lanes=ctx.lanes, map_ctx=ctx.map_ctx,
+                                 frame=int(states.frame_idx[step]), occupied=states,
+                                 ignore=(states.object_ids[row],))
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
