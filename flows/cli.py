@@ -381,29 +381,33 @@ def _print_edit(result, graph) -> None:
     from tasks.edit import edit_as_dict
 
     data = edit_as_dict(result, graph)
-    console.print(f"{result.seq_id}: {result.prompt!r}")
-    for k, command in enumerate(data["commands"]):
-        console.print(f"  command {k + 1}: {json.dumps(command, separators=(',', ':'))}", markup=False)
+    console.print(f"{result.seq_id}: {result.prompt!r}", soft_wrap=True)
+    if result.program is not None:
+        for k, command in enumerate(result.program.commands):
+            compact = command.model_dump(mode="json", exclude_defaults=True, exclude={"note"})
+            console.print(f"  command {k + 1}: {json.dumps(compact, separators=(',', ':'))}", markup=False,
+                          soft_wrap=True)
     if result.status != "succeeded":
-        console.print(f"[bold red]{result.status}[/bold red] ({result.reason}): {result.message}")
+        console.print(f"[bold red]{result.status}[/bold red] ({result.reason}): {result.message}", soft_wrap=True)
         return
     for grounded, change in zip(data["grounded"], data["changes"]):
         found = [f"{o} (node {n})" for o, n in zip(grounded["target_object_ids"], grounded["target_node_ids"])]
         anchors = [f"{o} (node {n})" for o, n in zip(grounded["anchor_object_ids"], grounded["anchor_node_ids"])]
         if found:
-            console.print(f"  grounded target: {', '.join(found)}", markup=False)
+            console.print(f"  grounded target: {', '.join(found)}", markup=False, soft_wrap=True)
         if anchors:
-            console.print(f"  grounded anchor: {', '.join(anchors)}", markup=False)
-        console.print(f"  changed: {change}", markup=False)
+            console.print(f"  grounded anchor: {', '.join(anchors)}", markup=False, soft_wrap=True)
+        console.print(f"  changed: {change}", markup=False, soft_wrap=True)
     validation = data["validation"]
     verdict = "[green]ok[/green]" if validation["ok"] else "[bold yellow]problems[/bold yellow]"
     console.print(f"validation of {validation['checked']} edited agent(s): {verdict}")
     for line in validation["failures"]:
-        console.print(f"  - {line}", markup=False)
+        console.print(f"  - {line}", markup=False, soft_wrap=True)
     total = result.bytes.get("total", 0)
     timing = ", ".join(f"{k} {v:.1f}" for k, v in result.seconds.items() if k != "total")
     console.print(f"edit {result.edit_id}{' (already stored)' if result.skipped else ''}: {result.edit_uri} "
-                  f"({total / 1e6:.2f} MB) in {result.seconds.get('total', 0.0):.1f} s ({timing})", markup=False)
+                  f"({total / 1e6:.2f} MB) in {result.seconds.get('total', 0.0):.1f} s ({timing})", markup=False,
+                  soft_wrap=True)
 
 
 @eval_app.command("grounding")

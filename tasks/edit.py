@@ -192,9 +192,9 @@ def run_edit(store_root: str, seq_id: str, prompt: str = "", *, commands_json: s
     store = ArtifactStore(store_root)
     run_id = run_id or DEFAULT_RUN_ID
     seconds: dict[str, float] = {}
-    started = time.perf_counter()
     loaded = loaded or load_edit_context(store, seq_id)
     seconds["load"] = loaded.seconds
+    started = time.perf_counter() - loaded.seconds  # the totals include loading
     ctx = loaded.ctx
 
     t = time.perf_counter()
