@@ -5,7 +5,7 @@
 
 Each frame composes the graph's Gaussians once (``SceneGraph.at``) and rasterizes every camera of one
 image size in one batch (``scene.render.render_composed``), with the exact per-pixel node ids of
-``SceneRender.node_id``. Pure torch/numpy, no I/O.
+``SceneRender.node_id`` composited in the same pass (``fused_ids``). Pure torch/numpy, no I/O.
 """
 
 from __future__ import annotations
@@ -74,7 +74,7 @@ def render_frame(graph: SceneGraph, frame_idx: int, views: Sequence[CameraView],
         c2w = torch.tensor(np.stack([views[i].cam_to_world for i in batch]), dtype=torch.float32)  # [C, 4, 4]
         Ks = torch.tensor(np.stack([views[i].K for i in batch]), dtype=torch.float32)  # [C, 3, 3]
         out = render_composed(composed, c2w, Ks, width, height, with_node_ids=with_node_ids, backend=backend,
-                              eps2d=graph.eps2d)
+                              eps2d=graph.eps2d, fused_ids=True)
         for j, i in enumerate(batch):
             rgb[i] = out.rgb[j].cpu().numpy().astype(np.float32)
             alpha[i] = out.alpha[j, ..., 0].cpu().numpy().astype(np.float32)
