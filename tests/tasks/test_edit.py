@@ -41,12 +41,34 @@ LANGUAGE_HASH = "1a9000000000000000000000000000000000000000000000000000000000caf
 FRAMES, CAMERAS = 6, 3
 
 
+@dataclasses.dataclass(frozen=True)
+class Target:
+    """A vehicle of the test world whose appearance caption no other object has: ``object_id``, ``words``."""
+
+    object_id: str
+    words: str
+
+
 @pytest.fixture(scope="module")
-def store_root(tmp_path_factory) -> str:
-    """The demo world's seed (a white van ``veh_02``) over 6 frames, 64 x 48 cameras, no pixels."""
+def world():
+    return generate_log(0, WorldConfig(num_frames=FRAMES, width=64, height=48, render_images=False))
+
+
+@pytest.fixture(scope="module")
+def target(world) -> Target:
+    captions = [o.attributes.get("caption_appearance", "") for o in world.objects]
+    for obj, caption in zip(world.objects, captions):
+        if obj.category == "vehicle" and caption and captions.count(caption) == 1:
+            return Target(obj.object_id, caption.split(" ", 1)[1])  # "a white sedan" -> "white sedan"
+    raise AssertionError("no vehicle with a unique caption in the test world")
+
+
+@pytest.fixture(scope="module")
+def store_root(tmp_path_factory, world) -> str:
+    """Seed 0 of the world over 6 frames, 64 x 48 cameras, no pixels."""
     root = tmp_path_factory.mktemp("edit_store")
     store = ArtifactStore(str(root))
-    log = generate_log(0, WorldConfig(num_frames=FRAMES, width=64, height=48, render_images=False))
+    log = world
     write_scene_log(store, log)
     graph = initial_graph(log, InitConfig(), set(range(FRAMES)))
     records = graph.to_records(f"{log.seq_id}/{SCENE_HASH}")
@@ -76,12 +98,12 @@ def _edit(store_root: str, *args: str) -> tuple[int, dict]:
     return result.exit_code, json.loads(lines[-1])
 
 
-def test_edit_stores_every_output_and_leaves_the_scene_alone(store_root):
+def test_edit_stores_every_output_and_leaves_the_scene_alone(store_root, target):
     root = Path(store_root)
     scene_before = _digest(root, "scenes") | _digest(root, "alignment") | _digest(root, "logs")
-    code, out = _edit(store_root, "--run-id", "r1", "remove the white van")
+    code, out = _edit(store_root, "--run-id", "r1", f"remove the {target.words}")
     assert code == 0, out
-    assert out["status"] == "succeeded" and out["grounded"][0]["target_object_ids"] == ["veh_02"]
+    assert out["status"] == "succeeded" and out["grounded"][0]["target_object_ids"] == [target.object_id]
     assert out["commands"][0]["op"] == "remove" and out["validation"]["ok"] is True
     store = ArtifactStore(store_root)
     rel = edit_dir("r1", "synth-000000", out["edit_id"])
@@ -94,7 +116,7 @@ def test_edit_stores_every_output_and_leaves_the_scene_alone(store_root):
     header = read_exr_header(store, f"{rel}/{renders[0]}")
     assert header["channels"] == ["R", "G", "B", "A", "id"] and header["format"] == ["float", "half"]
     trajectories = read_trajectories(store, "r1", "synth-000000", out["edit_id"])
-    assert "veh_02" not in set(trajectories.column("object_id").to_pylist())
+    assert target.object_id not in set(trajectories.column("object_id").to_pylist())
     assert "ego" in set(trajectories.column("object_id").to_pylist())
     manifest = read_edit_manifest(store, "r1", "synth-000000", out["edit_id"])
     assert manifest["bytes"]["total"] == out["bytes"]["total"] > 0
@@ -102,7 +124,7 @@ def test_edit_stores_every_output_and_leaves_the_scene_alone(store_root):
     after = _digest(root, "scenes") | _digest(root, "alignment") | _digest(root, "logs")
     assert after == scene_before
     # the same edit again is found, not re-rendered
-    code, again = _edit(store_root, "--run-id", "r1", "remove the white van")
+    code, again = _edit(store_root, "--run-id", "r1", f"remove the {target.words}")
     assert code == 0 and again["skipped"] is True and again["edit_id"] == out["edit_id"]
     assert len(read_edit_records(store, "r1")) == 1
 
@@ -140,13 +162,13 @@ def test_a_malformed_command_file_is_a_schema_error_naming_the_field(store_root,
     assert code == 2 and "not valid JSON" in out["message"]
 
 
-def test_the_stored_delta_rebuilds_the_edited_graph(store_root, tmp_path):
+def test_the_stored_delta_rebuilds_the_edited_graph(store_root, target):
     from tasks.edit import rebuild_edit, run_edit
 
     commands = json.dumps({"commands": [
         {"op": "insert", "asset": {"description": "orange traffic cones", "count": 2},
          "placement": {"relation": "in_lane", "distance_m": 12}},
-        {"op": "replace", "target": {"description": "the white van"}, "asset": {"description": "a yellow sedan"}}]})
+        {"op": "replace", "target": {"object_id": target.object_id}, "asset": {"description": "a yellow sedan"}}]})
     run = run_edit(store_root, "synth-000000", "cones and a yellow car", commands_json=commands, run_id="r4")
     assert run.status == "succeeded", run.message
     assert run.edited is not None and len(run.edited.delta.added) == 3
@@ -159,5 +181,5 @@ def test_the_stored_delta_rebuilds_the_edited_graph(store_root, tmp_path):
     assert delta_files == ["delta.json", "pose_tracks.parquet"]  # references, no Gaussians
     table = read_trajectories(ArtifactStore(store_root), "r4", "synth-000000", run.edit_id)
     sources = dict(zip(table.column("object_id").to_pylist(), table.column("source").to_pylist()))
-    assert sources["veh_02"] == "edited" and sources["inserted_00"] == "inserted" and sources["ego"] == "log"
+    assert sources[target.object_id] == "edited" and sources["inserted_00"] == "inserted" and sources["ego"] == "log"
     assert np.isin(["inserted_00", "inserted_01"], table.column("object_id").to_pylist()).all()
