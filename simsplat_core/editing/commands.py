@@ -93,7 +93,7 @@ class Placement(_Strict):
     anchor: TargetRef | None = Field(default=None, description="Reference object; None = the ego.")
     distance_m: float | None = Field(default=None, ge=0, le=300, description="Gap from the anchor (relation-specific).")
     lane: LaneChoice | None = Field(default=None, description="For in_lane: which lane relative to the anchor's.")
-    position: tuple[float, float, float] | None = Field(default=None, description="For absolute: ego-frame x, y, z (m).")
+    position: tuple[float, float, float] | None = Field(default=None, description="For absolute: ego x, y, z (m).")
     heading_deg: float | None = Field(default=None, ge=-360, le=360, description="Heading in the ego frame (deg, CCW).")
     frame: int | None = Field(default=None, ge=0, description="Frame the placement refers to (default: the first).")
 

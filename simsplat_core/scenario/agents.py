@@ -11,6 +11,7 @@ Frames: world frame of the log (metres, radians CCW from world +x). Steps are th
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -115,12 +116,15 @@ class AgentStates:
         ``z [T]`` default half the box height above ground), or replaced when ``object_id`` exists."""
         size = np.asarray(size, dtype=np.float64).reshape(3)
         z = np.full(self.num_steps, size[2] / 2.0) if z is None else np.asarray(z, dtype=np.float64)
-        row = dict(xy=np.asarray(xy, np.float64)[None], z=z[None], heading=np.asarray(heading, np.float64)[None],
-                   speed=np.asarray(speed, np.float64)[None], valid=np.asarray(valid, bool)[None], size=size[None])
+        row: dict[str, Any] = dict(xy=np.asarray(xy, np.float64)[None], z=z[None],
+                                   heading=np.asarray(heading, np.float64)[None],
+                                   speed=np.asarray(speed, np.float64)[None], valid=np.asarray(valid, bool)[None],
+                                   size=size[None])
         if object_id in self.object_ids:
             k = self.index(object_id)
-            arrays = {name: np.concatenate([getattr(self, name)[:k], value, getattr(self, name)[k + 1:]])
-                      for name, value in row.items()}
+            arrays: dict[str, Any] = {
+                name: np.concatenate([getattr(self, name)[:k], value, getattr(self, name)[k + 1:]])
+                for name, value in row.items()}
             return replace(self, categories=self.categories[:k] + (category,) + self.categories[k + 1:],
                            sources=self.sources[:k] + (source,) + self.sources[k + 1:],
                            node_ids=np.concatenate([self.node_ids[:k], [node_id], self.node_ids[k + 1:]]), **arrays)

@@ -3,7 +3,7 @@
 Vectorised with numpy, metres, world (or any common) frame:
 
 * polygon point tests, point-to-segment distances and convex hulls (used by ``map_context.py``);
-* oriented-box overlap by the separating-axis test, vectorised over frames (``footprints_overlap``;
+* oriented-box overlap by the separating-axis test, vectorised over frames and agent pairs (``footprints_overlap``;
   the world's population step rejects candidates with it);
 * signed distances of box corners to the drivable area's boundary (``corner_road_distances``,
   ``offroad``): positive inside the drivable area, negative outside.
@@ -62,34 +62,37 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
 def footprints_overlap(
     center_a: np.ndarray,
     heading_a: np.ndarray,
-    size_a: tuple[float, float],
+    size_a: tuple[float, float] | np.ndarray,
     center_b: np.ndarray,
     heading_b: np.ndarray,
-    size_b: tuple[float, float],
+    size_b: tuple[float, float] | np.ndarray,
     margin: float = 0.0,
 ) -> np.ndarray:
-    """Per-frame overlap of two oriented rectangles (separating-axis test).
+    """Per-frame overlap of two oriented rectangles (separating-axis test), broadcasting over leading axes.
 
     Args:
-        center_a, center_b: ``[T, 2]`` footprint centres.
-        heading_a, heading_b: ``[T]`` yaw of the length axis.
-        size_a, size_b: ``(length, width)``.
+        center_a, center_b: ``[..., 2]`` footprint centres (e.g. ``[T, 2]``, or ``[A, 1, T, 2]`` against
+            ``[1, B, T, 2]`` for every pair).
+        heading_a, heading_b: ``[...]`` yaw of the length axis.
+        size_a, size_b: ``(length, width)``, or ``[..., 2]`` arrays broadcasting like the headings.
         margin: clearance added to both half extents of ``a``.
 
     Returns:
-        ``[T]`` bool, true where the rectangles (``a`` grown by ``margin``) intersect.
+        ``[...]`` bool (the broadcast shape), true where the rectangles (``a`` grown by ``margin``) intersect.
     """
-    ha = np.array([size_a[0] / 2.0 + margin, size_a[1] / 2.0 + margin])
-    hb = np.array([size_b[0] / 2.0, size_b[1] / 2.0])
+    size_a = np.asarray(size_a, dtype=np.float64)
+    size_b = np.asarray(size_b, dtype=np.float64)
+    la, wa = size_a[..., 0] / 2.0 + margin, size_a[..., 1] / 2.0 + margin
+    lb, wb = size_b[..., 0] / 2.0, size_b[..., 1] / 2.0
     ua = np.stack([np.cos(heading_a), np.sin(heading_a)], axis=-1)
     va = np.stack([-np.sin(heading_a), np.cos(heading_a)], axis=-1)
     ub = np.stack([np.cos(heading_b), np.sin(heading_b)], axis=-1)
     vb = np.stack([-np.sin(heading_b), np.cos(heading_b)], axis=-1)
-    delta = center_b - center_a
-    separated = np.zeros(delta.shape[0], dtype=bool)
+    delta = np.asarray(center_b, dtype=np.float64) - np.asarray(center_a, dtype=np.float64)
+    separated = np.zeros(np.broadcast_shapes(delta.shape[:-1], ua.shape[:-1], ub.shape[:-1]), dtype=bool)
     for axis in (ua, va, ub, vb):
-        ra = ha[0] * np.abs(np.sum(ua * axis, -1)) + ha[1] * np.abs(np.sum(va * axis, -1))
-        rb = hb[0] * np.abs(np.sum(ub * axis, -1)) + hb[1] * np.abs(np.sum(vb * axis, -1))
+        ra = la * np.abs(np.sum(ua * axis, -1)) + wa * np.abs(np.sum(va * axis, -1))
+        rb = lb * np.abs(np.sum(ub * axis, -1)) + wb * np.abs(np.sum(vb * axis, -1))
         separated |= np.abs(np.sum(delta * axis, -1)) > ra + rb
     return ~separated
 
@@ -154,5 +157,24 @@ def offroad(
     drivable: tuple[np.ndarray, ...] | list[np.ndarray],
     tolerance_m: float = 0.0,
 ) -> np.ndarray:
-    """``[T]`` bool: some corner of the box lies more than ``tolerance_m`` outside the drivable area."""
-    return corner_road_distances(center, heading, size, drivable).min(axis=-1) < -tolerance_m
+    """``[T]`` bool: some corner of the box lies more than ``tolerance_m`` outside the drivable area.
+
+    Same answer as ``corner_road_distances(...).min(axis=-1) < -tolerance_m``; edge distances are computed
+    only for corners outside every polygon (polygons are skipped by their bounding boxes).
+    """
+    corners = box_footprints(center, heading, size)  # [T, 4, 2]
+    flat = corners.reshape(-1, 2)
+    outside = np.ones(len(flat), dtype=bool)
+    polys = [np.asarray(p, dtype=np.float64)[:, :2] for p in drivable]
+    for poly in polys:
+        near = outside & np.all((flat >= poly.min(axis=0)) & (flat <= poly.max(axis=0)), axis=1)
+        if near.any():
+            outside[near] &= ~points_in_polygon(flat[near], poly)
+    if tolerance_m > 0.0 and outside.any() and polys:
+        rows = np.flatnonzero(outside)
+        dist = np.full(len(rows), np.inf)
+        for poly in polys:
+            a, b = polygon_edges(poly)
+            dist = np.minimum(dist, segment_distances(flat[rows], a, b).min(axis=1))
+        outside[rows] = dist > tolerance_m
+    return np.asarray(outside.reshape(corners.shape[:-1]).any(axis=-1))

@@ -1,0 +1,224 @@
+"""Placement resolution on the synthetic intersection (seed 0: the ego drives +x in the right lane of a
+two-lane road) and on the real AV2 map: lanes, sides, distances, map areas, occupancy, refusals."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from simsplat_core.editing.commands import Placement
+from simsplat_core.editing.placement import (
+    LANE_AHEAD_M,
+    AnchorPose,
+    PlacedPose,
+    footprint,
+    place_row,
+    resolve_placement,
+)
+from simsplat_core.editing.result import EditRefused
+from simsplat_core.geometry import pose_from_yaw
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.geometry import footprints_overlap, points_in_polygon
+from simsplat_core.scenario.lane_graph import LaneGraph
+from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.world import WorldConfig, generate_log, layout_from_log
+
+CAR = (4.5, 1.9, 1.5)
+PERSON = (0.6, 0.6, 1.8)
+CONE = (0.4, 0.4, 0.7)
+AV2_LOG = Path("av2") / "sensor-log-7fab2350"
+
+
+@pytest.fixture(scope="module")
+def world():
+    log = generate_log(0, WorldConfig(render_images=False))
+    return {"log": log, "layout": layout_from_log(log), "ctx": MapContext.from_features(log.map_features),
+            "lanes": LaneGraph.from_features(log.map_features), "states": AgentStates.from_log(log)}
+
+
+def _place(world, placement: Placement, category: str = "vehicle", size=CAR, anchor: AnchorPose | None = None,
+           frame: int = 0, occupied: AgentStates | None = None) -> PlacedPose:
+    return resolve_placement(placement, category=category, size=size, anchor=anchor,
+                             ego_pose=world["log"].ego_poses[frame], lanes=world["lanes"], map_ctx=world["ctx"],
+                             frame=frame, occupied=occupied)
+
+
+def _lane_id(world, pose: PlacedPose) -> str:
+    assert pose.lane is not None
+    return world["lanes"].lanes[int(pose.lane.lane[0])].lane_id
+
+
+def _refused(world, placement: Placement, words: str, **kw) -> EditRefused:
+    with pytest.raises(EditRefused, match=words) as err:
+        _place(world, placement, **kw)
+    assert err.value.reason == "infeasible_placement"
+    return err.value
+
+
+def _empty_anchor(world, xy, heading: float, category: str = "vehicle", size=CAR) -> AnchorPose:
+    return AnchorPose(np.asarray(xy, float), heading, size, category, "anchor_1", size[2] / 2.0, "the white van")
+
+
+# ------------------------------------------------------------------------------------------ lanes
+def test_in_lane_placements_follow_the_lane_graph(world) -> None:
+    layout = world["layout"]
+    width = layout.lane_w("W")
+    ego_y = world["log"].ego_poses[0][1, 3]  # the ego drives the right (outer) lane, +x
+    same = _place(world, Placement(relation="in_lane", lane="same", distance_m=20.0))
+    assert same.xy == pytest.approx([20.0, ego_y], abs=0.05) and same.heading == pytest.approx(0.0, abs=1e-3)
+    assert same.area == "lane" and _lane_id(world, same).endswith("_1") and same.z == pytest.approx(CAR[2] / 2)
+    left = _place(world, Placement(relation="in_lane", lane="left", distance_m=20.0))
+    assert left.xy == pytest.approx([20.0, ego_y + width], abs=0.05) and left.heading == pytest.approx(0.0, abs=1e-3)
+    oncoming = _place(world, Placement(relation="in_lane", lane="opposite", distance_m=30.0))
+    assert oncoming.xy[0] == pytest.approx(30.0, abs=0.6) and oncoming.xy[1] > ego_y + 1.5 * width
+    assert abs(abs(oncoming.heading) - np.pi) < 1e-3  # facing the ego
+    default = _place(world, Placement(relation="in_lane"))
+    assert default.xy[0] == pytest.approx(LANE_AHEAD_M, abs=0.05)
+    err = _refused(world, Placement(relation="in_lane", lane="right"), "no lane to the right of the ego vehicle")
+    assert "right" in str(err)
+
+
+def test_a_car_beside_its_anchor_lands_in_the_lane_on_that_side(world) -> None:
+    layout = world["layout"]
+    width = layout.lane_w("W")
+    ego_y = world["log"].ego_poses[0][1, 3]
+    left = _place(world, Placement(relation="left_of"))
+    assert left.xy == pytest.approx([0.0, ego_y + width], abs=0.05) and left.area == "lane"
+    ahead = _place(world, Placement(relation="in_front_of", distance_m=5.0))
+    assert ahead.xy[1] == pytest.approx(ego_y, abs=0.05)
+    assert ahead.xy[0] - CAR[0] / 2 - 4.8 / 2 == pytest.approx(5.0, abs=0.05)  # 5 m between the bumpers
+    behind = _place(world, Placement(relation="behind"))
+    assert behind.xy[0] < -4.0 and behind.xy[1] == pytest.approx(ego_y, abs=0.05)
+    # the ego's right is the kerbside parking strip: no lane there
+    _refused(world, Placement(relation="right_of"), "no lane to the right of the ego vehicle")
+    # next_to: right first, else left
+    beside = _place(world, Placement(relation="next_to"))
+    assert beside.xy == pytest.approx(left.xy, abs=1e-6)
+
+
+def test_people_and_objects_beside_an_anchor_keep_the_gap(world) -> None:
+    layout = world["layout"]
+    van_xy = layout.arm_point("W", 50.0, layout.lane_offset("W", True, 0))
+    van = _empty_anchor(world, van_xy, 0.0, size=(5.5, 2.1, 2.4))
+    person = _place(world, Placement(relation="right_of", distance_m=2.0), "pedestrian", PERSON, anchor=van)
+    assert person.xy[1] - van_xy[1] == pytest.approx(-(2.1 / 2 + 2.0 + PERSON[1] / 2))
+    assert person.xy[0] == pytest.approx(van_xy[0]) and person.area == "road"  # in the next lane
+    _refused(world, Placement(relation="in_lane", lane="left"), "no lane to the left of the white van", anchor=van)
+    oncoming = _place(world, Placement(relation="left_of"), anchor=van)  # left of the inner lane: oncoming traffic
+    assert oncoming.xy[1] - van_xy[1] == pytest.approx(layout.lane_w("W"), abs=0.05)
+    assert abs(abs(oncoming.heading) - np.pi) < 1e-3
+    cone = _place(world, Placement(relation="behind"), "static", CONE, anchor=van)
+    assert van_xy[0] - cone.xy[0] == pytest.approx(5.5 / 2 + 3.0 + CONE[0] / 2)
+    # the z follows the anchor's ground
+    assert cone.z == pytest.approx(van.z - 2.4 / 2 + CONE[2] / 2)
+
+
+# ------------------------------------------------------------------------------------------ map areas
+def test_map_area_rules_per_category(world) -> None:
+    ctx = world["ctx"]
+    _refused(world, Placement(relation="on_sidewalk"), "cannot place a car on the sidewalk")
+    walker = _place(world, Placement(relation="on_sidewalk"), "pedestrian", PERSON)
+    corners = footprint(walker, PERSON)
+    assert walker.area == "sidewalk"
+    assert any(points_in_polygon(corners, poly).all() for poly in ctx.sidewalks)
+    crossing = _place(world, Placement(relation="on_crosswalk"), "pedestrian", PERSON)
+    assert crossing.area == "crosswalk" and ctx.facts(crossing.xy[None], np.zeros(1)).in_crosswalk[0]
+    assert abs(np.sin(crossing.heading)) > 0.99  # along the crosswalk, across the road
+    car_on_cw = _place(world, Placement(relation="on_crosswalk"))
+    assert car_on_cw.area == "lane" and ctx.facts(car_on_cw.xy[None], np.zeros(1)).in_crosswalk[0]
+    assert car_on_cw.heading == pytest.approx(0.0, abs=1e-3)  # in a lane running the ego's way
+    cone = _place(world, Placement(relation="on_road", distance_m=15.0), "static", CONE)
+    assert cone.xy == pytest.approx([15.0, 0.0], abs=0.05) and cone.area == "road"
+    # a car "at" a spot on the sidewalk (absolute, 11 m to the ego's right) is refused; a person may go there
+    _refused(world, Placement(relation="absolute", position=(5.0, -6.0, 0.0)), "cannot place a car on the sidewalk")
+    assert _place(world, Placement(relation="absolute", position=(5.0, -6.0, 0.0)), "pedestrian",
+                  PERSON).area == "sidewalk"
+    _refused(world, Placement(relation="absolute", position=(5.0, -30.0, 0.0)), "off the road and the sidewalk",
+             category="pedestrian", size=PERSON)
+
+
+def test_absolute_positions_are_in_the_ego_frame_at_the_frame(world) -> None:
+    log = world["log"]
+    frame = 39  # the ego has turned by then
+    ego = log.ego_poses[frame]
+    yaw = np.arctan2(ego[1, 0], ego[0, 0])
+    cone = _place(world, Placement(relation="absolute", position=(8.0, 0.0, 0.0), heading_deg=90.0, frame=frame),
+                  "static", CONE, frame=frame)
+    np.testing.assert_allclose(cone.xy, (ego @ np.array([8.0, 0.0, 0.0, 1.0]))[:2])
+    assert np.angle(np.exp(1j * (cone.heading - yaw - np.pi / 2))) == pytest.approx(0.0, abs=1e-9)
+    assert cone.z == pytest.approx(ego[2, 3] + CONE[2] / 2)
+    car = _place(world, Placement(relation="absolute", position=(10.0, 0.3, 0.0), frame=frame), frame=frame)
+    m = world["lanes"].nearest(car.xy[None])
+    assert m.distance[0] < 1e-6 and car.area == "lane"  # snapped onto the lane, along it
+    assert abs(np.angle(np.exp(1j * (car.heading - yaw)))) < np.deg2rad(30)
+
+
+# ------------------------------------------------------------------------------------------ occupancy
+def test_occupied_spots_are_nudged_or_refused_naming_the_object(world) -> None:
+    st = world["states"]
+    row = next(r for r in range(1, st.num_agents) if st.categories[r] == "vehicle" and st.valid[r, 0])
+    other = st.object_ids[row]
+    xy, h = st.xy[row, 0], st.heading[row, 0]
+    ego = world["log"].ego_poses[0]
+    local = np.linalg.inv(ego) @ np.r_[xy, 0.0, 1.0]
+    on_top = Placement(relation="absolute", position=(float(local[0]), float(local[1]), 0.0))
+    err = _refused(world, on_top, f"the spot is taken by vehicle '{other}' at frame 0", occupied=st)
+    assert "no free spot within" in str(err)
+    # a spot half a car length off is nudged clear along the lane, and says so
+    lane_dir = np.array([np.cos(h), np.sin(h)])
+    near = xy + 0.6 * st.size[row, 0] * lane_dir + 0.2 * np.array([-lane_dir[1], lane_dir[0]])
+    local = np.linalg.inv(ego) @ np.r_[near, 0.0, 1.0]
+    nudged = _place(world, Placement(relation="absolute", position=(float(local[0]), float(local[1]), 0.0)),
+                    occupied=st)
+    assert other in nudged.note and "nudged" in nudged.note
+    assert not footprints_overlap(nudged.xy[None], np.array([nudged.heading]), CAR[:2], xy[None], np.array([h]),
+                                  st.size[row, :2])[0]
+    # without occupancy the same spot is taken as is
+    assert _place(world, Placement(relation="absolute", position=(float(local[0]), float(local[1]), 0.0))).note == ""
+
+
+def test_a_row_of_cones_along_the_lane(world) -> None:
+    first = _place(world, Placement(relation="in_lane", distance_m=12.0), "static", CONE)
+    row = place_row(first, count=4, spacing_m=1.6, size=CONE, lanes=world["lanes"])
+    gaps = np.linalg.norm(np.diff(np.array([p.xy for p in row]), axis=0), axis=1)
+    np.testing.assert_allclose(gaps, CONE[0] + 1.6, atol=1e-6)
+    assert all(abs(p.xy[1] - first.xy[1]) < 1e-6 for p in row)
+
+
+# ------------------------------------------------------------------------------------------ AV2
+@pytest.mark.shared_data
+def test_av2_lane_placements(shared_data: Path) -> None:
+    from simsplat_core.data import load_av2_log
+
+    log_dir = shared_data / AV2_LOG
+    if not log_dir.exists():
+        pytest.skip("AV2 sample absent")
+    log = load_av2_log(log_dir)
+    lanes, ctx = LaneGraph.from_features(log.map_features), MapContext.from_features(log.map_features)
+    states = AgentStates.from_log(log)
+    placed = 0
+    for frame in (0, 50, 100, 150):
+        ego = log.ego_poses[frame]
+        try:
+            pose = resolve_placement(Placement(relation="in_lane", distance_m=20.0), category="vehicle", size=CAR,
+                                     anchor=None, ego_pose=ego, lanes=lanes, map_ctx=ctx, frame=frame,
+                                     occupied=states)
+        except EditRefused as err:  # e.g. the spot is taken: the message names the object
+            assert err.reason == "infeasible_placement" and "taken by" in str(err)
+            continue
+        m = lanes.nearest(pose.xy[None], np.array([pose.heading]), align_deg=10.0)
+        assert m.distance[0] < 0.05 and pose.area == "lane"
+        ahead = np.linalg.inv(ego) @ np.r_[pose.xy, ego[2, 3], 1.0]
+        # 20 m along the ego's lane: straight ahead, or less far as the crow flies where the lane turns
+        assert ahead[0] > 5.0 and 12.0 < np.hypot(ahead[0], ahead[1]) <= 20.5
+        placed += 1
+    assert placed >= 2
+    with pytest.raises(EditRefused, match="this map has no sidewalks"):
+        resolve_placement(Placement(relation="on_sidewalk"), category="pedestrian", size=PERSON, anchor=None,
+                          ego_pose=log.ego_poses[0], lanes=lanes, map_ctx=ctx, frame=0, occupied=None)
+    anchor_pose = pose_from_yaw(0.0, 0.0, 0.0, 0.0)
+    assert resolve_placement(Placement(relation="on_road", distance_m=10.0), category="static", size=CONE,
+                             anchor=None, ego_pose=anchor_pose, lanes=lanes, map_ctx=ctx, frame=0,
+                             occupied=None).area == "road"
