@@ -2,8 +2,8 @@
 
 * :func:`resolve` -- a command's placement as a pose (``editing.placement.resolve_placement``);
 * :func:`plan_inserted` -- how an inserted object moves: vehicles drive along their lane at a sensible speed
-  (:data:`~simsplat_core.editing.motion_requests.DEFAULT_CRUISE_MPS`) unless told otherwise (an absolute speed
-  of 0 parks them), pedestrians walk (:data:`~simsplat_core.editing.motion_requests.WALK_MPS`) along the
+  (:data:`~simsplat_core.editing.motion_requests.DEFAULT_CRUISE_MPS`, keeping a gap to the traffic ahead)
+  unless told otherwise (an absolute speed of 0 parks them), pedestrians walk (:data:`~simsplat_core.editing.motion_requests.WALK_MPS`) along the
   sidewalk or cross when told, static objects stand still;
 * :func:`plan_modified` -- a target's new motion from its log trajectory (``editing.motion_controller``);
 * :class:`Motion` -- the result on the step grid, and :func:`changed_motion` (does it differ from the log?).
@@ -29,6 +29,7 @@ from simsplat_core.editing.motion_requests import (
     StartState,
     VehicleMotionRequest,
     motion_kind,
+    traffic_from_states,
 )
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
@@ -125,15 +126,19 @@ def _start_speed(behaviour: Behaviour, cruise: float) -> float:
 
 
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
-          log: LogTrajectory | None, index: int, label: str, backfill: bool) -> PlannedTrajectory:
+          log: LogTrajectory | None, index: int, label: str, backfill: bool, object_id: str | None) -> PlannedTrajectory:
+    """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
+    current trajectories: the log, or what earlier commands made of them)."""
     ctx, states = draft.ctx, draft.states
     stop_behind = _other(draft, behaviour.stop.behind if behaviour.stop else None, index, "object to stop behind")
     try:
         if kind == VEHICLE:
             leader = _other(draft, behaviour.follow, index, "agent to follow")
+            exclude = tuple(o for o in (object_id, leader.object_id if leader else None) if o is not None)
             request = VehicleMotionRequest.from_behaviour(
                 behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
-                leader=leader, stop_behind=stop_behind, backfill=backfill, label=label)
+                leader=leader, stop_behind=stop_behind, traffic=traffic_from_states(states, exclude),
+                backfill=backfill, label=label)
             return plan_vehicle(request, ctx.lanes, ctx.map_ctx)
         ped = PedestrianMotionRequest.from_behaviour(
             behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
@@ -179,7 +184,8 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     kind = motion_kind(asset.category, asset.caption)
     cruise = DEFAULT_CRUISE_MPS if kind == VEHICLE else WALK_MPS
     start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
-    plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0)
+    plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
+                 object_id=None)
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
@@ -195,7 +201,8 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
         placed = _resolve_for_agent(draft, placement, row, start.step, index)
         start = StartState(start.step, np.asarray(placed.xy, np.float64), float(placed.heading), start.speed)
     size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
-    plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False)
+    plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
+                 object_id=states.object_ids[row])
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
