@@ -358,7 +358,7 @@ def edit(
     task = bar.add_task(f"render {seq}", total=None) if bar is not None else None
 
     def progress(done: int, total: int) -> None:
-        if bar is not None:
+        if bar is not None and task is not None:
             bar.update(task, completed=done, total=total)
 
     if bar is not None:

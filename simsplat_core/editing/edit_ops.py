@@ -220,8 +220,7 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
     placement = command.placement or _default_placement(asset.category)
     anchor_ids: tuple[int, ...] = ()
     anchor = None
-    step = draft.states.frame_idx.searchsorted(placement.frame or 0)
-    step = int(min(step, draft.states.num_steps - 1))
+    step = min(int(np.searchsorted(draft.states.frame_idx, placement.frame or 0)), draft.states.num_steps - 1)
     if placement.anchor is not None and not placement.anchor.is_ego:
         found = draft.grounder.ground(placement.anchor, removed=draft.gone, command_index=index, role="anchor")
         anchor_ids = found.node_ids[:1]

@@ -2,9 +2,9 @@
 
 * :func:`resolve` -- a command's placement as a pose (``editing.placement.resolve_placement``);
 * :func:`plan_inserted` -- how an inserted object moves: vehicles drive along their lane at a sensible speed
-  (:data:`~simsplat_core.editing.motion_requests.DEFAULT_CRUISE_MPS`, keeping a gap to the traffic ahead)
-  unless told otherwise (an absolute speed of 0 parks them), pedestrians walk (:data:`~simsplat_core.editing.motion_requests.WALK_MPS`) along the
-  sidewalk or cross when told, static objects stand still;
+  (``motion_requests.DEFAULT_CRUISE_MPS``, keeping a gap to the traffic ahead) unless told otherwise (an
+  absolute speed of 0 parks them), pedestrians walk (``motion_requests.WALK_MPS``) along the sidewalk or
+  cross when told, static objects stand still;
 * :func:`plan_modified` -- a target's new motion from its log trajectory (``editing.motion_controller``);
 * :class:`Motion` -- the result on the step grid, and :func:`changed_motion` (does it differ from the log?).
 """
@@ -126,7 +126,8 @@ def _start_speed(behaviour: Behaviour, cruise: float) -> float:
 
 
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
-          log: LogTrajectory | None, index: int, label: str, backfill: bool, object_id: str | None) -> PlannedTrajectory:
+          log: LogTrajectory | None, index: int, label: str, backfill: bool,
+          object_id: str | None) -> PlannedTrajectory:
     """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
     current trajectories: the log, or what earlier commands made of them)."""
     ctx, states = draft.ctx, draft.states
