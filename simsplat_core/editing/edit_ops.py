@@ -204,10 +204,15 @@ def replace(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
                           summary="; ".join(lines))
 
 
+#: Where an insert without a placement goes: ahead of the ego, where its front cameras see it.
+DEFAULT_AHEAD_M = 12.0
+
+
 def _default_placement(category: str) -> Placement:
+    """Pedestrians on the sidewalk, everything else in the ego lane, :data:`DEFAULT_AHEAD_M` ahead."""
     if category == "pedestrian":
-        return Placement(relation="on_sidewalk")
-    return Placement(relation="in_lane", lane="same")
+        return Placement(relation="on_sidewalk", distance_m=DEFAULT_AHEAD_M)
+    return Placement(relation="in_lane", lane="same", distance_m=DEFAULT_AHEAD_M)
 
 
 def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:

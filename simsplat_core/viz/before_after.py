@@ -19,7 +19,7 @@ import numpy as np
 
 from simsplat_core.viz.images import to_uint8
 
-OUTLINE = (255, 255, 0)
+OUTLINE = (255, 0, 255)  # magenta: stands out on every car and garment colour of the world
 LABEL_H = 18
 GAP = 4
 

@@ -7,7 +7,7 @@ import pytest
 
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.types import MapFeature
-from simsplat_core.viz.before_after import FramePair, before_after_picture, pick_views, sample_steps
+from simsplat_core.viz.before_after import OUTLINE, FramePair, before_after_picture, pick_views, sample_steps
 from simsplat_core.viz.bev import EDITED_COLOR, INSERTED_COLOR, REMOVED_COLOR, edit_bev
 
 T = 20
@@ -70,7 +70,7 @@ def test_before_after_puts_original_above_edited():
     blue_rows = np.flatnonzero(np.all(img == (0, 0, 255), axis=-1).any(axis=1))
     assert red_rows.size == 16 and blue_rows.size == 16 and red_rows.max() < blue_rows.min()
     assert _has(img, (255, 0, 0)) == 2 * 16 * 24  # the original row untouched
-    outline = np.flatnonzero(np.all(img == (255, 255, 0), axis=-1).any(axis=1))
+    outline = np.flatnonzero(np.all(img == OUTLINE, axis=-1).any(axis=1))
     assert outline.size and outline.min() >= blue_rows.min()  # the edited object outlined in the edited row
     with pytest.raises(ValueError, match="differ"):
         before_after_picture([FramePair("f0", red, blue[:8])])
