@@ -215,6 +215,19 @@ def _default_placement(category: str) -> Placement:
     return Placement(relation="in_lane", lane="same", distance_m=DEFAULT_AHEAD_M)
 
 
+def _where(placement: Placement, anchor: str) -> str:
+    """The placement in words ("in the same lane 12 m ahead of the ego", "left of veh_02 (node 16): ...")."""
+    gap = f"{placement.distance_m:g} m " if placement.distance_m is not None else ""
+    rel = placement.relation
+    if rel == "absolute":
+        return f"at {tuple(round(v, 2) for v in placement.position or ())} in the ego frame"
+    if rel == "in_lane":
+        return f"in the {placement.lane or 'same'} lane {gap}ahead of {anchor}"
+    if rel.startswith("on_"):
+        return f"{rel.replace('_', ' the ', 1)} {gap}{'ahead of' if gap else 'near'} {anchor}"
+    return f"{gap}{rel.replace('_', ' ')} {anchor}"
+
+
 def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
     """Add the asset (a row of ``count``) at the placement, moving as the behaviour says (module docstring)."""
     assert command.asset is not None
@@ -247,7 +260,7 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
         new_ids.append(object_id)
         lines.append(f"{object_id} (node {node_id}, {placed.area}{', ' + placed.note if placed.note else ''}, "
                      f"{motion.description})")
-    where = placement.relation.replace("_", " ") + (f" {draft.describe(anchor_ids[0])}" if anchor_ids else "")
+    where = _where(placement, draft.describe(anchor_ids[0]) if anchor_ids else "the ego")
     summary = f"inserted {asset.caption} (asset {asset.asset_id}) {where} as {'; '.join(lines)}"
     return CommandOutcome(command, anchor_node_ids=anchor_ids, new_object_ids=tuple(new_ids),
                           changed_object_ids=tuple(new_ids), summary=summary)
