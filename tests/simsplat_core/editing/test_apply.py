@@ -232,3 +232,31 @@ def test_without_a_bank_inserts_are_refused_naming_the_command(edit_log, edit_gr
     with pytest.raises(EditRefused, match="simsplat assets build") as info:
         apply_edit(bare, _program({"op": "insert", "asset": {"description": "a yellow sedan"}}))
     assert info.value.reason == "no_asset"
+
+
+def test_insert_a_pedestrian_walks_on_the_sidewalk(ctx):
+    from simsplat_core.scene.nodes import NonRigidNode
+
+    edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a pedestrian in a red top",
+                                                                  "category": "pedestrian"},
+                                       "placement": {"relation": "on_sidewalk", "distance_m": 10}}))
+    row = edited.states.index("inserted_00")
+    valid = edited.states.valid[row]
+    assert edited.states.speed[row][valid].max() > 0.8  # walks by default
+    first = int(np.argmax(valid))
+    facts = ctx.map_ctx.facts(edited.states.xy[row, first:first + 1], edited.states.heading[row, first:first + 1])
+    assert facts.on_sidewalk.all()
+    (added,) = edited.delta.added
+    node = edited.graph.node(added.node_id)
+    assert isinstance(node, NonRigidNode) and added.arc_length is not None  # the gait follows the new path
+
+
+def test_editor_parses_and_applies_a_prompt(ctx):
+    from simsplat_core.editing.apply import Editor
+
+    edited = Editor(ctx).edit("remove the white van")
+    assert edited.prompt == "remove the white van"
+    assert edited.delta.removed_node_ids == (_node(ctx, VAN),)
+    with pytest.raises(EditRefused) as info:
+        Editor(ctx).edit("paint the sky green")
+    assert info.value.reason in ("unsupported", "not_found")
