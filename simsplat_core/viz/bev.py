@@ -4,8 +4,8 @@
 
 World frame (the log's first ego pose), x up, y to the left, equal scale; the view is fitted to the ego's
 path and the paths of every changed agent (with a margin). Agents whose ``source`` is ``"edited"`` are
-drawn orange (old path dashed grey, new path solid), ``"inserted"`` cyan, removed agents (in ``before``
-but not in ``after``) red with a cross; unchanged agents in their category colour, the ego yellow. Dots
+drawn orange (old path dashed grey, new path solid, the box filled at the drawn step and outlined where it
+ends), ``"inserted"`` cyan, removed agents (in ``before`` but not in ``after``) red with a cross; unchanged agents in their category colour, the ego yellow. Dots
 on the new paths mark every second. Pure numpy + OpenCV.
 """
 
@@ -176,6 +176,9 @@ def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: Ag
         for p in view(after.xy[r][ticks]):
             cv2.circle(canvas, (int(p[0]), int(p[1])), 2, color, -1, cv2.LINE_AA)
         k = step if after.valid[r, step] else int(np.argmax(after.valid[r]))
+        last = int(after.num_steps - 1 - np.argmax(after.valid[r][::-1]))
+        if last != k:  # where it ends up: outline only
+            cv2.polylines(canvas, [footprint(after, r, last)], True, color, 1, cv2.LINE_AA)
         box = footprint(after, r, k)
         cv2.fillPoly(canvas, [box], tuple(int(c * 0.5) for c in color))
         cv2.polylines(canvas, [box], True, color, 1, cv2.LINE_AA)
