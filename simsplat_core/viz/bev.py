@@ -5,8 +5,8 @@
 World frame (the log's first ego pose), x up, y to the left, equal scale; the view is fitted to the ego's
 path and the paths of every changed agent (with a margin). Agents whose ``source`` is ``"edited"`` are
 drawn orange (old path dashed grey, new path solid, the box filled at the drawn step and outlined where it
-ends), ``"inserted"`` cyan, removed agents (in ``before`` but not in ``after``) red with a cross; unchanged agents in their category colour, the ego yellow. Dots
-on the new paths mark every second. Pure numpy + OpenCV.
+ends), ``"inserted"`` cyan, removed agents (in ``before`` but not in ``after``) red with a cross; unchanged
+agents in their category colour, the ego yellow. Dots on the new paths mark every second. Pure numpy + OpenCV.
 """
 
 from __future__ import annotations
