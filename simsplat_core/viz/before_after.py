@@ -48,14 +48,23 @@ def sample_steps(active: np.ndarray, count: int = 4) -> list[int]:
 
 
 def pick_views(pixels: np.ndarray, count: int = 4, min_pixels: int = 30) -> list[tuple[int, int]]:
-    """``(frame row, camera)`` of up to ``count`` views that show the edit: frames where some camera sees at least
-    ``min_pixels`` changed pixels (``pixels [F, C]`` counts), spread evenly over them, each in its busiest
-    camera. ``[]`` when no frame shows the edit."""
+    """``(frame row, camera)`` of up to ``count`` views that show the edit best: among frames where some camera
+    sees at least ``min_pixels`` changed pixels (``pixels [F, C]`` counts), the ones with the most changed
+    pixels, kept at least ``F / (2 count)`` frames apart so the picture spans the edit, each in its busiest
+    camera, in time order. ``[]`` when no frame shows the edit."""
     pixels = np.asarray(pixels)
-    shown = pixels.max(axis=1) >= min_pixels
-    if not shown.any():
+    best = pixels.max(axis=1)  # [F]
+    shown = np.flatnonzero(best >= min_pixels)
+    if shown.size == 0:
         return []
-    return [(row, int(np.argmax(pixels[row]))) for row in sample_steps(shown, count)]
+    min_gap = max(1, pixels.shape[0] // (2 * count))
+    chosen: list[int] = []
+    for row in shown[np.argsort(-best[shown], kind="stable")]:
+        if all(abs(int(row) - c) >= min_gap for c in chosen):
+            chosen.append(int(row))
+        if len(chosen) == count:
+            break
+    return [(row, int(np.argmax(pixels[row]))) for row in sorted(chosen)]
 
 
 def _panel(image: np.ndarray, mask: np.ndarray | None, scale: float) -> np.ndarray:

@@ -53,7 +53,11 @@ def test_sample_steps_spread_over_the_active_steps():
     pixels = np.zeros((10, 3), int)
     pixels[2:8, 1] = 50
     pixels[4, 2] = 80
-    assert pick_views(pixels, 3) == [(2, 1), (4, 2), (7, 1)]  # frames showing the edit, busiest camera
+    assert pick_views(pixels, 3) == [(2, 1), (3, 1), (4, 2)]  # biggest views (ties: earliest)
+    approaching = np.zeros((40, 2), int)
+    approaching[:, 0] = np.arange(40) * 10  # an inserted car that grows in view
+    views = pick_views(approaching, 4)
+    assert [row for row, _ in views] == [24, 29, 34, 39]  # the largest views, at least 40 / 8 = 5 frames apart
     assert pick_views(np.full((10, 3), 5), 3) == []  # too few pixels anywhere
 
 
