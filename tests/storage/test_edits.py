@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -250,16 +251,18 @@ def _append_many(root: str, edit_id: str, n: int) -> None:
 
 
 def test_concurrent_appends_lose_no_row(tmp_path):
-    """Two processes appending at once: the store's lock serialises the read-modify-write."""
-    import multiprocessing
+    """Two processes appending at once: the store's lock serialises the read-modify-write. (Fresh interpreters,
+    not forks: a fork of the test process inherits its threads and servers.)"""
+    import subprocess
+    import sys
 
-    ctx = multiprocessing.get_context("fork")
-    workers = [ctx.Process(target=_append_many, args=(str(tmp_path), f"e{k}", 8)) for k in range(2)]
-    for w in workers:
-        w.start()
-    for w in workers:
-        w.join(60)
-    assert [w.exitcode for w in workers] == [0, 0]
+    repo = str(Path(__file__).resolve().parents[2])
+    script = ("import sys; from tests.storage.test_edits import _append_many; "
+              "_append_many(sys.argv[1], sys.argv[2], 8)")
+    workers = [subprocess.Popen([sys.executable, "-c", script, str(tmp_path), f"e{k}"], cwd=repo,
+                                stderr=subprocess.PIPE, text=True) for k in range(2)]
+    errors = [w.communicate(timeout=120)[1] for w in workers]
+    assert [w.returncode for w in workers] == [0, 0], errors
     rows = read_edit_records(ArtifactStore(str(tmp_path)), "run1")
     assert len(rows) == 16
     for k in range(2):
