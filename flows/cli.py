@@ -316,6 +316,100 @@ def query(
         console.print(f"frame {answer.frame}: {answer.png_uri}")
 
 
+@app.command()
+def edit(
+    store: Annotated[str, typer.Option(help="Artifact store root holding the sequence's aligned scene "
+                                       "(and an asset bank for inserts and replacements).")],
+    seq: Annotated[str, typer.Option(help="Sequence to edit.")],
+    prompt: Annotated[str | None, typer.Argument(help='What to change, e.g. "remove the white van and make the '
+                                                 'red car stop" (optional with --commands).')] = None,
+    commands: Annotated[Path | None, typer.Option(help="EditProgram JSON (or a list of EditCommands) to apply "
+                                                  "instead of parsing the prompt.")] = None,
+    run_id: Annotated[str | None, typer.Option(help="Run the edit belongs to: edits/<run_id>/ (default: "
+                                               "'manual').")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout (for scripts): status, "
+                                          "edit directory, commands, grounded object ids, validation.")] = False,
+) -> None:
+    """Edit a stored scene from language (or a command file): ground, apply, validate, render every frame and
+    camera, and store the edit under STORE/edits/<run_id>/<seq>/<edit_id>/. Exit code 1: refused; 2: bad
+    command file."""
+    from flows.bars import new_bar, want_bar
+    from storage import ArtifactStore, list_logs
+    from tasks.edit import edit_as_dict, load_edit_context, run_edit
+
+    if prompt is None and commands is None:
+        raise typer.BadParameter("give a PROMPT or --commands FILE.json", param_hint="PROMPT")
+    artifacts = ArtifactStore(store)
+    available = list_logs(artifacts)
+    if seq not in available:
+        raise typer.BadParameter(f"no complete log {seq!r} in {artifacts.uri('logs')}; available: {available}",
+                                 param_hint="--seq")
+    commands_json = None
+    if commands is not None:
+        try:
+            commands_json = commands.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise typer.BadParameter(f"cannot read {commands}: {exc}", param_hint="--commands") from exc
+    try:
+        loaded = load_edit_context(artifacts, seq)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    bar = new_bar() if want_bar() and not as_json else None
+    task = bar.add_task(f"render {seq}", total=None) if bar is not None else None
+
+    def progress(done: int, total: int) -> None:
+        if bar is not None and task is not None:
+            bar.update(task, completed=done, total=total)
+
+    if bar is not None:
+        bar.start()
+    try:
+        result = run_edit(store, seq, prompt or "", commands_json=commands_json, commands_source=str(commands),
+                          run_id=run_id, loaded=loaded, progress=progress)
+    finally:
+        if bar is not None:
+            bar.stop()
+    code = 0 if result.status == "succeeded" else 2 if result.reason == "invalid_command" else 1
+    if as_json:
+        typer.echo(json.dumps(edit_as_dict(result, loaded.ctx.graph), allow_nan=False))
+        raise typer.Exit(code)
+    _print_edit(result, loaded.ctx.graph)
+    raise typer.Exit(code)
+
+
+def _print_edit(result, graph) -> None:
+    from tasks.edit import edit_as_dict
+
+    data = edit_as_dict(result, graph)
+    console.print(f"{result.seq_id}: {result.prompt!r}", soft_wrap=True)
+    if result.program is not None:
+        for k, command in enumerate(result.program.commands):
+            compact = command.model_dump(mode="json", exclude_defaults=True, exclude={"note"})
+            console.print(f"  command {k + 1}: {json.dumps(compact, separators=(',', ':'))}", markup=False,
+                          soft_wrap=True)
+    if result.status != "succeeded":
+        console.print(f"[bold red]{result.status}[/bold red] ({result.reason}): {result.message}", soft_wrap=True)
+        return
+    for grounded, change in zip(data["grounded"], data["changes"]):
+        found = [f"{o} (node {n})" for o, n in zip(grounded["target_object_ids"], grounded["target_node_ids"])]
+        anchors = [f"{o} (node {n})" for o, n in zip(grounded["anchor_object_ids"], grounded["anchor_node_ids"])]
+        if found:
+            console.print(f"  grounded target: {', '.join(found)}", markup=False, soft_wrap=True)
+        if anchors:
+            console.print(f"  grounded anchor: {', '.join(anchors)}", markup=False, soft_wrap=True)
+        console.print(f"  changed: {change}", markup=False, soft_wrap=True)
+    validation = data["validation"]
+    verdict = "[green]ok[/green]" if validation["ok"] else "[bold yellow]problems[/bold yellow]"
+    console.print(f"validation of {validation['checked']} edited agent(s): {verdict}")
+    for line in validation["failures"]:
+        console.print(f"  - {line}", markup=False, soft_wrap=True)
+    total = result.bytes.get("total", 0)
+    timing = ", ".join(f"{k} {v:.1f}" for k, v in result.seconds.items() if k != "total")
+    console.print(f"edit {result.edit_id}{' (already stored)' if result.skipped else ''}: {result.edit_uri} "
+                  f"({total / 1e6:.2f} MB) in {result.seconds.get('total', 0.0):.1f} s ({timing})", markup=False,
+                  soft_wrap=True)
+
+
 @eval_app.command("grounding")
 def eval_grounding(
     store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs and aligned scenes.")],

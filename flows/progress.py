@@ -9,36 +9,21 @@ active (rich allows only one live display at a time).
 from __future__ import annotations
 
 import logging
-import os
-import sys
 import threading
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
 from prefect.artifacts import create_progress_artifact, update_progress_artifact
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import Progress
 
+from flows.bars import new_bar, want_bar
 from tasks.progress import listening
 
 logger = logging.getLogger(__name__)
 
 #: The live display of an active ``StepBars``; ``FlowProgress`` adds its bar to it instead of starting one.
 _shared_bar: Progress | None = None
-
-
-def _new_bar() -> Progress:
-    return Progress(
-        TextColumn("[bold]{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), transient=False
-    )
-
-
-def _want_bar() -> bool:
-    """Show a bar on an interactive terminal, or when ``SIMSPLAT_PROGRESS=1``; never when ``=0``."""
-    setting = os.environ.get("SIMSPLAT_PROGRESS")
-    if setting is not None:
-        return setting == "1"
-    return sys.stderr.isatty()
 
 
 @dataclass
@@ -68,8 +53,8 @@ class FlowProgress:
             logger.warning("could not create a Prefect progress artifact for %s", self.stage, exc_info=True)
         if _shared_bar is not None:
             self._bar = _shared_bar
-        elif _want_bar():
-            self._bar = _new_bar()
+        elif want_bar():
+            self._bar = new_bar()
             self._bar.start()
             self._owns_bar = True
         if self._bar is not None:
@@ -114,8 +99,8 @@ class StepBars:
 
     def __enter__(self) -> StepBars:
         global _shared_bar
-        if _shared_bar is None and _want_bar():
-            self._bar = _shared_bar = _new_bar()
+        if _shared_bar is None and want_bar():
+            self._bar = _shared_bar = new_bar()
             self._bar.start()
             self._listening = listening(self._on_step)
             self._listening.__enter__()

@@ -9,6 +9,8 @@
 * ``alignment``, ``language_scenes``: the motion aligner models and language scenes (``alignment/``).
 * ``runs``: run directories and evaluation tables (``runs/<run_id>/tables``).
 * ``assets``: asset banks for scene editing (``assets/<bank_hash>``).
+* ``edits``: language edits (``edits/<run_id>/<seq_id>/<edit_id>``, the run's ``edits`` table); imported on
+  use (it loads the editing core), not re-exported here.
 
 Imports ``simsplat_core`` (types, scene records, language scenes); never prefect or ray.
 ``simsplat_core`` never imports this.

@@ -245,16 +245,29 @@ EDITS_SCHEMA = _schema(
 
 TRAJECTORIES_SCHEMA = _schema(
     "trajectories",
-    1,
+    2,  # 2: category column, source "inserted"
     [
         ("edit_id", pa.string()),
-        ("object_id", pa.string()),
-        ("step", pa.int32()),
+        ("object_id", pa.string()),  # the log's id for existing agents ("ego" for the ego), a new one when inserted
+        ("category", pa.string()),
+        ("step", pa.int32()),  # the log's frame index
         ("x", pa.float32()),
         ("y", pa.float32()),
         ("heading", pa.float32()),
-        ("speed", pa.float32()),
-        ("source", pa.string()),  # "log" | "edited" | "refined"
+        ("speed", pa.float32()),  # signed, m/s (negative when reversing)
+        ("source", pa.string()),  # "log" | "edited" | "inserted" | "refined"
+    ],
+)
+
+EDIT_POSE_TRACKS_SCHEMA = _schema(
+    "edit_pose_tracks",
+    1,
+    [
+        ("node_id", pa.int32()),  # the node the track belongs to (added or re-tracked)
+        ("t", pa.float64()),  # fractional frame index of the sample (may run past the log's frames)
+        ("transform", vec(16)),  # row-major 4x4 node -> world
+        ("present", pa.bool_()),
+        ("arc_length", pa.float64()),  # metres along the new path (NaN: none; retimes a pedestrian's gait)
     ],
 )
 
@@ -313,7 +326,8 @@ TABLES: dict[str, TableSpec] = {
         TableSpec("deformations", _fixed(DEFORMATIONS_SCHEMA)),
         TableSpec("assets", _fixed(ASSETS_SCHEMA)),
         TableSpec("edits", _fixed(EDITS_SCHEMA)),
-        TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA)),
+        TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA), min_version=2),
+        TableSpec("edit_pose_tracks", _fixed(EDIT_POSE_TRACKS_SCHEMA)),
         TableSpec("metrics", _fixed(METRICS_SCHEMA)),
     )
 }

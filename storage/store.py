@@ -26,6 +26,7 @@ with SIGKILL can leave a hidden ``.tmp-`` directory behind; it is never read and
 
 from __future__ import annotations
 
+import fcntl
 import json
 import logging
 import os
@@ -353,6 +354,31 @@ class ArtifactStore:
             if not _is_marker(f):
                 self._fs.delete_file(self._path(join_relpath(rel, f)))
         self._delete_quietly(tmp_rel)
+
+    # ----------------------------------------------------------------- read-modify-write
+    @contextmanager
+    def exclusive(self, relpath: str) -> Iterator[None]:
+        """Hold an exclusive advisory lock on ``relpath`` while the block runs (for read-modify-write of
+        one artifact, e.g. appending rows to a table).
+
+        Locally this is ``flock`` on a hidden ``.<name>.lock`` sibling, which serialises the processes of
+        one machine (Ray workers included). Object stores have no locks: the block runs unlocked and the
+        last writer wins, so give concurrent writers there artifacts of their own.
+        """
+        rel = normalize_relpath(relpath)
+        parent, name = _split(rel)
+        lock_rel = join_relpath(parent, f".{name}.lock")
+        os_path = self._os_path(lock_rel)
+        if os_path is None:
+            yield
+            return
+        self._fs.create_dir(self._path(parent), recursive=True)
+        with open(os_path, "a+b") as handle:
+            fcntl.flock(handle.fileno(), fcntl.LOCK_EX)
+            try:
+                yield
+            finally:
+                fcntl.flock(handle.fileno(), fcntl.LOCK_UN)
 
     # ----------------------------------------------------------------- local files for C libraries
     @contextmanager

@@ -11,6 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from simsplat_core.editing.commands import EditCommand
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene.graph import SceneGraph
@@ -49,13 +51,18 @@ class EditRefused(ValueError):
 
 @dataclass(frozen=True, eq=False)
 class AddedNode:
-    """A node the edit added: its id in the edited graph, the asset it came from and its own pose track."""
+    """A node the edit added: its id in the edited graph, the asset it came from and its own pose track.
+
+    ``arc_length`` (``[T]`` metres along the new path at ``track.times``, or ``None``) retimes a
+    pedestrian asset's gait to the new path (``editing.asset_nodes.asset_node``).
+    """
 
     node_id: int
     object_id: str
     asset_id: str
     category: str
     track: PoseTrack
+    arc_length: np.ndarray | None = None
 
 
 @dataclass(frozen=True, eq=False)

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import logging
 import math
+from collections.abc import Callable, Sequence
 
 import cv2
 import numpy as np
 
 from simsplat_core.geometry import BOX_EDGES, box_corners, invert_transform, transform_points
-from simsplat_core.types import CameraImage, SceneLog
+from simsplat_core.types import CameraImage, MapFeature, SceneLog
 from simsplat_core.viz.images import to_uint8
 
 logger = logging.getLogger(__name__)
@@ -100,6 +101,26 @@ def camera_panel(log: SceneLog, image: CameraImage, scale: float = 1.0) -> np.nd
     return canvas
 
 
+#: Map kinds filled as polygons (the others are drawn as polylines), and the drawing order.
+POLYGON_KINDS: tuple[str, ...] = ("drivable_area", "sidewalk", "crosswalk")
+MAP_DRAW_ORDER: tuple[str, ...] = ("drivable_area", "sidewalk", "crosswalk", "lane", "lane_marking", "road_edge")
+
+
+def draw_map(canvas: np.ndarray, map_features: Sequence[MapFeature], to_px: Callable[[np.ndarray], np.ndarray]
+             ) -> None:
+    """Draw ``map_features`` on ``canvas`` (uint8 ``[H, W, 3]``, in place) in :data:`MAP_COLORS`: areas filled,
+    lines as polylines. ``to_px`` maps ``[P, 3]`` world points to ``[P, 2]`` int32 pixels."""
+    for kind in MAP_DRAW_ORDER:
+        for feature in map_features:
+            if feature.kind != kind or len(feature.points) < 2:
+                continue
+            pts = to_px(feature.points)
+            if kind in POLYGON_KINDS:
+                cv2.fillPoly(canvas, [pts], MAP_COLORS[kind])
+            else:
+                cv2.polylines(canvas, [pts], False, MAP_COLORS[kind], 1, cv2.LINE_AA)
+
+
 def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 60.0) -> np.ndarray:
     """Bird's-eye view in the ego frame of ``frame_idx`` (ego at centre, x up), ``[size, size, 3]`` uint8."""
     canvas = np.full((size, size, 3), 20, np.uint8)
@@ -112,16 +133,7 @@ def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 
         v = size / 2.0 - ego[:, 0] * px_per_m
         return np.round(np.stack([u, v], axis=1)).astype(np.int32)
 
-    polygon_kinds = ("drivable_area", "sidewalk", "crosswalk")
-    for kind in ("drivable_area", "sidewalk", "crosswalk", "lane", "lane_marking", "road_edge"):
-        for feature in log.map_features:
-            if feature.kind != kind or len(feature.points) < 2:
-                continue
-            pts = to_px(feature.points)
-            if kind in polygon_kinds:
-                cv2.fillPoly(canvas, [pts], MAP_COLORS[kind])
-            else:
-                cv2.polylines(canvas, [pts], False, MAP_COLORS[kind], 1, cv2.LINE_AA)
+    draw_map(canvas, log.map_features, to_px)
     categories = {obj.object_id: obj.category for obj in log.objects}
     for track in log.tracks:
         row = track.index_of(frame_idx)

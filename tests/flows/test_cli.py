@@ -42,6 +42,7 @@ def _tree_digest(root: Path) -> dict[str, str]:
         ["eval"],
         ["eval", "grounding"],
         ["align"],
+        ["edit"],
     ],
 )
 def test_every_command_has_help(command):

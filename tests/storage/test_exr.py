@@ -99,3 +99,20 @@ def test_corrupt_and_missing_exr_name_the_file(store: ArtifactStore) -> None:
         read_exr(store, "broken.exr")
     with pytest.raises(FileNotFoundError, match="absent.exr"):
         read_exr(store, "absent.exr")
+
+
+def test_half_float_keeps_ids_exact_and_colours_close(tmp_path) -> None:
+    store = ArtifactStore(str(tmp_path))
+    channels = _render(h=16, w=24, seed=3)
+    del channels["Z"]  # depth in half would clip far values; the edit renders leave it out
+    write_exr(store, "full.exr", channels)
+    write_exr(store, "half.exr", channels, half=True)
+    back = read_exr(store, "half.exr")
+    assert list(back) == list(channels)
+    assert np.array_equal(back["id"], channels["id"])  # float32: ids up to 2**24 exact
+    for name in ("R", "G", "B", "A"):
+        assert np.abs(back[name] - channels[name]).max() <= 2.0**-11
+        assert not np.array_equal(back[name], channels[name])  # really stored as half
+    header = read_exr_header(store, "half.exr")
+    assert header["format"] == ["float", "half"]
+    assert store.size("half.exr") < store.size("full.exr")

@@ -70,6 +70,22 @@ def test_node_id_chunking_is_exact() -> None:
     assert bool((many.node_id[low] == -1).all()) and bool((many.node_id[~low] >= 0).all())
 
 
+def test_fused_node_ids_equal_the_separate_pass() -> None:
+    graph = make_graph()
+    c2w, K = camera(W, H)
+    with torch.no_grad():
+        for t in (0.0, 2.0, 3.5):
+            composed = graph.at(t)
+            separate = render_composed(composed, c2w, K, W, H)
+            extra_t = torch.rand((len(composed), 2))
+            fused = render_composed(composed, c2w, K, W, H, fused_ids=True, extra=extra_t)
+            plain = render_composed(composed, c2w, K, W, H, with_node_ids=False, extra=extra_t)
+            assert torch.equal(fused.node_id, separate.node_id)
+            assert len(set(torch.unique(fused.node_id).tolist()) - {-1}) >= 2  # several nodes seen
+            assert torch.allclose(fused.rgb, separate.rgb, atol=1e-6)
+            assert torch.allclose(fused.extra, plain.extra, atol=1e-6)  # the caller's channels untouched
+
+
 def test_render_without_node_ids_keeps_grad() -> None:
     graph = make_graph()
     for node in graph.nodes:

@@ -1,0 +1,138 @@
+"""Apply an edit program to a scene, by value: ground, place, plan, build the edited graph, validate.
+
+    ctx = EditContext.create(log, graph, language_scene, engine, bank)
+    edited = apply_edit(ctx, program)                 # EditedScene; raises EditRefused
+    edited = Editor(ctx).edit("remove the white van and make the red car stop")
+    edited.graph, edited.states, edited.delta, edited.validation
+
+Commands run in order on a working copy (:class:`~simsplat_core.editing.edit_ops.Draft`): each grounds its
+target / anchor against the scene's language (``editing.grounding``), then
+
+* ``remove`` drops the nodes and their agents (every match of a group target);
+* ``replace`` keeps each target's trajectory and swaps its appearance for a bank asset: a new node on the
+  same track, the asset's own box size, the box kept on the ground (same object id, source ``edited``);
+* ``insert`` retrieves an asset, resolves the placement on the lane graph / sidewalk (``editing.placement``)
+  and plans its motion (``editing.motion_controller``; vehicles drive along their lane, static objects and
+  rows of cones stand still, pedestrians walk along the sidewalk or cross when told);
+* ``modify`` re-plans a target's trajectory from its log trajectory (``editing.motion_controller``).
+
+The edited graph is :func:`~simsplat_core.editing.delta.apply_delta` of the stored graph and the
+resulting delta (the same function rebuilds a stored edit), so nothing of the stored scene changes and
+unchanged nodes are shared. Finally every edited and inserted agent is validated against every other
+agent (``scenario.metrics.validate_agents``). A command whose grounding fails, whose placement or motion
+is infeasible, or that changes nothing is refused (``EditRefused``, with the command's index).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+
+import numpy as np
+
+from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.commands import EditProgram
+from simsplat_core.editing.delta import apply_delta
+from simsplat_core.editing.edit_ops import Draft, apply_command, node_factory
+from simsplat_core.editing.grounding import Grounder
+from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_LIKE, EditorOptions
+from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.result import EditedScene, EditRefused
+from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.lane_graph import LaneGraph
+from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.scenario.metrics import validate_agents
+from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.types import SceneLog
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["CHATSIM_LIKE", "OMNIRE_LIKE", "EditContext", "Editor", "EditorOptions", "apply_edit"]
+
+
+@dataclass(frozen=True, eq=False)
+class EditContext:
+    """Everything an edit reads, none of it changed by editing.
+
+    Attributes:
+        log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
+        graph: the stored scene graph.
+        language: the graph's language scene (what grounding reads).
+        engine: the grounding engine (its text encoder also retrieves assets and parses prompts).
+        bank: the asset bank (``None``: inserts and replacements are refused, naming ``simsplat assets build``).
+        lanes: the log's lane graph.
+        map_ctx: the log's map for point queries.
+        states: every agent of the log (ego included) on the log's frames, with their node ids.
+    """
+
+    log: SceneLog
+    graph: SceneGraph
+    language: LanguageScene
+    engine: QueryEngine
+    bank: AssetBank | None
+    lanes: LaneGraph
+    map_ctx: MapContext
+    states: AgentStates
+
+    @classmethod
+    def create(cls, log: SceneLog, graph: SceneGraph, language: LanguageScene, engine: QueryEngine,
+               bank: AssetBank | None) -> EditContext:
+        """The context of ``graph`` (reconstructed from ``log``): lane graph, map context and agent states
+        derived from the log.
+
+        Raises:
+            StaleSceneError: ``language`` describes another revision of the graph.
+        """
+        language.check_graph(graph)
+        node_of_object = {n.object_id: n.node_id for n in graph.object_nodes}
+        return cls(log=log, graph=graph, language=language, engine=engine, bank=bank,
+                   lanes=LaneGraph.from_features(log.map_features), map_ctx=MapContext.from_features(log.map_features),
+                   states=AgentStates.from_log(log, node_of_object))
+
+
+def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = DEFAULT_OPTIONS) -> EditedScene:
+    """Apply ``program`` to ``ctx.graph`` (module docstring).
+
+    Raises:
+        EditRefused: a command cannot be carried out (its ``command_index`` says which), or the program as a
+            whole changes nothing.
+    """
+    grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding)
+    draft = Draft.start(ctx, grounder, options)
+    outcomes = []
+    for index, command in enumerate(program.commands):
+        options.check(command, index)
+        outcomes.append(apply_command(draft, command, index))
+    delta = draft.delta()
+    if delta.is_empty:
+        raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
+    graph = apply_delta(ctx.graph, delta, node_factory(draft.assets.__getitem__, ctx.graph.frame_indices))
+    rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
+    validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
+    logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
+                "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
+    return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,
+                       states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation)
+
+
+class Editor:
+    """Parse and apply prompts in one scene: ``Editor(ctx, options).edit("insert a yellow taxi ahead")``."""
+
+    def __init__(self, ctx: EditContext, options: EditorOptions = DEFAULT_OPTIONS) -> None:
+        self.ctx = ctx
+        self.options = options
+
+    def parse(self, prompt: str) -> EditProgram:
+        """The program of ``prompt`` (``parse_prompt`` with the engine's text encoder).
+
+        Raises:
+            EditRefused: the words ask for something the command language cannot express.
+        """
+        program = parse_prompt(prompt, encoder=self.ctx.engine.text_encoder)
+        return program if program.prompt else program.model_copy(update={"prompt": prompt})
+
+    def edit(self, prompt: str) -> EditedScene:
+        """Parse ``prompt`` and apply it. Raises ``EditRefused``."""
+        return apply_edit(self.ctx, self.parse(prompt), self.options)

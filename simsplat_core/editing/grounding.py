@@ -1,0 +1,138 @@
+"""Ground an edit's targets and anchors (``TargetRef``) to scene-graph nodes, or refuse with a clear message.
+
+    grounder = Grounder(language_scene, engine, graph, mode="language")
+    found = grounder.ground(TargetRef(description="the white van"), command_index=0)
+    found.node_ids, found.object_ids, found.message
+
+* ``description``: ``QueryEngine.ground`` (mode ``"language"``), or the engine with motion and location
+  switched off (``"attributes"``: category and colour only); mode ``"ids"`` refuses descriptions.
+  ``group=True`` asks the engine for every match ("all parked cars").
+* ``node_id`` / ``object_id``: the graph's object node (any mode).
+
+Nothing found is ``EditRefused(reason="not_found")`` whose message is the engine's ("no purple bus in this
+scene") plus what similar objects the scene has. Nodes an earlier command removed are not found again.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections import Counter
+from collections.abc import Collection
+from dataclasses import dataclass
+
+from simsplat_core.editing.commands import TargetRef
+from simsplat_core.editing.options import GroundingMode
+from simsplat_core.editing.result import EditRefused
+from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.query_parse import parse_query
+from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.scene.graph import SceneGraph
+
+logger = logging.getLogger(__name__)
+
+#: Similar objects named in a not-found message.
+SIMILAR_SHOWN = 3
+
+
+@dataclass(frozen=True)
+class Grounded:
+    """Nodes a reference grounded to: ``node_ids`` / ``object_ids`` (same order, best first) and the
+    engine's message (or how the id was resolved)."""
+
+    node_ids: tuple[int, ...]
+    object_ids: tuple[str, ...]
+    message: str
+
+
+class Grounder:
+    """Grounds ``TargetRef`` s in one scene (module docstring).
+
+    Args:
+        language: the language scene of ``graph`` (its object nodes, captions, motion features).
+        engine: the grounding engine.
+        graph: the graph being edited (ids are checked against its object nodes).
+        mode: the editor's grounding mode.
+    """
+
+    def __init__(self, language: LanguageScene, engine: QueryEngine, graph: SceneGraph,
+                 mode: GroundingMode = "language") -> None:
+        self.language = language
+        self.graph = graph
+        self.mode = mode
+        if mode == "attributes":
+            engine = engine.with_config(dataclasses.replace(engine.config, use_motion=False, use_location=False))
+        self.engine = engine
+        self._objects = {n.node_id: n for n in graph.object_nodes}
+
+    def describe(self, node_id: int) -> str:
+        """``"veh_02 (node 16): a white van"`` (the caption when the language scene has one)."""
+        node = self._objects[node_id]
+        caption = ""
+        try:
+            entry = self.language.node(node_id)
+            caption = entry.caption.text if entry.caption is not None else ""
+        except KeyError:
+            pass
+        return f"{node.object_id} (node {node_id})" + (f": {caption}" if caption else f": a {node.category}")
+
+    def ground(self, ref: TargetRef, *, removed: Collection[int] = (), command_index: int | None = None,
+               role: str = "target") -> Grounded:
+        """The nodes ``ref`` names that still exist (not in ``removed``).
+
+        Raises:
+            EditRefused: ``not_found`` (nothing matches, or only removed nodes), ``unsupported`` (a
+                description in ``"ids"`` mode).
+        """
+        if ref.is_ego:
+            raise EditRefused(f"the ego vehicle cannot be a {role} here", reason="unsupported",
+                              command_index=command_index)
+        if ref.node_id is not None or ref.object_id is not None:
+            return self._by_id(ref, removed, command_index, role)
+        assert ref.description is not None
+        if self.mode == "ids":
+            raise EditRefused(f"this editor takes object ids, not descriptions: give the {role} as a node id or "
+                              f"object id instead of {ref.description!r}", reason="unsupported",
+                              command_index=command_index)
+        text = ref.description.strip()
+        if ref.group and not parse_query(text).group:
+            text = f"all {text}"
+        grounding = self.engine.ground(self.language, text)
+        gone = set(removed)
+        alive = [m for m in grounding.matches if m.node_id in self._objects and m.node_id not in gone]
+        if not alive:
+            if grounding.matches:
+                message = (f"{ref.description!r} is {', '.join(self.describe(m.node_id) for m in grounding.matches)}"
+                           ", which an earlier command already removed")
+            else:
+                message = self._not_found(grounding.message, [m.node_id for m in grounding.ranking], gone)
+            raise EditRefused(message, reason="not_found", command_index=command_index)
+        ids = tuple(m.node_id for m in alive)
+        logger.info("%s %r -> %s", role, ref.description, ids)
+        return Grounded(ids, tuple(self._objects[i].object_id for i in ids), grounding.message)
+
+    def _by_id(self, ref: TargetRef, removed: Collection[int], command_index: int | None, role: str) -> Grounded:
+        if ref.node_id is not None:
+            node = self._objects.get(ref.node_id)
+            asked = f"node {ref.node_id}"
+        else:
+            node = next((n for n in self._objects.values() if n.object_id == ref.object_id), None)
+            asked = f"object {ref.object_id!r}"
+        if node is None:
+            known = ", ".join(f"{n.object_id} (node {n.node_id})" for n in list(self._objects.values())[:12])
+            raise EditRefused(f"no {asked} in this scene; objects: {known}"
+                              f"{' ...' if len(self._objects) > 12 else ''}", reason="not_found",
+                              command_index=command_index)
+        if node.node_id in set(removed):
+            raise EditRefused(f"{asked} was already removed by an earlier command", reason="not_found",
+                              command_index=command_index)
+        return Grounded((node.node_id,), (node.object_id,), f"{role} by id: {self.describe(node.node_id)}")
+
+    def _not_found(self, message: str, ranked: list[int], gone: set[int]) -> str:
+        """The engine's message plus the closest objects (or, with none of the category, what the scene has)."""
+        similar = [i for i in ranked if i in self._objects and i not in gone][:SIMILAR_SHOWN]
+        if similar:
+            return f"{message}; closest: " + "; ".join(self.describe(i) for i in similar)
+        counts = Counter(n.category for i, n in self._objects.items() if i not in gone)
+        have = ", ".join(f"{k} {c}{'s' if k != 1 else ''}" for c, k in counts.most_common())
+        return f"{message}; this scene has {have or 'no objects'}"

@@ -1,0 +1,223 @@
+"""Between the edit ops and the placement resolver / motion controller: requests in, step-grid motions out.
+
+* :func:`resolve` -- a command's placement as a pose (``editing.placement.resolve_placement``);
+* :func:`plan_inserted` -- how an inserted object moves: vehicles drive along their lane at a sensible speed
+  (``motion_requests.DEFAULT_CRUISE_MPS``, keeping a gap to the traffic ahead) unless told otherwise (an
+  absolute speed of 0 parks them), pedestrians walk (``motion_requests.WALK_MPS``) along the sidewalk or
+  cross when told, static objects stand still;
+* :func:`plan_modified` -- a target's new motion from its log trajectory (``editing.motion_controller``);
+* :class:`Motion` -- the result on the step grid, and :func:`changed_motion` (does it differ from the log?).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+import torch
+
+from simsplat_core.editing.asset_record import Asset
+from simsplat_core.editing.commands import Behaviour, Placement, TargetRef
+from simsplat_core.editing.motion_controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
+from simsplat_core.editing.motion_requests import (
+    DEFAULT_CRUISE_MPS,
+    WALK_MPS,
+    LogTrajectory,
+    OtherAgent,
+    PedestrianMotionRequest,
+    StartState,
+    VehicleMotionRequest,
+    motion_kind,
+    traffic_from_states,
+)
+from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
+from simsplat_core.editing.result import EditRefused
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.vocabulary import VEHICLE
+from simsplat_core.scene.pose_track import PoseTrack
+from simsplat_core.scene.transforms import poses_from_boxes
+
+if TYPE_CHECKING:
+    from simsplat_core.editing.edit_ops import Draft
+
+#: A motion differing from the log by less than this (m, m/s) everywhere changes nothing.
+UNCHANGED_TOL = 0.05
+
+
+@dataclass(frozen=True)
+class Motion:
+    """An agent's motion on the step grid: ``xy [T, 2]``, ``heading [T]``, ``speed [T]`` (signed), ``valid [T]``,
+    ``arc_length [T]`` metres travelled (``None``: not tracked), and a phrase for people."""
+
+    xy: np.ndarray
+    heading: np.ndarray
+    speed: np.ndarray
+    valid: np.ndarray
+    arc_length: np.ndarray | None
+    description: str
+
+    @classmethod
+    def planned(cls, plan: PlannedTrajectory, description: str) -> Motion:
+        return cls(plan.xy, plan.heading, plan.speed, plan.valid, plan.arc_length, description)
+
+    @classmethod
+    def standing(cls, xy: np.ndarray, heading: float, steps: int) -> Motion:
+        return cls(np.tile(np.asarray(xy, np.float64), (steps, 1)), np.full(steps, float(heading)), np.zeros(steps),
+                   np.ones(steps, bool), np.zeros(steps), "standing still")
+
+    def track(self, frame_idx: np.ndarray, z: np.ndarray) -> PoseTrack:
+        """Box poses at the step frames (``z [T]`` box-centre heights), present where valid."""
+        center = np.concatenate([self.xy, np.asarray(z, np.float64).reshape(-1, 1)], axis=1)
+        poses = torch.as_tensor(poses_from_boxes(center, self.heading), dtype=torch.float32)
+        return PoseTrack(np.asarray(frame_idx, np.float64), poses, torch.as_tensor(self.valid))
+
+
+def changed_motion(states: AgentStates, row: int, motion: Motion) -> bool:
+    """Whether ``motion`` differs from agent ``row`` 's current one (validity, position or speed)."""
+    valid = states.valid[row]
+    if not np.array_equal(valid, motion.valid):
+        return True
+    if not valid.any():
+        return False
+    dxy = np.linalg.norm(states.xy[row][valid] - motion.xy[valid], axis=1).max()
+    dv = np.abs(states.speed[row][valid] - motion.speed[valid]).max()
+    return bool(dxy > UNCHANGED_TOL or dv > UNCHANGED_TOL)
+
+
+def anchor_pose(draft: Draft, object_id: str, label: str, step: int, index: int) -> AnchorPose:
+    """Agent ``object_id`` at ``step`` as a placement anchor (``EditRefused`` when it is not there then)."""
+    try:
+        return AnchorPose.from_states(draft.states, draft.row_of(object_id), step, label)
+    except ValueError:
+        frame = int(draft.states.frame_idx[step])
+        raise EditRefused(f"{label} is not in the scene at frame {frame}, where the object is to be placed",
+                          reason="infeasible_placement", command_index=index) from None
+
+
+def resolve(draft: Draft, placement: Placement, asset: Asset, anchor: AnchorPose | None, step: int,
+            index: int) -> PlacedPose:
+    """Where ``placement`` puts ``asset`` at ``step`` (``EditRefused`` naming why it cannot be placed)."""
+    ctx = draft.ctx
+    try:
+        return resolve_placement(placement, category=asset.category, size=asset.size, anchor=anchor,
+                                 ego_pose=ctx.log.ego_poses[step], lanes=ctx.lanes, map_ctx=ctx.map_ctx,
+                                 frame=int(draft.states.frame_idx[step]), occupied=draft.states)
+    except EditRefused as exc:
+        raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
+
+
+def _other(draft: Draft, ref: TargetRef | None, index: int, role: str) -> OtherAgent | None:
+    """The grounded agent ``ref`` names (a leader, an object to stop behind)."""
+    if ref is None:
+        return None
+    if ref.is_ego:
+        row = draft.states.index("ego")
+        return OtherAgent.from_states(draft.states, row, "the ego vehicle")
+    found = draft.grounder.ground(ref, removed=draft.gone, command_index=index, role=role)
+    return OtherAgent.from_states(draft.states, draft.row_of(found.object_ids[0]), draft.describe(found.node_ids[0]))
+
+
+def _start_speed(behaviour: Behaviour, cruise: float) -> float:
+    """Speed an inserted mover starts with: the asked absolute speed (0 parks it), else ``cruise``."""
+    if behaviour.speed is not None:
+        return behaviour.speed.target_mps(cruise)
+    return cruise
+
+
+def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
+          log: LogTrajectory | None, index: int, label: str, backfill: bool,
+          object_id: str | None) -> PlannedTrajectory:
+    """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
+    current trajectories: the log, or what earlier commands made of them)."""
+    ctx, states = draft.ctx, draft.states
+    stop_behind = _other(draft, behaviour.stop.behind if behaviour.stop else None, index, "object to stop behind")
+    try:
+        if kind == VEHICLE:
+            leader = _other(draft, behaviour.follow, index, "agent to follow")
+            exclude = tuple(o for o in (object_id, leader.object_id if leader else None) if o is not None)
+            request = VehicleMotionRequest.from_behaviour(
+                behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
+                leader=leader, stop_behind=stop_behind, traffic=traffic_from_states(states, exclude),
+                backfill=backfill, label=label)
+            return plan_vehicle(request, ctx.lanes, ctx.map_ctx)
+        ped = PedestrianMotionRequest.from_behaviour(
+            behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
+            stop_behind=stop_behind, backfill=backfill, label=label)
+        return plan_pedestrian(ped, ctx.map_ctx)
+    except EditRefused as exc:
+        raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
+
+
+def describe_behaviour(behaviour: Behaviour | None) -> str:
+    """A short phrase for a behaviour ("speed 30 km/h, stop (before crosswalk), delay 2 s")."""
+    if behaviour is None or behaviour.is_empty:
+        return "default motion"
+    parts = []
+    if behaviour.speed is not None:
+        spec = behaviour.speed
+        parts.append({"absolute": f"speed {spec.value:g} {spec.unit}", "factor": f"speed x{spec.value:g}",
+                      "delta": f"speed {spec.value:+g} {spec.unit}"}[spec.mode])
+    for name, value in behaviour.model_dump(exclude_defaults=True, exclude={"speed"}, mode="json").items():
+        words = name.replace("_", " ").replace(" s", "")
+        if value is True:
+            parts.append(words)
+        elif isinstance(value, dict):
+            inner = ", ".join(f"{k.replace('_', ' ')} {v}" for k, v in value.items() if v not in (None, False))
+            parts.append(f"{words} ({inner})" if inner else words)
+        else:
+            parts.append(f"{words} {value}" + (" s" if name.endswith("_s") else ""))
+    return ", ".join(parts)
+
+
+def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, placed: PlacedPose, step: int,
+                  index: int) -> Motion:
+    """The motion of an inserted object placed at ``placed``, planned from ``step`` (module docstring)."""
+    heading = float(placed.heading)
+    xy = np.asarray(placed.xy, np.float64)
+    steps = draft.states.num_steps
+    if asset.category == "static":
+        if behaviour is not None and not behaviour.is_empty:
+            raise EditRefused(f"{asset.caption} is a static object: it cannot move ({describe_behaviour(behaviour)})",
+                              reason="wrong_category", command_index=index)
+        return Motion.standing(xy, heading, steps)
+    behaviour = behaviour or Behaviour()
+    kind = motion_kind(asset.category, asset.caption)
+    cruise = DEFAULT_CRUISE_MPS if kind == VEHICLE else WALK_MPS
+    start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
+    plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
+                 object_id=None)
+    return Motion.planned(plan, describe_behaviour(behaviour))
+
+
+def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Placement | None, index: int,
+                  label: str) -> Motion:
+    """Agent ``row`` 's new motion from its current trajectory by ``behaviour`` (moved to ``placement`` first when
+    given); ``label`` names it in messages."""
+    states = draft.states
+    kind = motion_kind(states.categories[row], label)
+    log = LogTrajectory.from_states(states, row)
+    start = StartState.from_log(log, states.times)
+    if placement is not None:
+        placed = _resolve_for_agent(draft, placement, row, start.step, index)
+        start = StartState(start.step, np.asarray(placed.xy, np.float64), float(placed.heading), start.speed)
+    size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
+    plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
+                 object_id=states.object_ids[row])
+    return Motion.planned(plan, describe_behaviour(behaviour))
+
+
+def _resolve_for_agent(draft: Draft, placement: Placement, row: int, step: int, index: int) -> PlacedPose:
+    """Where ``placement`` moves agent ``row`` at ``step`` (its own box ignored when checking for room)."""
+    ctx, states = draft.ctx, draft.states
+    anchor = None
+    if placement.anchor is not None and not placement.anchor.is_ego:
+        found = draft.grounder.ground(placement.anchor, removed=draft.gone, command_index=index, role="anchor")
+        anchor = anchor_pose(draft, found.object_ids[0], draft.describe(found.node_ids[0]), step, index)
+    try:
+        return resolve_placement(placement, category=states.categories[row], size=tuple(states.size[row]),
+                                 anchor=anchor, ego_pose=ctx.log.ego_poses[step], lanes=ctx.lanes, map_ctx=ctx.map_ctx,
+                                 frame=int(states.frame_idx[step]), occupied=states,
+                                 ignore=(states.object_ids[row],))
+    except EditRefused as exc:
+        raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc

@@ -1,0 +1,262 @@
+"""apply_edit on a small synthetic scene: remove / replace / modify / insert by value, refusals, the delta
+rebuilding the edited graph, the restricted editors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
+from simsplat_core.editing.asset_record import Asset
+from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.commands import EditProgram
+from simsplat_core.editing.delta import apply_delta
+from simsplat_core.editing.edit_ops import node_factory
+from simsplat_core.editing.procedural_assets import procedural_asset
+from simsplat_core.editing.result import EditRefused
+from simsplat_core.scene import GaussianSet
+from simsplat_core.scene.nodes import OFFSETS
+
+#: The moving vehicle the tests modify, and the van they remove / replace (seed 0 of the world).
+VAN = "veh_02"
+
+
+def _program(*commands: dict, prompt: str = "") -> EditProgram:
+    return EditProgram.model_validate({"prompt": prompt, "commands": list(commands)})
+
+
+def _box_gaussians(size: tuple[float, float, float], rgb: tuple[float, float, float], n: int = 64,
+                   seed: int = 0) -> GaussianSet:
+    g = torch.Generator().manual_seed(seed)
+    means = (torch.rand((n, 3), generator=g) - 0.5) * torch.tensor(size)
+    return GaussianSet.create(means, torch.full((n,), 0.15), torch.tensor([rgb] * n), 0.9)
+
+
+@pytest.fixture(scope="module")
+def bank() -> AssetBank:
+    car = Asset(asset_id="unit.car", category="vehicle", subtype="sedan", caption="a yellow sedan", color="yellow",
+                size=(4.4, 1.9, 1.5), source_seq="unit", source_object="car",
+                gaussians=_box_gaussians((4.4, 1.9, 1.5), (0.9, 0.8, 0.1)))
+    walker_gs = _box_gaussians((0.5, 0.5, 1.7), (0.8, 0.1, 0.1), seed=1)
+    walker_gs.extras[OFFSETS] = torch.zeros((len(walker_gs), 3, 3))
+    walker = Asset(asset_id="unit.walker", category="pedestrian", subtype="adult",
+                   caption="a pedestrian in a red top and black pants", color="red", size=(0.5, 0.5, 1.7),
+                   source_seq="unit", source_object="walker", gaussians=walker_gs,
+                   deform_frames=np.array([0, 5, 10]), deform_arc_length=np.array([0.0, 0.7, 1.4], np.float32))
+    return AssetBank.from_assets([car, walker, procedural_asset("traffic cone", "orange")])
+
+
+@pytest.fixture(scope="module")
+def ctx(edit_log, edit_graph, edit_language, engine, bank) -> EditContext:
+    return EditContext.create(edit_log, edit_graph, edit_language, engine, bank)
+
+
+def _node(ctx: EditContext, object_id: str) -> int:
+    return next(n.node_id for n in ctx.graph.object_nodes if n.object_id == object_id)
+
+
+def _moving_vehicle(ctx: EditContext) -> str:
+    """A vehicle of the log that drives over its whole track (so a stop changes it)."""
+    states = ctx.states
+    for r, (oid, cat) in enumerate(zip(states.object_ids, states.categories)):
+        moving = states.speed[r][states.valid[r]]
+        if cat == "vehicle" and oid != "ego" and moving.size >= 30 and moving.min() > 3:
+            return oid
+    raise AssertionError("the test world has no vehicle moving over 30 frames")
+
+
+def test_remove_is_by_value(ctx):
+    edited = apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}}))
+    van = _node(ctx, VAN)
+    assert edited.delta.removed_node_ids == (van,) and not edited.delta.added and not edited.delta.retracked
+    assert van not in {n.node_id for n in edited.graph.nodes}
+    assert VAN not in edited.states.object_ids and VAN in ctx.states.object_ids
+    assert van in {n.node_id for n in ctx.graph.nodes} and ctx.graph.revision == ""  # the stored graph unchanged
+    assert edited.outcomes[0].target_node_ids == (van,) and "white van" in edited.outcomes[0].summary
+    assert edited.validation.as_dict()["checked"] == 0
+    # unchanged nodes are shared, not copied
+    kept = next(n for n in ctx.graph.object_nodes if n.node_id != van)
+    assert edited.graph.node(kept.node_id) is kept
+
+
+def test_remove_a_group(ctx):
+    edited = apply_edit(ctx, _program({"op": "remove", "target": {"description": "orange traffic cones",
+                                                                   "group": True}}))
+    assert sorted(edited.delta.removed_node_ids) == sorted(_node(ctx, o) for o in ("static_00", "static_01"))
+
+
+def test_not_found_is_refused_with_the_command_index(ctx):
+    with pytest.raises(EditRefused) as info:
+        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}},
+                                 {"op": "remove", "target": {"description": "the purple bus"}}))
+    assert info.value.reason == "not_found" and info.value.command_index == 1
+    assert "purple bus" in str(info.value)
+
+
+def test_a_removed_object_cannot_be_edited_again(ctx):
+    with pytest.raises(EditRefused, match="already removed") as info:
+        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}},
+                                 {"op": "modify", "target": {"object_id": VAN}, "behaviour": {"stop": {}}}))
+    assert info.value.command_index == 1
+
+
+def test_replace_keeps_the_trajectory_and_fits_the_box_on_the_ground(ctx, bank):
+    edited = apply_edit(ctx, _program({"op": "replace", "target": {"description": "the white van"},
+                                       "asset": {"description": "a yellow sedan"}}))
+    van = _node(ctx, VAN)
+    (added,) = edited.delta.added
+    assert edited.delta.removed_node_ids == (van,) and added.object_id == VAN and added.asset_id == "unit.car"
+    assert added.node_id > max(n.node_id for n in ctx.graph.nodes)
+    before, after = ctx.states.index(VAN), edited.states.index(VAN)
+    assert edited.states.sources[after] == "edited" and edited.states.node_ids[after] == added.node_id
+    valid = ctx.states.valid[before]
+    assert np.array_equal(edited.states.valid[after], valid)
+    assert np.allclose(edited.states.xy[after][valid], ctx.states.xy[before][valid])
+    assert np.allclose(edited.states.size[after], bank.get("unit.car").size)
+    old_ground = ctx.states.z[before] - ctx.states.size[before, 2] / 2
+    new_ground = edited.states.z[after] - edited.states.size[after, 2] / 2
+    assert np.allclose(old_ground[valid], new_ground[valid])
+    node = edited.graph.node(added.node_id)
+    assert len(node.gaussians) == len(bank.get("unit.car").gaussians) and van not in {n.node_id for n in
+                                                                                     edited.graph.nodes}
+
+
+def test_replace_across_categories_is_refused(ctx):
+    with pytest.raises(EditRefused) as info:
+        apply_edit(ctx, _program({"op": "replace", "target": {"description": "the white van"},
+                                  "asset": {"description": "a pedestrian in a red top", "category": "pedestrian"}}))
+    assert info.value.reason == "wrong_category"
+
+
+def test_modify_stop_retracks_the_node(ctx):
+    target = _moving_vehicle(ctx)
+    edited = apply_edit(ctx, _program({"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}}))
+    node_id = _node(ctx, target)
+    assert list(edited.delta.retracked) == [node_id] and not edited.delta.added
+    row = edited.states.index(target)
+    assert edited.states.sources[row] == "edited"
+    speed = edited.states.speed[row][edited.states.valid[row]]
+    assert abs(speed[-1]) < 0.1 < abs(speed[0])  # it comes to rest
+    track = edited.delta.retracked[node_id]
+    pose, _ = track.sample(float(edited.states.frame_idx[-1]))
+    assert np.allclose(pose[:2, 3].numpy(), edited.states.xy[row, -1], atol=1e-3)
+    assert [v.object_id for v in edited.validation.agents] == [target]
+
+
+def test_modify_that_changes_nothing_is_refused(ctx):
+    with pytest.raises(EditRefused, match="would not change") as info:
+        apply_edit(ctx, _program({"op": "modify", "target": {"object_id": _moving_vehicle(ctx)}, "behaviour": {}}))
+    assert info.value.reason == "infeasible_motion"
+
+
+def test_static_objects_do_not_move(ctx):
+    with pytest.raises(EditRefused) as info:
+        apply_edit(ctx, _program({"op": "modify", "target": {"object_id": "static_00"}, "behaviour": {"stop": {}}}))
+    assert info.value.reason == "wrong_category"
+
+
+def test_replace_then_modify_acts_on_the_new_node(ctx):
+    target = _moving_vehicle(ctx)
+    edited = apply_edit(ctx, _program({"op": "replace", "target": {"object_id": target},
+                                       "asset": {"description": "a yellow sedan"}},
+                                      {"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}}))
+    (added,) = edited.delta.added
+    assert not edited.delta.retracked and edited.delta.removed_node_ids == (_node(ctx, target),)
+    row = edited.states.index(target)
+    end = float(edited.states.frame_idx[-1])
+    pose, _ = added.track.sample(end)
+    assert np.allclose(pose[:2, 3].numpy(), edited.states.xy[row, -1], atol=1e-3)  # the new node stops
+    assert abs(edited.states.speed[row][edited.states.valid[row]][-1]) < 0.1
+
+
+def test_insert_a_row_of_cones_standing_on_the_road(ctx):
+    edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "orange traffic cones", "count": 3},
+                                       "placement": {"relation": "in_lane", "distance_m": 15}}))
+    assert [a.object_id for a in edited.delta.added] == ["inserted_00", "inserted_01", "inserted_02"]
+    assert edited.outcomes[0].new_object_ids == ("inserted_00", "inserted_01", "inserted_02")
+    rows = [edited.states.index(o) for o in edited.outcomes[0].new_object_ids]
+    for r in rows:
+        assert edited.states.sources[r] == "inserted" and edited.states.valid[r].all()
+        assert np.ptp(edited.states.xy[r], axis=0).max() < 1e-9  # standing still
+        assert np.allclose(edited.states.z[r], edited.states.size[r, 2] / 2)  # on the ground (z = 0 here)
+    starts = np.stack([edited.states.xy[r, 0] for r in rows])
+    assert np.all(np.linalg.norm(np.diff(starts, axis=0), axis=1) > 0.5)  # a row, not a pile
+    assert ctx.map_ctx.facts(starts, np.zeros(len(starts))).on_drivable.all()  # cones go on the road
+    assert {a.node_id for a in edited.delta.added} <= {n.node_id for n in edited.graph.nodes}
+    assert len(edited.validation.agents) == 3
+
+
+def test_insert_a_vehicle_drives_along_its_lane(ctx):
+    edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
+                                       "placement": {"relation": "in_lane", "distance_m": 20}}))
+    row = edited.states.index("inserted_00")
+    valid = edited.states.valid[row]
+    assert edited.states.speed[row][valid].mean() > 2.0  # drives by default
+    match = ctx.lanes.nearest(edited.states.xy[row][valid], edited.states.heading[row][valid])
+    assert np.nanmax(match.distance) < 1.0  # on a lane centre line, oriented along it
+
+
+def test_inserting_a_car_on_the_sidewalk_is_refused(ctx):
+    with pytest.raises(EditRefused) as info:
+        apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
+                                  "placement": {"relation": "on_sidewalk"}}))
+    assert info.value.reason == "infeasible_placement"
+
+
+def test_the_delta_rebuilds_the_edited_graph(ctx, bank):
+    edited = apply_edit(ctx, _program({"op": "replace", "target": {"description": "the white van"},
+                                       "asset": {"description": "a yellow sedan"}},
+                                      {"op": "modify", "target": {"object_id": _moving_vehicle(ctx)},
+                                       "behaviour": {"stop": {}}},
+                                      {"op": "insert", "asset": {"description": "orange traffic cones", "count": 2}},
+                                      {"op": "remove", "target": {"description": "the stop sign", "group": True}}))
+    rebuilt = apply_delta(ctx.graph, edited.delta, node_factory(bank.get, ctx.graph.frame_indices))
+    assert rebuilt.revision == edited.graph.revision
+    for t in (0.0, 7.5, 20.0, 39.0):
+        a, b = edited.graph.at(t), rebuilt.at(t)
+        assert a.node_slices == b.node_slices
+        assert torch.allclose(a.means, b.means)
+
+
+def test_omnire_like_takes_ids_only(ctx):
+    with pytest.raises(EditRefused, match="object ids") as info:
+        apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}}), OMNIRE_LIKE)
+    assert info.value.reason == "unsupported"
+    edited = apply_edit(ctx, _program({"op": "remove", "target": {"object_id": VAN}}), OMNIRE_LIKE)
+    assert edited.delta.removed_node_ids == (_node(ctx, VAN),)
+
+
+def test_without_a_bank_inserts_are_refused_naming_the_command(edit_log, edit_graph, edit_language, engine):
+    bare = EditContext.create(edit_log, edit_graph, edit_language, engine, None)
+    with pytest.raises(EditRefused, match="simsplat assets build") as info:
+        apply_edit(bare, _program({"op": "insert", "asset": {"description": "a yellow sedan"}}))
+    assert info.value.reason == "no_asset"
+
+
+def test_insert_a_pedestrian_walks_on_the_sidewalk(ctx):
+    from simsplat_core.scene.nodes import NonRigidNode
+
+    edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a pedestrian in a red top",
+                                                                  "category": "pedestrian"},
+                                       "placement": {"relation": "on_sidewalk", "distance_m": 10}}))
+    row = edited.states.index("inserted_00")
+    valid = edited.states.valid[row]
+    assert edited.states.speed[row][valid].max() > 0.8  # walks by default
+    first = int(np.argmax(valid))
+    facts = ctx.map_ctx.facts(edited.states.xy[row, first:first + 1], edited.states.heading[row, first:first + 1])
+    assert facts.on_sidewalk.all()
+    (added,) = edited.delta.added
+    node = edited.graph.node(added.node_id)
+    assert isinstance(node, NonRigidNode) and added.arc_length is not None  # the gait follows the new path
+
+
+def test_editor_parses_and_applies_a_prompt(ctx):
+    from simsplat_core.editing.apply import Editor
+
+    edited = Editor(ctx).edit("remove the white van")
+    assert edited.prompt == "remove the white van"
+    assert edited.delta.removed_node_ids == (_node(ctx, VAN),)
+    with pytest.raises(EditRefused) as info:
+        Editor(ctx).edit("paint the sky green")
+    assert info.value.reason in ("unsupported", "not_found")
