@@ -41,6 +41,7 @@ def _tree_digest(root: Path) -> dict[str, str]:
         ["query"],
         ["eval"],
         ["eval", "grounding"],
+        ["eval", "editing"],
         ["align"],
         ["edit"],
     ],
@@ -152,6 +153,14 @@ def test_eval_grounding_names_what_is_missing(tmp_path):
     assert result.exit_code != 0
     text = _flat(result.output)
     assert "no language scene" in text and "simsplat run" in text
+
+
+def test_eval_editing_names_what_is_missing(tmp_path):
+    result = runner.invoke(app, ["eval", "editing", "--store", str(tmp_path), "--out", str(tmp_path / "run")])
+    assert result.exit_code != 0
+    text = _flat(result.output)
+    assert "no language scene" in text and "simsplat run" in text
+    assert not (tmp_path / "run").exists()
 
 
 def test_query_without_an_aligned_scene_says_so(tmp_path):

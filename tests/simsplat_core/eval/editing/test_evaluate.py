@@ -13,7 +13,14 @@ from simsplat_core.editing.apply import EditContext
 from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import EditCommand, EditProgram, TargetRef
 from simsplat_core.editing.procedural_assets import procedural_asset
-from simsplat_core.eval.editing.evaluate import METHODS, EvalScene, Method, evaluate_editing, evaluate_prompt
+from simsplat_core.eval.editing.evaluate import (
+    METHODS,
+    EvalScene,
+    Method,
+    editing_methods,
+    evaluate_editing,
+    evaluate_prompt,
+)
 from simsplat_core.eval.editing.outcomes import completion_table, fidelity_table
 from simsplat_core.eval.editing.prompts import INFEASIBLE, PromptConfig, build_prompt_set
 from simsplat_core.eval.editing.truth import SceneTruth
@@ -69,3 +76,13 @@ def test_correct_edit_passes_wrong_edit_fails_infeasible_is_refused(scene: EvalS
     table = completion_table(outcomes).to_pylist()
     assert {r["method"] for r in table} == {"omnire-like", "no-inserts"}
     assert fidelity_table(outcomes, {scene.truth.seq_id: scene.psnr_unedited}).num_rows == 14
+
+
+def test_methods_are_the_editor_with_options() -> None:
+    names = [m.name for m in editing_methods()]
+    assert names == ["ours", "chatsim-like", "omnire-like"]
+    chatsim, omnire = METHODS["chatsim-like"], METHODS["omnire-like"]
+    assert chatsim.from_words and chatsim.options.grounding == "attributes" and "modify" not in chatsim.options.ops
+    assert not omnire.from_words and omnire.options.grounding == "ids" and not omnire.options.allow_pedestrian_insert
+    with pytest.raises(KeyError, match="known"):
+        editing_methods(["ours", "nope"])
