@@ -2,10 +2,11 @@
 
 Thin: load each sequence's log (with its ground-truth images), the editor's context (stored scene graph,
 language scene, asset bank: ``tasks.edit.load_edit_context``) and the world that generated the log; build
-the prompt set from ground truth; run every method on every prompt and check it
-(``simsplat_core.eval.editing``); write the run's tables into ``OUT``: ``tables/editing.{parquet,md}``,
-``tables/editing_infeasible``, ``tables/edit_fidelity``, ``tables/editing_outcomes`` (every method's result on
-every prompt, with the check's reason) and ``manifest.json``.
+the prompt set from ground truth (inserts ask for the looks the bank holds); run every method on every
+prompt and check it (``simsplat_core.eval.editing``); write the run's tables into ``OUT``:
+``tables/editing.{parquet,md}``, ``tables/editing_infeasible``, ``tables/edit_fidelity``,
+``tables/editing_outcomes`` (every method's result on every prompt, with the check's reason) and
+``manifest.json``.
 """
 
 from __future__ import annotations
@@ -23,12 +24,14 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.eval.editing.evaluate import EvalConfig, EvalScene, editing_methods, evaluate_editing
+from simsplat_core.eval.editing.observation import AssetLook
 from simsplat_core.eval.editing.outcomes import (
     completion_table,
     fidelity_table,
     infeasible_table,
     outcomes_table,
 )
+from simsplat_core.eval.editing.plans import AssetPools
 from simsplat_core.eval.editing.prompts import INFEASIBLE, PromptConfig, build_prompt_set, prompt_counts
 from simsplat_core.eval.editing.truth import SceneTruth
 from simsplat_core.eval.tables import markdown
@@ -98,7 +101,8 @@ def evaluate_editing_run(store_root: str, seq_ids: Sequence[str], out_root: str,
         log = read_scene_log(store, seq_id)
         nodes = {n.object_id: n.node_id for n in loaded.ctx.graph.object_nodes}
         scenes.append(EvalScene.prepare(SceneTruth.from_log(log, nodes), loaded.ctx))
-    prompts = build_prompt_set([s.truth for s in scenes], PromptConfig(per_category, infeasible, seed))
+    pools = AssetPools.from_bank([AssetLook.of_asset(a) for a in bank.assets])
+    prompts = build_prompt_set([s.truth for s in scenes], PromptConfig(per_category, infeasible, seed), pools)
     progress = StepProgress("eval editing", headline="")
     outcomes = evaluate_editing(scenes, prompts, chosen, EvalConfig(render_all=render_all),
                                 progress=lambda done, total, label: progress(done, total))

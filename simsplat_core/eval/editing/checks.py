@@ -7,7 +7,8 @@ trajectories:
 
 * **who**: remove drops exactly the targets; modify changes exactly the targets; replace redraws exactly
   the targets (a new node on the unchanged trajectory, or the target swapped for a new agent driving it);
-  insert adds exactly ``count`` agents of the asked category; nothing else moves, the ego never does.
+  insert adds exactly ``count`` agents of the asked category (a static object of a catalogue kind with that
+  kind's box size); nothing else moves, the ego never does.
 * **where** (inserts, at the new agent's first step, relative to the ground-truth anchor -- the ego or a
   scene object -- at that step): in a lane (the anchor's lane, its left / right neighbour or the
   oncoming lane, about ``d`` metres ahead along any lane-following path from the anchor, aligned with
@@ -32,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.editing.procedural_assets import STATIC_KINDS
 from simsplat_core.eval.editing.intents import EGO, EditIntent, MotionIntent, PlacementIntent
 from simsplat_core.eval.editing.observation import EditObservation, StateChanges, state_changes, trajectory_changed
 from simsplat_core.eval.editing.truth import SceneTruth
@@ -57,6 +59,8 @@ RUN_MPS = 2.2
 NEXT_TO_M = 3.0
 #: A delayed agent keeps to its original path within this (metres).
 PATH_TOL_M = 0.75
+#: An inserted static object's box is within this share of its kind's catalogue box, per dimension.
+KIND_SIZE_TOL = 0.2
 _CROSSING = (voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT)
 
 
@@ -241,7 +245,24 @@ def _check_who(intent: EditIntent, before: AgentStates, after: AgentStates, chan
         wrong = [o for o in changes.added if after.categories[after.index(o)] != intent.asset.category]
         v.require(not wrong, f"inserted {[after.categories[after.index(o)] for o in wrong]}, asked for a "
                   f"{intent.asset.category}")
+        _check_static_kind(intent, after, changes.added, v)
     return changes.added
+
+
+def _check_static_kind(intent: EditIntent, after: AgentStates, added: tuple[str, ...], v: Verdict) -> None:
+    """A static object of a catalogue kind has that kind's box (within ``KIND_SIZE_TOL``): the captioner tells
+    cones from barriers by the box, not e.g. a barrel from a cone."""
+    asset = intent.asset
+    if asset is None or asset.category != "static" or asset.subtype not in STATIC_KINDS:
+        return
+    nominal = np.asarray(STATIC_KINDS[asset.subtype].size, dtype=np.float64)
+    want = np.concatenate([np.sort(nominal[:2]), nominal[2:]])
+    for o in added:
+        size = after.size[after.index(o)]
+        got = np.concatenate([np.sort(size[:2]), size[2:]])
+        v.require(bool(np.all(np.abs(got - want) <= KIND_SIZE_TOL * want)),
+                  f"{o} has a {got[1]:.2f} x {got[0]:.2f} x {got[2]:.2f} m box, a {asset.subtype} is "
+                  f"{want[1]:.2f} x {want[0]:.2f} x {want[2]:.2f} m")
 
 
 # ---------------------------------------------------------------------------------------------- where

@@ -37,6 +37,7 @@ from simsplat_core.eval.editing.intents import (
     PlacementIntent,
     SpeedWords,
 )
+from simsplat_core.eval.editing.observation import AssetLook
 from simsplat_core.eval.editing.references import (
     absent_pedestrian_phrase,
     absent_vehicle_phrase,
@@ -62,7 +63,7 @@ from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.scenario.path import Path
 from simsplat_core.world.agents import EGO_SIZE, Agent
 from simsplat_core.world.paths import route
-from simsplat_core.world.road import connector_points, target_lane
+from simsplat_core.world.road import SIDEWALK, connector_points, target_lane
 
 #: Comfortable deceleration used to judge whether a stop is reachable (m/s^2).
 COMFORT_DECEL = 3.5
@@ -108,7 +109,9 @@ class Draft:
 @dataclass(frozen=True)
 class AssetPools:
     """What the asset bank can be asked for: ``(subtype, colour)`` of vehicles and ``(upper, lower)`` clothing
-    of pedestrians seen well in the evaluated scenes (the bank cuts its assets out of them)."""
+    of pedestrians -- those of the bank (:meth:`from_bank`), or those seen well in the evaluated scenes, which
+    the bank cuts its assets out of (:meth:`from_truths`). A quarter of the vehicles asked for are recoloured
+    within their kind's catalogue colours (the bank makes colour variants)."""
 
     vehicles: tuple[tuple[str, str], ...]
     pedestrians: tuple[tuple[str, str], ...]
@@ -127,6 +130,16 @@ class AssetPools:
         if not vehicles or not pedestrians:
             raise ValueError("no well-visible vehicle or pedestrian in the scenes: nothing to build assets from")
         return cls(tuple(sorted(vehicles)), tuple(sorted(pedestrians)))
+
+    @classmethod
+    def from_bank(cls, assets: Sequence[AssetLook]) -> AssetPools:
+        """What an asset bank holds (``AssetLook.of_asset`` of its assets): the looks its vehicles and
+        pedestrians have (pedestrians with known trousers)."""
+        vehicles = {(a.subtype, a.color) for a in assets if a.category == "vehicle"}
+        pedestrians = {(a.color, a.lower) for a in assets if a.category == "pedestrian" and a.lower}
+        if not vehicles or not pedestrians:
+            raise ValueError("the asset bank has no vehicle or no pedestrian (with known clothing colours)")
+        return cls(tuple(sorted(vehicles)), tuple(sorted((u, lo) for u, lo in pedestrians if lo is not None)))
 
 
 # ---------------------------------------------------------------------------------------------- helpers
@@ -219,6 +232,30 @@ def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> tuple[n
     if s > path.path.length:
         return None
     return np.asarray(path.path.position(s), dtype=np.float64), float(path.path.heading(s))
+
+
+def _ego_frame_point(truth: SceneTruth, ahead: float, left: float) -> np.ndarray:
+    """World point ``ahead`` metres in front of and ``left`` metres left of the ego at the first frame."""
+    h = float(truth.ego_heading[0])
+    return truth.ego_xy[0] + ahead * np.array([np.cos(h), np.sin(h)]) + left * np.array([-np.sin(h), np.cos(h)])
+
+
+def _sidewalk_ahead(truth: SceneTruth, distance: float) -> bool:
+    """Some sidewalk lies ``distance`` (+-1.5 m) ahead of the ego, within 15 m to either side: "on the sidewalk
+    d m ahead" has a place (ahead of the junction box there is none)."""
+    pts = np.array([_ego_frame_point(truth, distance + dx, dy) for dx in np.arange(-1.5, 1.6, 0.5)
+                    for dy in np.arange(-15.0, 15.1, 0.5)])
+    return bool((truth.layout.region(pts) == SIDEWALK).any())
+
+
+def _road_ahead(truth: SceneTruth, distance: float) -> tuple[bool, bool]:
+    """``(the road straight ahead at distance is an arm's travel lanes, ... and 3 m clear of its crosswalk)``:
+    where crossing (or jaywalking across) the street ``d`` m ahead is well defined."""
+    pos = truth.road_position(_ego_frame_point(truth, distance, 0.0), float(truth.ego_heading[0]))
+    if pos.arm is None or pos.region != "travel":
+        return False, False
+    c0, c1 = truth.layout.crosswalk_range(pos.arm)
+    return True, abs(pos.along - 0.5 * (c0 + c1)) - 0.5 * (c1 - c0) >= 3.0
 
 
 def _vehicle_asset(pools: AssetPools, rng: np.random.Generator, avoid: tuple[str, str] | None = None
@@ -357,6 +394,8 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
                     {"n": count_word(n, rng), "items": pick(rng, ("cones", "traffic cones", "orange cones")),
                      "d": distance_phrase(distance, rng), "side": name}))
     for distance in (10.0, 15.0, 20.0):
+        if not _sidewalk_ahead(truth, distance):
+            continue
         asset, words = _static_asset(rng)
         out.append(Draft("static_sidewalk", EditIntent(
             "insert", asset=asset, placement=PlacementIntent("on_sidewalk", EGO, distance)),
@@ -388,16 +427,23 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
 def plan_add_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
     out: list[Draft] = []
     for distance in (8.0, 10.0, 12.0, 15.0, 20.0):
-        for kind, placement, motion in (
-            ("pedestrian_sidewalk", PlacementIntent("on_sidewalk", EGO, distance), None),
-            ("pedestrian_crossing", PlacementIntent("in_front_of", EGO, distance), MotionIntent(cross_street=True)),
+        sidewalk, (road, off_crosswalk) = _sidewalk_ahead(truth, distance), _road_ahead(truth, distance)
+        for kind, placement, motion, feasible in (
+            ("pedestrian_sidewalk", PlacementIntent("on_sidewalk", EGO, distance), None, sidewalk),
+            ("pedestrian_crossing", PlacementIntent("in_front_of", EGO, distance), MotionIntent(cross_street=True),
+             road),
             ("pedestrian_insert_jaywalk", PlacementIntent("in_front_of", EGO, distance),
-             MotionIntent(cross_street=True, jaywalk=True)),
-            ("pedestrian_insert_run", PlacementIntent("on_sidewalk", EGO, distance), MotionIntent(gait="run")),
+             MotionIntent(cross_street=True, jaywalk=True), off_crosswalk),
+            ("pedestrian_insert_run", PlacementIntent("on_sidewalk", EGO, distance), MotionIntent(gait="run"),
+             sidewalk),
         ):
+            if not feasible:
+                continue
             asset, words = _pedestrian_asset(pools, rng)
             out.append(Draft(kind, EditIntent("insert", asset=asset, placement=placement, motion=motion),
                              {"A": words, "d": distance_phrase(distance, rng)}))
+        if not sidewalk:
+            continue
         asset, words = _pedestrian_asset(pools, rng)
         said, value, mps = speed_words(float(rng.uniform(0.8, 1.8)), "m/s", rng)
         out.append(Draft("pedestrian_walk_speed", EditIntent(

@@ -263,3 +263,13 @@ def test_state_changes_measures_redrawn_and_moved(before) -> None:
                                 speed=before.speed[row], valid=before.valid[row], size=(11.5, 2.5, 3.1), node_id=777)
     changes = state_changes(before, redrawn)
     assert changes.redrawn == ("veh_01",) and changes.moved == () and changes.removed == ()
+
+
+def test_a_static_kind_needs_its_box(truth, before) -> None:
+    spot, h = _ego_lane_spot(truth, 8.0)
+    intent = EditIntent("insert", asset=AssetIntent("static", "barrel", "orange"),
+                        placement=PlacementIntent("in_lane", EGO, 8.0, "same"))
+    barrel = check_states(truth, intent, _obs(before, _insert(before, "new_0", "static", spot, h, (0.6, 0.6, 1.0))))
+    assert "a barrel is" not in barrel.reason
+    cone = check_states(truth, intent, _obs(before, _insert(before, "new_0", "static", spot, h, (0.42, 0.42, 0.72))))
+    assert not cone.passed and "a barrel is 0.60 x 0.60 x 1.00 m" in cone.reason
