@@ -124,7 +124,15 @@ def evaluate_editing_run(store_root: str, seq_ids: Sequence[str], out_root: str,
         times = [o.seconds for o in outcomes if o.method == method.name and not o.refusal]
         edit_seconds[method.name] = ({"mean": statistics.fmean(times), "median": statistics.median(times),
                                       "max": max(times)} if times else {})
+    by_op: dict[str, dict[str, float]] = {}
+    for method in chosen:
+        for op in ("insert", "remove", "modify", "replace"):
+            scores = [o.fidelity.psnr for o in outcomes if o.method == method.name and o.completed
+                      and o.fidelity is not None and o.prompt.intent.op == op and o.prompt.category != INFEASIBLE]
+            if scores:
+                by_op.setdefault(method.name, {})[op] = round(statistics.fmean(scores), 3)
     manifest = {"stage": "editing", "sequences": list(seq_ids), "prompts": prompt_counts(prompts),
+                "fidelity_psnr_by_op": by_op,
                 "methods": [m.name for m in chosen], "unedited_test_psnr": unedited,
                 "asset_bank": bank.bank_hash, "edit_seconds": edit_seconds, "render_all": render_all,
                 "seconds": round(time.perf_counter() - started, 3)}
