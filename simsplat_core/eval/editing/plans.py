@@ -70,6 +70,9 @@ COMFORT_DECEL = 3.5
 #: Footprints (length, width) of the objects a spot must have room for: a car and a traffic cone.
 CAR_FOOTPRINT = (5.5, 2.2)
 CONE_FOOTPRINT = (0.6, 0.6)
+PERSON_FOOTPRINT = (0.8, 0.8)
+#: Clearance an asked motion keeps from traffic replaying its log (metres around the box).
+CLEARANCE_M = 1.0
 
 _TURNING = (voc.TURNING_LEFT, voc.TURNING_RIGHT)
 _STATIONARY = (voc.STOPPED, voc.PARKED)
@@ -196,10 +199,11 @@ def _free(truth: SceneTruth, xy: np.ndarray, heading: float, size: tuple[float, 
 
 
 def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, size: tuple[float, ...], skip: str = "",
-               lateral: float = 0.0, accel: float = 2.0, margin: float = 0.3) -> bool:
+               lateral: float = 0.0, accel: float = 2.0, margin: float = CLEARANCE_M) -> bool:
     """Driving ``path`` from arc length ``s0`` at ``v0`` m/s, changing to ``v1`` at ``accel`` m/s^2 (shifted
     ``lateral`` metres to the left), overlaps no agent but ``skip`` (nor the ego, ahead of it) over the log:
-    the requested motion is possible without running into traffic that replays its log."""
+    the requested motion is possible without running into (or brushing past, ``margin``) traffic that replays its
+    log."""
     t = truth.world.times
     dv = v1 - v0
     ta = abs(dv) / accel
@@ -428,6 +432,8 @@ def plan_add_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
     out: list[Draft] = []
     for distance in (8.0, 10.0, 12.0, 15.0, 20.0):
         sidewalk, (road, off_crosswalk) = _sidewalk_ahead(truth, distance), _road_ahead(truth, distance)
+        free = _free(truth, _ego_frame_point(truth, distance, 0.0), 0.0, PERSON_FOOTPRINT, 1.0)
+        road, off_crosswalk = road and free, off_crosswalk and free
         for kind, placement, motion, feasible in (
             ("pedestrian_sidewalk", PlacementIntent("on_sidewalk", EGO, distance), None, sidewalk),
             ("pedestrian_crossing", PlacementIntent("in_front_of", EGO, distance), MotionIntent(cross_street=True),
@@ -456,6 +462,8 @@ def plan_add_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
                                                             placement=PlacementIntent("on_crosswalk", EGO)),
                          {"A": words}))
     for anchor, phrase in _named(truth, rng, ("vehicle", "pedestrian")):
+        if anchor.category == "vehicle" and _label(truth, anchor.object_id) not in _STATIONARY:
+            continue  # a person stands next to a parked or waiting car, not next to one driving through
         side = pick(rng, ("left", "right"))
         gap = float(pick(rng, ("1", "1.5", "2")))
         asset, words = _pedestrian_asset(pools, rng)
@@ -540,8 +548,9 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
         own, s0 = agent.motion.path, float(agent.traj["s"][0])
 
         def clear(v1: float, _own: Path = own, _s0: float = s0, _v0: float = v0, _a: Agent = agent) -> bool:
-            """A speed-up to ``v1`` on its own path stays clear of traffic (slowing down always does)."""
-            return v1 <= _v0 or _clear_run(truth, _own, _s0, _v0, v1, _a.size, _a.object_id)
+            """Driving its own path at ``v1`` (from ``v0``) stays clear of traffic: faster it may run into the car
+            ahead, slower it may meet crossing traffic it passed before."""
+            return _clear_run(truth, _own, _s0, _v0, v1, _a.size, _a.object_id)
 
         if moving and label in _CRUISING:
             unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))
