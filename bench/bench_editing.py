@@ -10,8 +10,9 @@ it is only read (the evaluation's tables go to ``--eval-out``, default a tempora
 1. **One edit per category** (scene of the first sequence, the first prompt of each category that ``ours``
    completes in the evaluation's prompt set): parse, ground + apply + validate (``apply_edit``), and render
    every frame and camera of the edited graph with node ids (``editing.renders.render_frames``, 40 frames x 3
-   cameras at 240x160), timed separately; ``--repeats`` runs, the median reported. Torch uses
-   ``--threads`` threads (the target is <= 20 s on 2 cores).
+   cameras at 240x160), timed separately; ``--repeats`` runs, the median reported, and the first run of the
+   prompt (its phrases not yet in the text encoder's cache) in full. Torch uses ``--threads`` threads (the
+   target is <= 20 s on 2 cores).
 2. **The evaluation** (``tasks.editing_eval.evaluate_editing_run``): completion per (method, category),
    infeasible prompts refused, fidelity per category next to the unedited test PSNR, failures grouped by
    reason.
@@ -68,10 +69,13 @@ def time_one_edit_per_category(store_root: str, seq_id: str, repeats: int) -> di
     out = {}
     for category in CATEGORIES:
         for prompt in (p for p in prompts if p.category == category):
+            t0 = time.perf_counter()
             try:
-                editor.edit(prompt.text)
+                first = editor.edit(prompt.text)
             except EditRefused:
                 continue
+            list(render_frames(first.graph, ctx.log))
+            cold_s = time.perf_counter() - t0  # the text's phrases not yet in the encoder's cache
             runs = []
             for _ in range(repeats):
                 t0 = time.perf_counter()
@@ -85,9 +89,10 @@ def time_one_edit_per_category(store_root: str, seq_id: str, repeats: int) -> di
             parse_s, apply_s, render_s, total_s = (statistics.median(r[k] for r in runs) for k in range(4))
             out[category] = {"prompt": prompt.text, "parse_s": round(parse_s, 3), "apply_s": round(apply_s, 3),
                              "render_s": round(render_s, 3), "total_s": round(total_s, 3),
+                             "cold_total_s": round(cold_s, 3),
                              "frames": len(frames), "cameras": len(frames[0].cameras) if frames else 0}
-            logger.info("%-18s total %6.2f s (parse %.2f, ground+apply+validate %.2f, render %.2f): %s", category,
-                        total_s, parse_s, apply_s, render_s, prompt.text)
+            logger.info("%-18s total %6.2f s (parse %.2f, ground+apply+validate %.2f, render %.2f; first run %.2f s):"
+                        " %s", category, total_s, parse_s, apply_s, render_s, cold_s, prompt.text)
             break
         else:
             out[category] = {"prompt": "", "error": "no prompt of this category was carried out"}
@@ -129,7 +134,7 @@ def main() -> None:
     result: dict = {"store": args.store, "sequences": seq_ids, "threads": args.threads}
     if not args.skip_timing:
         result["one_edit"] = time_one_edit_per_category(args.store, seq_ids[0], args.repeats)
-        totals = [v["total_s"] for v in result["one_edit"].values() if "total_s" in v]
+        totals = [max(v["total_s"], v["cold_total_s"]) for v in result["one_edit"].values() if "total_s" in v]
         result["one_edit_max_s"] = max(totals) if totals else None
     if not args.skip_eval:
         from tasks.editing_eval import evaluate_editing_run
