@@ -57,9 +57,10 @@ def _lateral_rules(w: PredicateWork) -> None:
     if w.take(r"(?:overtake|overtakes|overtaking|pass|passes|passing|get past|gets past|go around|goes around)"):
         w.set("lane_change", "left")
         w.set("longitudinal", "accelerate")
-        phrase, end = w.noun_phrase_after(w.text.rfind("|") + 1)
+        start = w.text.rfind("|") + 1
+        phrase, end = w.noun_phrase_after(start)
         if phrase:
-            w.blank(w.text.index(phrase), end)
+            w.blank(start, end)
     if "lane_change" not in w.out.fields and re.search(_AMBIGUOUS_LANE, w.text):
         w.out.refusal = "a lane change needs a side: say 'change lanes to the left' or 'to the right'"
         w.out.refusal_field = "lane_change"

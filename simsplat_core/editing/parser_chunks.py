@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Iterable, Sequence
 
 from simsplat_core.editing import parser_lexicon as lex
@@ -140,7 +141,7 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
     while j < n:  # modifiers, then the head noun (and object nouns compounded with it)
         t = tokens[j]
         k = head_noun(tokens, j)
-        if k and not (head and tokens[j] in ("left", "right", "front", "back")):  # "turn the car *left*"
+        if k and not (head and tokens[j] in ("left", "right", "front", "back", "one")):  # "turn the car *left*"
             j += k
             head = True
             continue
@@ -149,9 +150,10 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
         if t == "and" and j + 1 < n and (tokens[j + 1] in COLOR_SYNONYMS) and j > start:
             j += 1
             continue
-        if j > start and (_predicate_start(tokens, j) or match(tokens, j, NP_PREPOSITIONS)):
+        prep = match(tokens, j, NP_PREPOSITIONS) > 0 and not head_noun(tokens, j + 1)  # "the *opposite* lane"
+        if j > start and (_predicate_start(tokens, j) or prep):
             break
-        if j == start and (match(tokens, j, NP_PREPOSITIONS) or t in lex.MODALS or t in ("and", "then")
+        if j == start and (prep or t in lex.MODALS or t in ("and", "then")
                            or (j == i and _predicate_start(tokens, j))):  # "to *walk* across": a verb
             break
         j += 1
@@ -175,6 +177,8 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
             end = chunk_np(tokens, j + k, "inner")
             if prep == "between" and end < n - 1 and tokens[end] == "and":
                 end = max(end, chunk_np(tokens, end + 1, "inner"))
+            while end < n - 1 and tokens[end] in ("and", ",") and _appearance(tokens, end + 1):
+                end = chunk_np(tokens, end + 1, "inner")  # "in a red top *and black trousers*"
             if end > j + k and not (mode == "asset" and prep != "of" and _names_place(tokens[j + k : end])):
                 j = end
                 continue
@@ -186,6 +190,15 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
             continue
         break
     return j
+
+
+def _appearance(tokens: Sequence[str], i: int) -> bool:
+    """Whether the noun phrase at ``i`` is a garment or a colour ("beige trousers", "a blue cap") -- part of
+    the appearance before it, not a new object."""
+    end = chunk_np(tokens, i, "inner")
+    words = tokens[i:end]
+    return bool(words) and (any(w in lex.GARMENTS for w in words)
+                            or words[0] in COLOR_SYNONYMS and not any(w in NOUNS for w in words))
 
 
 def _names_place(words: Sequence[str]) -> bool:
@@ -205,6 +218,22 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
             break
         j += 1
     return j
+
+
+def np_after(text: str, start: int, exclude: Iterable[str] = ()) -> tuple[str, int, int]:
+    """The ``target`` noun phrase that starts at the first word of ``text[start:]``, up to any blanked word
+    (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``; ``("", start, start)``:
+    none."""
+    words = []
+    for m in re.finditer(r"\S+", text[start:]):
+        if "|" in m.group(0):
+            break
+        words.append(m)
+    tokens = [m.group(0) for m in words]
+    stop = chunk_np(tokens, 0, "target", exclude=exclude) if tokens else 0
+    if stop == 0:
+        return "", start, start
+    return " ".join(tokens[:stop]), start + words[0].start(), start + words[stop - 1].end()
 
 
 def chunk_targets(tokens: Sequence[str], i: int, mode: str = "target",

@@ -153,6 +153,7 @@ OTHER_NOUNS: tuple[str, ...] = ("one", "ones", "thing", "things", "object", "obj
                                 "backpack", "bag", "umbrella", "stroller", "pram", "dog", "stripe", "stripes",
                                 "everyone", "everybody", "everything", "agents")
 #: Every noun that may head a noun phrase.
+GARMENTS: frozenset[str] = frozenset((*UPPER_GARMENTS, *LOWER_GARMENTS))
 HEAD_NOUNS: frozenset[str] = frozenset((*NOUNS, *UPPER_GARMENTS, *LOWER_GARMENTS, *EXTRA_ASSET_NOUNS, *PLACE_NOUNS,
                                         *OTHER_NOUNS, *NON_OBJECTS))
 HEAD_NOUN_MAX_WORDS = max(len(n.split()) for n in HEAD_NOUNS)
