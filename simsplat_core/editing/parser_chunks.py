@@ -173,7 +173,8 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
                 continue
         k = match(tokens, j, preps)
         prep = " ".join(tokens[j : j + k])
-        if k and prep not in exclude and not is_quantity(tokens, j + k):
+        if k and (prep not in exclude or prep in APPEARANCE_PREPOSITIONS and _appearance(tokens, j + k)) \
+                and not is_quantity(tokens, j + k):
             end = chunk_np(tokens, j + k, "inner")
             if prep == "between" and end < n - 1 and tokens[end] == "and":
                 end = max(end, chunk_np(tokens, end + 1, "inner"))
@@ -206,15 +207,24 @@ def _names_place(words: Sequence[str]) -> bool:
     return any(w in lex.PLACE_NOUNS or w in lex.NON_OBJECTS or w in NOUNS for w in words)
 
 
+#: Words after which a verb form is a noun ("a right *turn*", "its *speed*").
+_NOUN_MARKERS = frozenset({"a", "an", "the", "its", "their", "his", "her", "left", "right", "full", "complete"})
+
+
 def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
     """End of a participle's or relative clause's complement: up to a modal, a base verb, a clause break."""
     n = len(tokens)
     first = j
     while j < n:
         t = tokens[j]
-        if t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to":
+        if t == "and" and j + 1 < n and is_participle(tokens[j + 1]):  # "standing and waiting"
+            j += 2
+            continue
+        if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
+                or match(tokens, j, lex.SCENE_PHRASES)):
             break
-        if t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t):
+        if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
+                and tokens[j - 1] not in _NOUN_MARKERS):  # "making a right *turn*", "reducing its *speed*"
             break
         j += 1
     return j

@@ -158,8 +158,8 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
     relative, distance, anchor, anchor_end = _anchor_relative(s)
     for rx, lane in _LANES:
         m = s.find(rx)
-        if m and anchor is not None and relative != "in_front_of" and not s.text[anchor_end : m.start()].strip():
-            anchor += " " + m.group(0).strip()  # "behind the black suv in the oncoming lane": the anchor's lane
+        if m and anchor is not None and relative != "in_front_of" and "|" not in s.text[anchor_end : m.start()]:
+            anchor += " " + s.text[anchor_end : m.end()].strip()  # "behind the suv in the oncoming lane": its lane
             s.blank(m.start(), m.end())
             break
         if m:
@@ -202,18 +202,19 @@ def _distance(m: re.Match[str]) -> float | None:
 def _anchor_relative(s: _Scan) -> tuple[str | None, float | None, str | None, int]:
     """``(relation, distance, anchor phrase, its end)`` of a placement relative to a noun phrase (``anchor``
     None: the ego), read before lanes and areas so that an anchor keeps its own ("the van parked at the curb")."""
-    for rx, relation in _RELATIVE:
-        for m in re.finditer(r"(?<![\w/-])(?:" + rx + r")(?= )", s.text):
-            if "|" in m.group(0):
-                continue
-            phrase, end = s.anchor_after(m.end())
-            ego = re.fullmatch(_EGO, phrase) is not None
-            words = phrase.split()
-            if not phrase or not ego and words[chunks.chunk_np(words, 0, "inner") - 1] in lex.PLACE_NOUNS:
-                continue  # "on the right side of the road" is an area
-            s.blank(m.start(), end)
-            rel = relation if relation != "side" else f"{_side(m)}_of"
-            return rel, _distance(m), None if ego else phrase, end
+    matches = sorted(((m, relation) for rx, relation in _RELATIVE
+                      for m in re.finditer(r"(?<![\w/-])(?:" + rx + r")(?= )", s.text)), key=lambda c: c[0].start())
+    for m, relation in matches:  # the first in the text: "beside the van to the right of us" is beside the van
+        if "|" in m.group(0):
+            continue
+        phrase, end = s.anchor_after(m.end())
+        ego = re.fullmatch(_EGO, phrase) is not None
+        words = phrase.split()
+        if not phrase or not ego and words[chunks.chunk_np(words, 0, "inner") - 1] in lex.PLACE_NOUNS:
+            continue  # "on the right side of the road" is an area
+        s.blank(m.start(), end)
+        rel = relation if relation != "side" else f"{_side(m)}_of"
+        return rel, _distance(m), None if ego else phrase, end
     return None, None, None, -1
 
 
