@@ -221,7 +221,8 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
             j += 2
             continue
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
-                or match(tokens, j, lex.SCENE_PHRASES)):
+                or match(tokens, j, lex.SCENE_PHRASES)
+                or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)):  # "by 1 s"
             break
         if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
                 and tokens[j - 1] not in _NOUN_MARKERS):  # "making a right *turn*", "reducing its *speed*"

@@ -160,7 +160,7 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
         m = s.find(rx)
         if m and anchor is not None and relative != "in_front_of" and "|" not in s.text[anchor_end : m.start()]:
             anchor += " " + s.text[anchor_end : m.end()].strip()  # "behind the suv in the oncoming lane": its lane
-            s.blank(m.start(), m.end())
+            s.blank(anchor_end, m.end())
             break
         if m:
             out.lane = lane if lane != "side" else _side(m)
@@ -248,6 +248,9 @@ def _count(tokens: Sequence[str]) -> tuple[int | None, int]:
     """``(count given by the leading words or None, tokens they take)``."""
     k = chunks.match(tokens, 0, lex.QUANTITY_PHRASES)
     if k:
+        given = number_word(tokens[k]) if k < len(tokens) else None  # "a line of *3* cones"
+        if given is not None and given == int(given) and given > 0:
+            return int(given), k + 1
         return lex.QUANTITY_PHRASES[" ".join(tokens[:k])], k
     if tokens and tokens[0] in ("a", "an", "another", "one", "1", "single", "a single", "one more"):
         return 1, 1
