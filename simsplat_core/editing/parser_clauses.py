@@ -32,6 +32,7 @@ from simsplat_core.editing.parser_behaviour import parse_predicate
 from simsplat_core.editing.parser_placement import PlacementParse, find_placement, parse_asset, spacing_words
 from simsplat_core.editing.parser_predicate import INTENT_FIELDS
 from simsplat_core.editing.parser_semantic import nearest_intent
+from simsplat_core.editing.parser_speed import SPEED_NOUN, SPEED_VERB
 from simsplat_core.editing.parser_state import INDEFINITE, Draft, PromptState, Subject
 from simsplat_core.editing.result import EditRefused
 
@@ -52,8 +53,7 @@ _INSERT_FILLER = frozenset("appear appears show up there here new too as well al
 #: Clause-opening verbs a typo may be corrected to.
 _KNOWN_VERBS = sorted({v for v in (*lex.REMOVE_VERBS, *lex.INSERT_VERBS, *lex.REPLACE_VERBS, *lex.CAUSATIVES,
                                    *lex.TARGET_FIRST_VERBS) if " " not in v})
-_SPEED_OF = re.compile(r"(?:set|change|adjust|reduce|lower|decrease|cut|drop|increase|raise|boost) (?:the )?"
-                       r"(?:walking |driving |travel |travelling |running )?(?:speed|pace) of ")
+_SPEED_OF = re.compile(SPEED_VERB + r" (?:the )?" + SPEED_NOUN + r" of ")
 _SIDEWAYS = r"(?:over )?\d+(?:\.\d+)? m (?:to the |towards the |over to the |to its )?(?:left|right)"
 
 
@@ -90,7 +90,8 @@ class PromptParser(PromptState):
         spans = chunks.chunk_targets(tokens, start, "target", exclude=("to", "by"))
         if not spans:
             return False
-        self._modify([self._subject(tokens[a:b]) for a, b in spans], [tokens[0], "its", "speed", *tokens[spans[-1][1]:]])
+        subjects = [self._subject(tokens[a:b]) for a, b in spans]
+        self._modify(subjects, [tokens[0], "its", "speed", *tokens[spans[-1][1] :]])
         return True
 
     def _replace(self, tokens: list[str]) -> bool:

@@ -54,7 +54,8 @@ _LANES: tuple[tuple[str, str], ...] = (
      r"|on the other side of the road|in the lane going the other way"
      r"|in the lane (?:of|for|with) (?:the )?(?:oncoming|opposing) traffic", "opposite"),
     (r"in (?:the |our |my |its )?(?:ego|own|same|current)(?: vehicle| car)?(?:'s)? lane(?: as)?"
-     r"|in (?:our|my|its) lane|in the lane of the ego(?: vehicle| car)?|in the (?:same )?lane (?:that )?(?:we are|i am) in|in (?:the |this )?lane(?= |$)", "same"),
+     r"|in (?:our|my|its) lane|in the lane of the ego(?: vehicle| car)?"
+     r"|in the (?:same )?lane (?:that )?(?:we are|i am) in|in (?:the |this )?lane(?= |$)", "same"),
 )
 _AREAS: tuple[tuple[str, str], ...] = (
     (r"(?:on|onto|at|in|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"

@@ -28,6 +28,12 @@ def _factor(word: str) -> float | None:
     return table.get(word, number_word(word))
 
 
+#: Verbs that set a speed ("*reduce* its speed to 8 km/h", "*set* the speed of the bus to 30 km/h").
+SPEED_VERB = r"(?:set|change|adjust|bring|reduce|lower|decrease|cut|drop|increase|raise|boost)"
+#: A speed as a noun ("the *walking speed* of the man").
+SPEED_NOUN = r"(?:(?:walking|driving|travel|travelling|running|cruising) )?(?:speed|pace)"
+
+
 def speed_rules(w: PredicateWork) -> None:
     def factor(value: float | None) -> bool:
         if value is None:
@@ -67,8 +73,7 @@ def speed_rules(w: PredicateWork) -> None:
             w.set("gait", gait.group(1))
         return True
 
-    w.take(r"(?:set|change|adjust|bring|reduce|lower|decrease|cut|drop|increase|raise|boost)(?:s)? (?:its |the |their )?"
-           r"(?:walking |driving |travel |travelling |running )?(?:speed|pace)(?: down| up)? to " + _SPEED,
+    w.take(SPEED_VERB + r"(?:s)? (?:its |the |their )?" + SPEED_NOUN + r"(?: down| up)? to " + _SPEED,
            lambda m: absolute(m.group(1), m.group(2)))  # "reduce its speed to 8 km/h"
     w.take(_SPEED + r" " + faster, lambda m: delta(m, 1.0))
     w.take(_SPEED + r" " + slower, lambda m: delta(m, -1.0))
