@@ -11,6 +11,11 @@
 
 Nothing found is ``EditRefused(reason="not_found")`` whose message is the engine's ("no purple bus in this
 scene") plus what similar objects the scene has. Nodes an earlier command removed are not found again.
+
+An edit acts on what it names: a search may rank the nearest colour first ("the purple van" -> a blue van),
+an edit may not. Matches whose caption contradicts a colour the description names are dropped
+(:func:`colors_agree`; neighbouring greys agree, captions being unsure of them); when none is left the
+reference is refused as not found.
 """
 
 from __future__ import annotations
@@ -21,11 +26,13 @@ from collections import Counter
 from collections.abc import Collection
 from dataclasses import dataclass
 
+from simsplat_core.color_names import ACHROMATIC_NAMES
 from simsplat_core.editing.commands import TargetRef
 from simsplat_core.editing.options import GroundingMode
 from simsplat_core.editing.result import EditRefused
+from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_parse import parse_query
+from simsplat_core.language.query_parse import ParsedQuery, parse_query
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.scene.graph import SceneGraph
 
@@ -33,6 +40,30 @@ logger = logging.getLogger(__name__)
 
 #: Similar objects named in a not-found message.
 SIMILAR_SHOWN = 3
+
+
+def _same_color(asked: str, seen: str) -> bool:
+    """``asked`` and ``seen`` name the same colour, or neighbouring achromatic ones (white / silver / gray /
+    black are told apart by brightness, which lighting shifts by a step)."""
+    if asked == seen:
+        return True
+    if asked in ACHROMATIC_NAMES and seen in ACHROMATIC_NAMES:
+        return abs(ACHROMATIC_NAMES.index(asked) - ACHROMATIC_NAMES.index(seen)) == 1
+    return False
+
+
+def colors_agree(parsed: ParsedQuery, caption: AppearanceCaption | None) -> bool:
+    """Whether ``caption`` can be the object ``parsed`` describes by colour: every named colour (the main colour,
+    or the upper / lower clothing colours) is among the caption's (no caption: nothing contradicts)."""
+    if caption is None:
+        return True
+    pairs = [(parsed.upper_color, caption.upper_color), (parsed.lower_color, caption.lower_color)]
+    for asked, seen in pairs:
+        if asked is not None and seen is not None and not _same_color(asked, seen):
+            return False
+    seen_colors = caption.colors
+    return all(any(_same_color(asked, seen) for seen in seen_colors) for asked in parsed.colors) if seen_colors \
+        else True
 
 
 @dataclass(frozen=True)
@@ -100,6 +131,14 @@ class Grounder:
         grounding = self.engine.ground(self.language, text)
         gone = set(removed)
         alive = [m for m in grounding.matches if m.node_id in self._objects and m.node_id not in gone]
+        parsed = parse_query(text)
+        agreeing = [m for m in alive if colors_agree(parsed, self._caption(m.node_id))]
+        if alive and not agreeing:
+            asked = " / ".join(c for c in (*parsed.colors, parsed.upper_color, parsed.lower_color) if c)
+            message = self._not_found(f"no {asked} {parsed.noun or 'object'} matching {ref.description!r} in this "
+                                      "scene", [m.node_id for m in grounding.ranking], gone)
+            raise EditRefused(message, reason="not_found", command_index=command_index)
+        alive = agreeing
         if not alive:
             if grounding.matches:
                 message = (f"{ref.description!r} is {', '.join(self.describe(m.node_id) for m in grounding.matches)}"
@@ -110,6 +149,12 @@ class Grounder:
         ids = tuple(m.node_id for m in alive)
         logger.info("%s %r -> %s", role, ref.description, ids)
         return Grounded(ids, tuple(self._objects[i].object_id for i in ids), grounding.message)
+
+    def _caption(self, node_id: int) -> AppearanceCaption | None:
+        try:
+            return self.language.node(node_id).caption
+        except KeyError:
+            return None
 
     def _by_id(self, ref: TargetRef, removed: Collection[int], command_index: int | None, role: str) -> Grounded:
         if ref.node_id is not None:

@@ -127,9 +127,9 @@ def _start_speed(behaviour: Behaviour, cruise: float) -> float:
 
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
-          object_id: str | None) -> PlannedTrajectory:
+          object_id: str | None, with_traffic: bool = True) -> PlannedTrajectory:
     """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
-    current trajectories: the log, or what earlier commands made of them)."""
+    current trajectories: the log, or what earlier commands made of them; ``with_traffic=False``: to none)."""
     ctx, states = draft.ctx, draft.states
     stop_behind = _other(draft, behaviour.stop.behind if behaviour.stop else None, index, "object to stop behind")
     try:
@@ -138,7 +138,8 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
             exclude = tuple(o for o in (object_id, leader.object_id if leader else None) if o is not None)
             request = VehicleMotionRequest.from_behaviour(
                 behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
-                leader=leader, stop_behind=stop_behind, traffic=traffic_from_states(states, exclude),
+                leader=leader, stop_behind=stop_behind,
+                traffic=traffic_from_states(states, exclude) if with_traffic else (),
                 backfill=backfill, label=label)
             return plan_vehicle(request, ctx.lanes, ctx.map_ctx)
         ped = PedestrianMotionRequest.from_behaviour(
@@ -204,7 +205,32 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
     plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
                  object_id=states.object_ids[row])
+    if kind == VEHICLE and behaviour.speed is not None:
+        _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     return Motion.planned(plan, describe_behaviour(behaviour))
+
+
+#: A faster speed counts as reached at this share of the asked speed.
+SPEED_REACHED_SHARE = 0.8
+
+
+def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behaviour, start: StartState,
+                         size: tuple[float, float, float], log: LogTrajectory | None, index: int, label: str,
+                         object_id: str) -> None:
+    """Refuse a speed-up that the traffic ahead takes away (never a silent no-op): when the plan keeping its gap
+    stays under :data:`SPEED_REACHED_SHARE` of the asked speed but the same plan on a free road gets there."""
+    assert behaviour.speed is not None
+    target = behaviour.speed.target_mps(abs(start.speed))
+    reached = float(np.max(np.abs(plan.speed[start.step:]), initial=0.0))
+    if target <= abs(start.speed) + 0.5 or reached >= SPEED_REACHED_SHARE * target:
+        return
+    free = _plan(draft, VEHICLE, behaviour, start, size, log, index, label, backfill=False, object_id=object_id,
+                 with_traffic=False)
+    free_reached = float(np.max(np.abs(free.speed[start.step:]), initial=0.0))
+    if free_reached >= SPEED_REACHED_SHARE * target:
+        raise EditRefused(f"{label} cannot reach {target:.1f} m/s: keeping its gap to the traffic ahead it gets to "
+                          f"{reached:.1f} m/s (the other agents replay their log and do not make room)",
+                          reason="infeasible_motion", command_index=index)
 
 
 def _resolve_for_agent(draft: Draft, placement: Placement, row: int, step: int, index: int) -> PlacedPose:

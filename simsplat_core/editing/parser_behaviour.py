@@ -57,9 +57,10 @@ def _lateral_rules(w: PredicateWork) -> None:
     if w.take(r"(?:overtake|overtakes|overtaking|pass|passes|passing|get past|gets past|go around|goes around)"):
         w.set("lane_change", "left")
         w.set("longitudinal", "accelerate")
-        phrase, end = w.noun_phrase_after(w.text.rfind("|") + 1)
+        start = w.text.rfind("|") + 1
+        phrase, end = w.noun_phrase_after(start)
         if phrase:
-            w.blank(w.text.index(phrase), end)
+            w.blank(start, end)
     if "lane_change" not in w.out.fields and re.search(_AMBIGUOUS_LANE, w.text):
         w.out.refusal = "a lane change needs a side: say 'change lanes to the left' or 'to the right'"
         w.out.refusal_field = "lane_change"
@@ -92,7 +93,9 @@ def _pedestrian_rules(w: PredicateWork) -> None:
     jaywalking = w.take(r"jaywalk\w*(?: (?:across|over))?(?: (?:the|a) (?:street|road))?") | w.take(jay)
     gaits = {"run": r"run|runs|running|sprint|sprints|sprinting|jog|jogs|jogging|dash|dashes|race|races|rush|rushes"
                     r"|bolt|bolts",
-             "walk": r"walk|walks|walking|stroll|strolls|amble|ambles|saunter|saunters|wander|wanders"}
+             "walk": r"walk|walks|walking|stroll|strolls|strolling|amble|ambles|ambling|saunter|saunters|sauntering"
+                     r"|wander|wanders|wandering"}
+    start = r"(?:(?:start|starts|begin|begins|break|breaks) (?:to |into a )?)?"  # "start running"
     crossed = w.take(r"(?:(?:cross|crosses|crossing)" + _CROSSABLE + r"|(?:(?:" + gaits["run"] + "|" + gaits["walk"]
                      + r"|go|goes|head|heads|step|steps|hurry|hurries|make (?:his|her|their|"
                        r"its) way)(?: out)? (?:across"
@@ -105,9 +108,9 @@ def _pedestrian_rules(w: PredicateWork) -> None:
     if jaywalking:
         w.set("jaywalk", True)
     if "gait" not in w.out.fields:
-        w.take(gaits["run"], lambda m: w.set("gait", "run"))
+        w.take(start + r"(?:" + gaits["run"] + r")", lambda m: w.set("gait", "run"))
     if "gait" not in w.out.fields:
-        w.take(gaits["walk"], lambda m: w.set("gait", "walk"))
+        w.take(start + r"(?:" + gaits["walk"] + r")", lambda m: w.set("gait", "walk"))
 
 
 def _gait_of(w: PredicateWork, phrase: str, gaits: dict[str, str]) -> None:

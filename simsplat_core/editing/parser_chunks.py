@@ -16,6 +16,7 @@
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Iterable, Sequence
 
 from simsplat_core.editing import parser_lexicon as lex
@@ -140,7 +141,7 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
     while j < n:  # modifiers, then the head noun (and object nouns compounded with it)
         t = tokens[j]
         k = head_noun(tokens, j)
-        if k and not (head and tokens[j] in ("left", "right", "front", "back")):  # "turn the car *left*"
+        if k and not (head and tokens[j] in ("left", "right", "front", "back", "one")):  # "turn the car *left*"
             j += k
             head = True
             continue
@@ -149,9 +150,10 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
         if t == "and" and j + 1 < n and (tokens[j + 1] in COLOR_SYNONYMS) and j > start:
             j += 1
             continue
-        if j > start and (_predicate_start(tokens, j) or match(tokens, j, NP_PREPOSITIONS)):
+        prep = match(tokens, j, NP_PREPOSITIONS) > 0 and not head_noun(tokens, j + 1)  # "the *opposite* lane"
+        if j > start and (_predicate_start(tokens, j) or prep):
             break
-        if j == start and (match(tokens, j, NP_PREPOSITIONS) or t in lex.MODALS or t in ("and", "then")
+        if j == start and (prep or t in lex.MODALS or t in ("and", "then")
                            or (j == i and _predicate_start(tokens, j))):  # "to *walk* across": a verb
             break
         j += 1
@@ -171,10 +173,13 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
                 continue
         k = match(tokens, j, preps)
         prep = " ".join(tokens[j : j + k])
-        if k and prep not in exclude and not is_quantity(tokens, j + k):
+        if k and (prep not in exclude or prep in APPEARANCE_PREPOSITIONS and _appearance(tokens, j + k)) \
+                and not is_quantity(tokens, j + k):
             end = chunk_np(tokens, j + k, "inner")
             if prep == "between" and end < n - 1 and tokens[end] == "and":
                 end = max(end, chunk_np(tokens, end + 1, "inner"))
+            while end < n - 1 and tokens[end] in ("and", ",") and _appearance(tokens, end + 1):
+                end = chunk_np(tokens, end + 1, "inner")  # "in a red top *and black trousers*"
             if end > j + k and not (mode == "asset" and prep != "of" and _names_place(tokens[j + k : end])):
                 j = end
                 continue
@@ -188,9 +193,22 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
     return j
 
 
+def _appearance(tokens: Sequence[str], i: int) -> bool:
+    """Whether the noun phrase at ``i`` is a garment or a colour ("beige trousers", "a blue cap") -- part of
+    the appearance before it, not a new object."""
+    end = chunk_np(tokens, i, "inner")
+    words = tokens[i:end]
+    return bool(words) and (any(w in lex.GARMENTS for w in words)
+                            or words[0] in COLOR_SYNONYMS and not any(w in NOUNS for w in words))
+
+
 def _names_place(words: Sequence[str]) -> bool:
     """An appearance phrase that is a place ("in *the left lane*", "with *the bus*") and so not appearance."""
     return any(w in lex.PLACE_NOUNS or w in lex.NON_OBJECTS or w in NOUNS for w in words)
+
+
+#: Words after which a verb form is a noun ("a right *turn*", "its *speed*").
+_NOUN_MARKERS = frozenset({"a", "an", "the", "its", "their", "his", "her", "left", "right", "full", "complete"})
 
 
 def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
@@ -199,12 +217,34 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
     first = j
     while j < n:
         t = tokens[j]
-        if t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to":
+        if t == "and" and j + 1 < n and is_participle(tokens[j + 1]):  # "standing and waiting"
+            j += 2
+            continue
+        if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
+                or match(tokens, j, lex.SCENE_PHRASES)
+                or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)):  # "by 1 s"
             break
-        if t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t):
+        if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
+                and tokens[j - 1] not in _NOUN_MARKERS):  # "making a right *turn*", "reducing its *speed*"
             break
         j += 1
     return j
+
+
+def np_after(text: str, start: int, exclude: Iterable[str] = ()) -> tuple[str, int, int]:
+    """The ``target`` noun phrase that starts at the first word of ``text[start:]``, up to any blanked word
+    (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``; ``("", start, start)``:
+    none."""
+    words = []
+    for m in re.finditer(r"\S+", text[start:]):
+        if "|" in m.group(0):
+            break
+        words.append(m)
+    tokens = [m.group(0) for m in words]
+    stop = chunk_np(tokens, 0, "target", exclude=exclude) if tokens else 0
+    if stop == 0:
+        return "", start, start
+    return " ".join(tokens[:stop]), start + words[0].start(), start + words[stop - 1].end()
 
 
 def chunk_targets(tokens: Sequence[str], i: int, mode: str = "target",

@@ -32,6 +32,7 @@ from simsplat_core.editing.parser_behaviour import parse_predicate
 from simsplat_core.editing.parser_placement import PlacementParse, find_placement, parse_asset, spacing_words
 from simsplat_core.editing.parser_predicate import INTENT_FIELDS
 from simsplat_core.editing.parser_semantic import nearest_intent
+from simsplat_core.editing.parser_speed import SPEED_NOUN, SPEED_VERB
 from simsplat_core.editing.parser_state import INDEFINITE, Draft, PromptState, Subject
 from simsplat_core.editing.result import EditRefused
 
@@ -52,6 +53,7 @@ _INSERT_FILLER = frozenset("appear appears show up there here new too as well al
 #: Clause-opening verbs a typo may be corrected to.
 _KNOWN_VERBS = sorted({v for v in (*lex.REMOVE_VERBS, *lex.INSERT_VERBS, *lex.REPLACE_VERBS, *lex.CAUSATIVES,
                                    *lex.TARGET_FIRST_VERBS) if " " not in v})
+_SPEED_OF = re.compile(SPEED_VERB + r" (?:the )?" + SPEED_NOUN + r" of ")
 _SIDEWAYS = r"(?:over )?\d+(?:\.\d+)? m (?:to the |towards the |over to the |to its )?(?:left|right)"
 
 
@@ -68,7 +70,7 @@ class PromptParser(PromptState):
                 logger.debug("reading %r as %r", tokens[0], close[0])
                 tokens = [close[0], *tokens[1:]]  # a typo: "remvoe the car"
         try:
-            for form in (self._replace, self._remove, self._insert, self._causative, self._target_first,
+            for form in (self._speed_of, self._replace, self._remove, self._insert, self._causative, self._target_first,
                          self._subject_first, self._continuation, self._unknown_verb):
                 if form(tokens):
                     return
@@ -78,6 +80,19 @@ class PromptParser(PromptState):
             raise EditRefused(f"{self.clause_text!r} asks for something out of range ({exc.title}"
                               f"{'.' + where if where else ''}: {error['msg']})", reason="invalid_command") from exc
         raise self.not_understood(self.clause_text)
+
+    def _speed_of(self, tokens: list[str]) -> bool:
+        """ "set the walking speed of the man in red to 8 km/h": the speed verb, then its owner."""
+        m = _SPEED_OF.match(" ".join(tokens))
+        if m is None:
+            return False
+        start = len(m.group(0).split())
+        spans = chunks.chunk_targets(tokens, start, "target", exclude=("to", "by"))
+        if not spans:
+            return False
+        subjects = [self._subject(tokens[a:b]) for a, b in spans]
+        self._modify(subjects, [tokens[0], "its", "speed", *tokens[spans[-1][1] :]])
+        return True
 
     def _replace(self, tokens: list[str]) -> bool:
         words = " ".join(tokens)

@@ -22,6 +22,9 @@ REMOVE_VERBS: tuple[str, ...] = (
     "nuke", "kill", "exclude", "omit", "purge", "dispose of", "do away with", "throw out", "toss out", "hide",
     "despawn", "un-spawn", "unspawn", "pull out",
 )
+#: Where a removed object goes ("take the van *out of the scene*"): never part of a description.
+SCENE_PHRASES: tuple[str, ...] = ("out of the scene", "from the scene", "out of the picture", "out of the clip",
+                                  "out of the video", "out of the frame")
 #: Verbs that insert an indefinite noun phrase ("add a cone"); with a definite one ("put the van ...") they move it.
 INSERT_VERBS: tuple[str, ...] = (
     "add", "insert", "put", "place", "spawn", "drop in", "drop off", "drop", "introduce", "create", "position",
@@ -153,6 +156,7 @@ OTHER_NOUNS: tuple[str, ...] = ("one", "ones", "thing", "things", "object", "obj
                                 "backpack", "bag", "umbrella", "stroller", "pram", "dog", "stripe", "stripes",
                                 "everyone", "everybody", "everything", "agents")
 #: Every noun that may head a noun phrase.
+GARMENTS: frozenset[str] = frozenset((*UPPER_GARMENTS, *LOWER_GARMENTS))
 HEAD_NOUNS: frozenset[str] = frozenset((*NOUNS, *UPPER_GARMENTS, *LOWER_GARMENTS, *EXTRA_ASSET_NOUNS, *PLACE_NOUNS,
                                         *OTHER_NOUNS, *NON_OBJECTS))
 HEAD_NOUN_MAX_WORDS = max(len(n.split()) for n in HEAD_NOUNS)

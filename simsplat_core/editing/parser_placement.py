@@ -40,7 +40,7 @@ _RELATIVE: tuple[tuple[str, str], ...] = (
 )
 #: Relations to the ego without a noun phrase ("20 m ahead", "on our left").
 _EGO_RELATIVE: tuple[tuple[str, str], ...] = (
-    (_D + r"(?:ahead|in front|forward|down the road|up the road|further(?: ahead| up| down)?|away)(?! of)",
+    (_D + r"(?:up )?(?:ahead|in front|forward|down the road|up the road|further(?: ahead| up| down)?|away)(?! of)",
      "in_front_of"),
     (r"(?P<d>\d+(?:\.\d+)?) m (?:behind|back)(?! of)", "behind"),
     (r"(?:to|on|at) (?:the|our|my) (?P<side>left|right)(?:[- ]hand)?(?: side)?(?! of| lane)", "side"),
@@ -51,9 +51,11 @@ _LANES: tuple[tuple[str, str], ...] = (
      r"(?P<side2>left|right)|(?:one|1) lane (?:to the |over to the |over on the )?(?P<side3>left|right)|in the (?:next"
      r"|adjacent|neighbouring|neighboring) lane (?:to|on) the (?P<side4>left|right)", "side"),
     (r"in (?:the )?(?:oncoming|opposite|opposing|other|contraflow) (?:lane|direction|traffic)|in oncoming traffic"
-     r"|on the other side of the road|in the lane going the other way", "opposite"),
+     r"|on the other side of the road|in the lane going the other way"
+     r"|in the lane (?:of|for|with) (?:the )?(?:oncoming|opposing) traffic", "opposite"),
     (r"in (?:the |our |my |its )?(?:ego|own|same|current)(?: vehicle| car)?(?:'s)? lane(?: as)?"
-     r"|in (?:our|my|its) lane|in the lane of the ego(?: vehicle| car)?|in (?:the |this )?lane(?= |$)", "same"),
+     r"|in (?:our|my|its) lane|in the lane of the ego(?: vehicle| car)?"
+     r"|in the (?:same )?lane (?:that )?(?:we are|i am) in|in (?:the |this )?lane(?= |$)", "same"),
 )
 _AREAS: tuple[tuple[str, str], ...] = (
     (r"(?:on|onto|at|in|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"
@@ -102,14 +104,10 @@ class _Scan:
         self.text = self.text[:start] + " " + "|" * max(end - start - 2, 1) + " " + self.text[end:]
 
     def anchor_after(self, end: int) -> tuple[str, int]:
-        tokens = self.text[end:].split()
-        if not tokens or "|" in tokens[0]:
+        phrase, _, stop = chunks.np_after(self.text, end, _ANCHOR_EXCLUDE)
+        if not phrase or chunks.is_quantity(phrase.split(), 0):
             return "", end
-        stop = chunks.chunk_np(tokens, 0, "target", exclude=_ANCHOR_EXCLUDE)
-        phrase = " ".join(tokens[:stop])
-        if not phrase or chunks.is_quantity(tokens, 0):
-            return "", end
-        return phrase, end + self.text[end:].index(phrase) + len(phrase)
+        return phrase, stop
 
     def residual(self) -> list[str]:
         return [t for t in self.text.split() if "|" not in t]
@@ -158,8 +156,13 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
                 out.heading_deg = deg
                 s.blank(m.start(), m.end())
                 break
+    relative, distance, anchor, anchor_end = _anchor_relative(s)
     for rx, lane in _LANES:
         m = s.find(rx)
+        if m and anchor is not None and relative != "in_front_of" and "|" not in s.text[anchor_end : m.start()]:
+            anchor += " " + s.text[anchor_end : m.end()].strip()  # "behind the suv in the oncoming lane": its lane
+            s.blank(anchor_end, m.end())
+            break
         if m:
             out.lane = lane if lane != "side" else _side(m)
             s.blank(m.start(), m.end())
@@ -175,7 +178,8 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
             s.blank(m.start(), m.end())
             found = True
             break
-    relative, distance, anchor = _relative(s)
+    if relative is None and distance is None:
+        relative, distance = _ego_relative(s)
     found = found or relative is not None
     if relative is not None or distance is not None:
         out.distance_m = distance
@@ -196,30 +200,38 @@ def _distance(m: re.Match[str]) -> float | None:
     return float(m.group("d")) if "d" in m.re.groupindex and m.group("d") else None
 
 
-def _relative(s: _Scan) -> tuple[str | None, float | None, str | None]:
-    """``(relation, distance, anchor phrase)`` of a relative placement (``anchor`` None: the ego)."""
-    for rx, relation in _RELATIVE:
-        for m in re.finditer(r"(?<![\w/-])(?:" + rx + r")(?= )", s.text):
-            if "|" in m.group(0):
-                continue
-            phrase, end = s.anchor_after(m.end())
-            if not phrase:
-                continue
-            s.blank(m.start(), end)
-            rel = relation if relation != "side" else f"{_side(m)}_of"
-            ego = re.fullmatch(_EGO, phrase) is not None
-            return rel, _distance(m), None if ego else phrase
+def _anchor_relative(s: _Scan) -> tuple[str | None, float | None, str | None, int]:
+    """``(relation, distance, anchor phrase, its end)`` of a placement relative to a noun phrase (``anchor``
+    None: the ego), read before lanes and areas so that an anchor keeps its own ("the van parked at the curb")."""
+    matches = sorted(((m, relation) for rx, relation in _RELATIVE
+                      for m in re.finditer(r"(?<![\w/-])(?:" + rx + r")(?= )", s.text)), key=lambda c: c[0].start())
+    for m, relation in matches:  # the first in the text: "beside the van to the right of us" is beside the van
+        if "|" in m.group(0):
+            continue
+        phrase, end = s.anchor_after(m.end())
+        ego = re.fullmatch(_EGO, phrase) is not None
+        words = phrase.split()
+        if not phrase or not ego and words[chunks.chunk_np(words, 0, "inner") - 1] in lex.PLACE_NOUNS:
+            continue  # "on the right side of the road" is an area
+        s.blank(m.start(), end)
+        rel = relation if relation != "side" else f"{_side(m)}_of"
+        return rel, _distance(m), None if ego else phrase, end
+    return None, None, None, -1
+
+
+def _ego_relative(s: _Scan) -> tuple[str | None, float | None]:
+    """``(relation, distance)`` of a placement relative to the ego without a noun phrase ("20 m ahead")."""
     for rx, relation in _EGO_RELATIVE:
         found = s.find(rx)
         if found:
             s.blank(found.start(), found.end())
             rel = relation if relation != "side" else f"{_side(found)}_of"
-            return rel, _distance(found), None
+            return rel, _distance(found)
     found = s.find(_N + r" m")
     if found:
         s.blank(found.start(), found.end())
-        return None, float(found.group(1)), None
-    return None, None, None
+        return None, float(found.group(1))
+    return None, None
 
 
 # --------------------------------------------------------------------------------------------------- assets
@@ -237,6 +249,9 @@ def _count(tokens: Sequence[str]) -> tuple[int | None, int]:
     """``(count given by the leading words or None, tokens they take)``."""
     k = chunks.match(tokens, 0, lex.QUANTITY_PHRASES)
     if k:
+        given = number_word(tokens[k]) if k < len(tokens) else None  # "a line of *3* cones"
+        if given is not None and given == int(given) and given > 0:
+            return int(given), k + 1
         return lex.QUANTITY_PHRASES[" ".join(tokens[:k])], k
     if tokens and tokens[0] in ("a", "an", "another", "one", "1", "single", "a single", "one more"):
         return 1, 1

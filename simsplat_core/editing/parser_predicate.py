@@ -90,16 +90,9 @@ class PredicateWork:
 
     def noun_phrase_after(self, end: int, exclude: tuple[str, ...] = ()) -> tuple[str, int]:
         """The noun phrase starting after character ``end`` (text, its end character); ``("", end)``: none."""
-        rest = self.text[end:]
-        tokens = rest.split()
-        if not tokens or "|" in tokens[0]:
-            return "", end
-        stop = chunks.chunk_np(tokens, 0, "target", exclude=("at", "after", "before", "until", "for", "with",
-                                                             "in", "by", *exclude))
-        if stop == 0:
-            return "", end
-        phrase = " ".join(tokens[:stop])
-        return phrase, end + rest.index(phrase) + len(phrase)
+        phrase, _, stop = chunks.np_after(self.text, end, ("at", "after", "before", "until", "for", "with", "in",
+                                                           "by", *exclude))
+        return (phrase, stop) if phrase else ("", end)
 
     def set(self, name: str, value: Any) -> None:
         self.out.fields[name] = value

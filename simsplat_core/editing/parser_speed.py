@@ -28,6 +28,12 @@ def _factor(word: str) -> float | None:
     return table.get(word, number_word(word))
 
 
+#: Verbs that set a speed ("*reduce* its speed to 8 km/h", "*set* the speed of the bus to 30 km/h").
+SPEED_VERB = r"(?:set|change|adjust|bring|reduce|lower|decrease|cut|drop|increase|raise|boost)"
+#: A speed as a noun ("the *walking speed* of the man").
+SPEED_NOUN = r"(?:(?:walking|driving|travel|travelling|running|cruising) )?(?:speed|pace)"
+
+
 def speed_rules(w: PredicateWork) -> None:
     def factor(value: float | None) -> bool:
         if value is None:
@@ -60,19 +66,21 @@ def speed_rules(w: PredicateWork) -> None:
         w.set("speed", SpeedSpec(mode="delta", value=sign * float(m.group(value)),
                                  unit=m.group(unit)))  # type: ignore[arg-type]
 
-    w.take(_SPEED + r" " + faster, lambda m: delta(m, 1.0))
-    w.take(_SPEED + r" " + slower, lambda m: delta(m, -1.0))
-    w.take(up + r"(?: by)? " + _SPEED, lambda m: delta(m, 1.0))
-    w.take(down + r"(?: by)? " + _SPEED, lambda m: delta(m, -1.0))
-    w.take(r"(?:faster|quicker) by " + _SPEED, lambda m: delta(m, 1.0))
-    w.take(r"slower by " + _SPEED, lambda m: delta(m, -1.0))
-
     def absolute(value: str, unit: str, words: str = "") -> bool:
         w.set("speed", SpeedSpec(mode="absolute", value=float(value), unit=unit))  # type: ignore[arg-type]
         gait = re.search(r"\b(walk|run)s?\b", words)
         if gait:
             w.set("gait", gait.group(1))
         return True
+
+    w.take(SPEED_VERB + r"(?:s)? (?:its |the |their )?" + SPEED_NOUN + r"(?: down| up)? to " + _SPEED,
+           lambda m: absolute(m.group(1), m.group(2)))  # "reduce its speed to 8 km/h"
+    w.take(_SPEED + r" " + faster, lambda m: delta(m, 1.0))
+    w.take(_SPEED + r" " + slower, lambda m: delta(m, -1.0))
+    w.take(up + r"(?: by)? " + _SPEED, lambda m: delta(m, 1.0))
+    w.take(down + r"(?: by)? " + _SPEED, lambda m: delta(m, -1.0))
+    w.take(r"(?:faster|quicker) by " + _SPEED, lambda m: delta(m, 1.0))
+    w.take(r"slower by " + _SPEED, lambda m: delta(m, -1.0))
 
     lead = (r"(?:(?:at|to|with|of|reach|reaches|hit|hits|doing|do|does|maintain|maintains|keep|hold|a|an|constant"
             r"|steady|top|speed|up|down|limit|exactly|only|just|the|going|go|goes|drive|drives|travel|travels|cruise"

@@ -66,6 +66,11 @@ class Draft:
     fields: dict[str, Any] = field(default_factory=dict)
 
 
+def _conflicts(fields: dict[str, Any], given: dict[str, Any]) -> bool:
+    """Whether ``fields`` change a value ``given`` already has ("pull up and stop" asks for one stop twice)."""
+    return any(name in given and given[name] != value for name, value in fields.items())
+
+
 def _is_ego(phrase: str) -> bool:
     return phrase in lex.EGO_WORDS
 
@@ -268,14 +273,14 @@ class PromptState:
         self.subject = subject
         if subject.inserted is not None:
             draft = self.drafts[subject.inserted]
-            if set(fields) & set(draft.fields) or (place is not None and draft.placement is not None):
+            if _conflicts(fields, draft.fields) or (place is not None and draft.placement is not None):
                 raise self.refuse(f"{self.clause_text!r} asks {subject.label!r} for something it was already given")
             draft.fields.update(fields)
             draft.placement = place or draft.placement
             return
         last = self.drafts[-1] if self.drafts else None
         if (last is not None and last.op == "modify" and last.subject is not None and last.subject.ref == subject.ref
-                and not set(fields) & set(last.fields) and not (place is not None and last.placement is not None)):
+                and not _conflicts(fields, last.fields) and not (place is not None and last.placement is not None)):
             last.fields.update(fields)
             last.placement = place or last.placement
             last.note = f"{last.note}; {self.clause_text}"[:500]

@@ -34,7 +34,8 @@ _VAGUE_COUNTS: dict[str, int] = {"a couple of": 2, "a pair of": 2, "a few": 3, "
 _CONTRACTIONS: tuple[tuple[str, str], ...] = (
     (r"\bcan't\b|\bcannot\b", "can not"), (r"\bwon't\b", "will not"), (r"\blet's\b", "let us"),
     (r"\b(\w+)n't\b", r"\1 not"), (r"\b(i|you|we|they)'d\b", r"\1 would"), (r"\b(i|you|we|they)'ll\b", r"\1 will"),
-    (r"\b(it|that|there|he|she|what|where)'s\b", r"\1 is"), (r"\b(\w+)'re\b", r"\1 are"), (r"\bi'm\b", "i am"),
+    (r"\b(it|that|there|he|she|what|where|who|which)'s\b", r"\1 is"), (r"\b(\w+)'re\b", r"\1 are"),
+    (r"\bi'm\b", "i am"),
     (r"\b(i|you|we|they)'ve\b", r"\1 have"), (r"\bgonna\b", "going to"), (r"\bwanna\b", "want to"),
     (r"\bgotta\b", "has to"),
 )

@@ -10,7 +10,7 @@ import torch
 from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.assets import AssetBank
-from simsplat_core.editing.commands import EditProgram
+from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, SpeedSpec, TargetRef
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import node_factory
 from simsplat_core.editing.procedural_assets import procedural_asset
@@ -260,3 +260,26 @@ def test_editor_parses_and_applies_a_prompt(ctx):
     with pytest.raises(EditRefused) as info:
         Editor(ctx).edit("paint the sky green")
     assert info.value.reason in ("unsupported", "not_found")
+
+
+def test_a_speed_up_the_traffic_ahead_takes_away_is_refused_not_silently_dropped(ctx):
+    """Every vehicle asked for 12 m/s either gets near it, or is refused naming the traffic only when a free road
+    would have let it get there (a plain physical limit, 4 s of log at comfortable acceleration, is no refusal)."""
+    from simsplat_core.editing.motion_glue import SPEED_REACHED_SHARE
+
+    outcomes = {"reached": 0, "refused": 0, "limited": 0}
+    for oid, category in zip(ctx.states.object_ids, ctx.states.categories, strict=True):
+        if category != "vehicle" or oid == "ego":
+            continue
+        try:
+            edited = apply_edit(ctx, EditProgram(commands=[EditCommand(
+                op="modify", target=TargetRef(object_id=oid),
+                behaviour=Behaviour(speed=SpeedSpec(mode="absolute", value=12.0)))]))
+        except EditRefused as refused:
+            assert refused.reason == "infeasible_motion", str(refused)
+            assert "traffic ahead" in str(refused) and "12.0 m/s" in str(refused)
+            outcomes["refused"] += 1
+            continue
+        top = float(np.abs(edited.states.speed[edited.states.index(oid)]).max())
+        outcomes["reached" if top >= SPEED_REACHED_SHARE * 12.0 else "limited"] += 1
+    assert outcomes["reached"] > 0 and outcomes["refused"] > 0, outcomes

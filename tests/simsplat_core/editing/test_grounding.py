@@ -88,3 +88,28 @@ def test_editor_options_refuse_what_the_baselines_cannot_do():
     EditorOptions().check(walker, 0)
     with pytest.raises(ValueError, match="unknown"):
         EditorOptions(ops=frozenset({"teleport"}))
+
+
+def test_a_named_colour_the_match_does_not_have_is_refused_not_substituted(grounder):
+    """The search may rank the nearest colour first; an edit must not act on it ("the purple van" is no blue van)."""
+    assert grounder.ground(TargetRef(description="the van")).object_ids == ("veh_02",)  # the van is white
+    for wrong in ("the purple van", "the red van", "the black van"):
+        with pytest.raises(EditRefused) as info:
+            grounder.ground(TargetRef(description=wrong))
+        assert info.value.reason == "not_found" and wrong.split()[1] in str(info.value)
+
+
+def test_colours_agree_with_captions_by_name_and_by_clothing():
+    from simsplat_core.editing.grounding import colors_agree
+    from simsplat_core.language.appearance.captioner import AppearanceCaption
+    from simsplat_core.language.query_parse import parse_query
+
+    car = AppearanceCaption("a blue SUV", "vehicle", "SUV", ("blue",))
+    person = AppearanceCaption("a pedestrian in a red top and black trousers", "pedestrian", "adult",
+                               ("red", "black"), upper_color="red", lower_color="black")
+    assert colors_agree(parse_query("the blue SUV"), car)
+    assert not colors_agree(parse_query("the purple SUV"), car)
+    assert colors_agree(parse_query("the SUV"), car) and colors_agree(parse_query("the purple SUV"), None)
+    assert colors_agree(parse_query("the person in a red top and black trousers"), person)
+    assert not colors_agree(parse_query("the person in a green top"), person)
+    assert not colors_agree(parse_query("the person in a red top and blue trousers"), person)

@@ -337,7 +337,60 @@ TYPED: list[tuple[str, list[dict[str, Any]]]] = [
      [{"op": MOD, "behaviour.start_time_s": 2.0, "behaviour.cross_street": True}]),
 ]
 
-TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI + TYPED
+#: Phrasing families an independent prompt generator used (variants of them, not its prompts).
+FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
+    # "and" between garments / colours stays in the noun phrase
+    ("add a cyclist in a yellow jacket and black shorts on the road 5 m ahead",
+     [{"op": INS, "asset.description": "a cyclist in a yellow jacket and black shorts", AK: "yellow", PR: "on_road",
+       PD: 5.0}]),
+    ("remove the woman in a blue coat and white trousers",
+     [{"op": REM, "target.description": "the woman in a blue coat and white trousers"}]),
+    ("the man wearing a black jacket and grey jeans should stop",
+     [{"op": MOD, "target.description": "the man wearing a black jacket and grey jeans", "behaviour.stop": "set"}]),
+    ("add a cone and a barrier in front of the van", [{"op": INS, AS: "traffic cone"}, {"op": INS, AS: "barrier"}]),
+    # relative clauses and participles stay in the target / anchor description
+    ("the woman who's on the crosswalk should run",
+     [{"op": MOD, "target.description": "the woman who is on the crosswalk", "behaviour.gait": "run"}]),
+    ("make the van which is in the left lane slow down",
+     [{"op": MOD, "target.description": "the van which is in the left lane", "behaviour.longitudinal": "decelerate"}]),
+    ("put a cone 2 m behind the taxi that is stopped at the light",
+     [{"op": INS, PR: "behind", "placement.anchor.description": "the taxi that is stopped at the light", PD: 2.0,
+       "behaviour": None}]),
+    ("add a barrel on the right side of the truck parked by the curb",
+     [{"op": INS, PR: "right_of", "placement.anchor.description": "the truck parked by the curb"}]),
+    ("put a barrier next to the bus making a left turn",
+     [{"op": INS, PR: "next_to", "placement.anchor.description": "the bus making a left turn", "behaviour": None}]),
+    ("the pedestrian in a red top and black pants who is standing on the curb should walk across the street",
+     [{"op": MOD, TD: "black pants who is standing on the curb", "behaviour.cross_street": True}]),
+    ("delete the man in a grey hoodie sitting and waiting on the bench",
+     [{"op": REM, "target.description": "the man in a grey hoodie sitting and waiting on the bench"}]),
+    # lanes
+    ("add a van in the opposing lane 40 m ahead", [{"op": INS, PR: "in_lane", PL: "opposite", PD: 40.0}]),
+    ("put a truck 20 m ahead in the lane of the oncoming traffic", [{"op": INS, PR: "in_lane", PL: "opposite"}]),
+    ("put a car one lane over to the right 20 m ahead", [{"op": INS, PR: "in_lane", PL: "right", PD: 20.0}]),
+    ("add a truck in my lane 30 meters up ahead", [{"op": INS, PR: "in_lane", PL: "same", PD: 30.0}]),
+    ("add a taxi in the lane we are in, 15 m ahead", [{"op": INS, PR: "in_lane", PL: "same", PD: 15.0}]),
+    ("place a bus 15 m behind the red car in the left lane",
+     [{"op": INS, PR: "behind", "placement.anchor.description": "the red car in the left lane", PL: None}]),
+    # verbs and idioms
+    ("the man should start jogging", [{"op": MOD, "behaviour.gait": "run"}]),
+    ("the woman in the green dress should begin running", [{"op": MOD, "behaviour.gait": "run"}]),
+    ("add a man sauntering along the sidewalk 5 m ahead", [{"op": INS, PR: "on_sidewalk", "behaviour.gait": "walk"}]),
+    ("delay the white van that is waiting at the junction by 3 seconds",
+     [{"op": MOD, "target.description": "the white van that is waiting at the junction", "behaviour.delay_s": 3.0}]),
+    ("the girl should cross over to the other side of the road", [{"op": MOD, "behaviour.cross_street": True}]),
+    ("make the child stand still", [{"op": MOD, "behaviour.stop": "set"}]),
+    ("the taxi should pull up and stop", [{"op": MOD, TD: "taxi", "behaviour.stop": "set"}]),
+    ("take the red truck parked near the bus out of the scene",
+     [{"op": REM, "target.description": "the red truck parked near the bus"}]),
+    ("set the speed of the black van to 20 km/h",
+     [{"op": MOD, TD: "black van", SP_MODE: "absolute", SP_VAL: 20.0, SP_UNIT: "km/h"}]),
+    ("the bus should reduce its speed to 30 km/h", [{"op": MOD, SP_MODE: "absolute", SP_VAL: 30.0}]),
+    ("add a line of 6 cones in the right lane", [{"op": INS, AN: 6, PR: "in_lane", PL: "right"}]),
+    ("put a row of three barriers 10 m ahead", [{"op": INS, AS: "barrier", AN: 3, PD: 10.0}]),
+]
+
+TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI + TYPED + FAMILIES
 
 
 def test_the_table_is_large_and_distinct() -> None:
