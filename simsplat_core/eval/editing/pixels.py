@@ -11,7 +11,8 @@ of the unedited scene, at the same frames and cameras.
   nothing to check in pixels (its place is checked on the trajectories).
 * **appearance**: the built-in captioner (``language.appearance.captioner.describe_track``) captions the
   rendered crops of an inserted or replacing object the world shows (views with at least
-  ``MIN_CAPTION_PIXELS`` node pixels, box size from the edited agent); its colour (vehicles, static objects:
+  ``MIN_CAPTION_PIXELS`` node pixels, box size from the edited agent; an object drawn smaller than that
+  everywhere is not judged by colour); its colour (vehicles, static objects:
   main or second colour; pedestrians: top and trousers) must be the asked one -- or what the captioner says
   of the world's own rendering of an object of the asked colour at the same place
   (``PixelEvidence.reference_captions``: the captioner's lighting confusions, e.g. a sunlit silver body named
@@ -103,7 +104,8 @@ def check_appearance(evidence: PixelEvidence, intent: EditIntent, object_id: str
     if asset is None:
         return
     crops = object_crops(evidence.edited, node_id, object_id, category, box_size)
-    if not v.require(bool(crops), f"{object_id}: no view with {MIN_CAPTION_PIXELS}+ pixels to caption"):
+    if not crops:  # drawn where it should be (``check_visible``), but too small anywhere for the captioner
+        v.note(f"{object_id} too small to caption (no view with {MIN_CAPTION_PIXELS}+ pixels)")
         return
     caption = describe_track(crops)
     reference = evidence.reference_captions.get(object_id)
