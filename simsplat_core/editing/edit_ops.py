@@ -244,7 +244,7 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
         anchor_ids = found.node_ids[:1]
         anchor = anchor_pose(draft, found.object_ids[0], draft.describe(anchor_ids[0]), step, index)
     gap = command.asset.spacing_m if command.asset.spacing_m is not None else ROW_GAP_M[asset.category]
-    first = resolve(draft, placement, asset, anchor, step, index)
+    first = resolve(draft, placement, asset, anchor, step, index, command.behaviour)
     new_ids, lines = [], []
     for placed in place_row(first, count=command.asset.count, spacing_m=gap, size=asset.size, lanes=draft.ctx.lanes):
         motion = plan_inserted(draft, command.behaviour, asset, placed, step, index)

@@ -3,7 +3,8 @@
 * :func:`resolve` -- a command's placement as a pose (``editing.placement.resolve_placement``);
 * :func:`plan_inserted` -- how an inserted object moves: vehicles drive along their lane at a sensible speed
   (``motion_requests.DEFAULT_CRUISE_MPS``, keeping a gap to the traffic ahead) unless told otherwise (an
-  absolute speed of 0 parks them), pedestrians walk (``motion_requests.WALK_MPS``) along the sidewalk or
+  absolute speed of 0 parks them; one placed parked outside the lanes stays parked unless told to move),
+  pedestrians walk (``motion_requests.WALK_MPS``) along the sidewalk or
   cross when told, static objects stand still;
 * :func:`plan_modified` -- a target's new motion from its log trajectory (``editing.motion_controller``);
 * :class:`Motion` -- the result on the step grid, and :func:`changed_motion` (does it differ from the log?).
@@ -62,9 +63,9 @@ class Motion:
         return cls(plan.xy, plan.heading, plan.speed, plan.valid, plan.arc_length, description)
 
     @classmethod
-    def standing(cls, xy: np.ndarray, heading: float, steps: int) -> Motion:
+    def standing(cls, xy: np.ndarray, heading: float, steps: int, description: str = "standing still") -> Motion:
         return cls(np.tile(np.asarray(xy, np.float64), (steps, 1)), np.full(steps, float(heading)), np.zeros(steps),
-                   np.ones(steps, bool), np.zeros(steps), "standing still")
+                   np.ones(steps, bool), np.zeros(steps), description)
 
     def track(self, frame_idx: np.ndarray, z: np.ndarray) -> PoseTrack:
         """Box poses at the step frames (``z [T]`` box-centre heights), present where valid."""
@@ -96,13 +97,15 @@ def anchor_pose(draft: Draft, object_id: str, label: str, step: int, index: int)
 
 
 def resolve(draft: Draft, placement: Placement, asset: Asset, anchor: AnchorPose | None, step: int,
-            index: int) -> PlacedPose:
-    """Where ``placement`` puts ``asset`` at ``step`` (``EditRefused`` naming why it cannot be placed)."""
+            index: int, behaviour: Behaviour | None = None) -> PlacedPose:
+    """Where ``placement`` puts ``asset`` at ``step`` (``EditRefused`` naming why it cannot be placed); a
+    ``behaviour`` crossing the street starts it at the road's edge."""
     ctx = draft.ctx
+    crossing = behaviour is not None and behaviour.cross_street
     try:
         return resolve_placement(placement, category=asset.category, size=asset.size, anchor=anchor,
                                  ego_pose=ctx.log.ego_poses[step], lanes=ctx.lanes, map_ctx=ctx.map_ctx,
-                                 frame=int(draft.states.frame_idx[step]), occupied=draft.states)
+                                 frame=int(draft.states.frame_idx[step]), occupied=draft.states, crossing=crossing)
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
 
@@ -184,6 +187,8 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
         return Motion.standing(xy, heading, steps)
     behaviour = behaviour or Behaviour()
     kind = motion_kind(asset.category, asset.caption)
+    if kind == VEHICLE and placed.parked and behaviour.is_empty:
+        return Motion.standing(xy, heading, steps, "parked")
     cruise = DEFAULT_CRUISE_MPS if kind == VEHICLE else WALK_MPS
     start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
     plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
@@ -200,7 +205,7 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     log = LogTrajectory.from_states(states, row)
     start = StartState.from_log(log, states.times)
     if placement is not None:
-        placed = _resolve_for_agent(draft, placement, row, start.step, index)
+        placed = _resolve_for_agent(draft, placement, row, start.step, index, crossing=behaviour.cross_street)
         start = StartState(start.step, np.asarray(placed.xy, np.float64), float(placed.heading), start.speed)
     size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
     plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
@@ -233,8 +238,10 @@ def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behav
                           reason="infeasible_motion", command_index=index)
 
 
-def _resolve_for_agent(draft: Draft, placement: Placement, row: int, step: int, index: int) -> PlacedPose:
-    """Where ``placement`` moves agent ``row`` at ``step`` (its own box ignored when checking for room)."""
+def _resolve_for_agent(draft: Draft, placement: Placement, row: int, step: int, index: int,
+                       crossing: bool = False) -> PlacedPose:
+    """Where ``placement`` moves agent ``row`` at ``step`` (its own box ignored when checking for room; ``crossing``:
+    it crosses the street from there)."""
     ctx, states = draft.ctx, draft.states
     anchor = None
     if placement.anchor is not None and not placement.anchor.is_ego:
@@ -244,6 +251,6 @@ def _resolve_for_agent(draft: Draft, placement: Placement, row: int, step: int, 
         return resolve_placement(placement, category=states.categories[row], size=tuple(states.size[row]),
                                  anchor=anchor, ego_pose=ctx.log.ego_poses[step], lanes=ctx.lanes, map_ctx=ctx.map_ctx,
                                  frame=int(states.frame_idx[step]), occupied=states,
-                                 ignore=(states.object_ids[row],))
+                                 ignore=(states.object_ids[row],), crossing=crossing)
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc

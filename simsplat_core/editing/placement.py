@@ -10,16 +10,23 @@ and the map.
   ``distance_m`` ahead of the anchor's projection along the lane graph (centre to centre; default
   :data:`LANE_AHEAD_M`), oriented along the lane;
 * ``on_crosswalk`` / ``on_sidewalk`` / ``on_road`` -- the nearest spot of that kind of map area where the box
-  fits, from the anchor (``distance_m`` ahead of it when given);
+  fits, from the anchor; with ``distance_m``, about that far ahead of it (within :func:`distance_slack`), on the
+  side of the road edge nearest the anchor when both sides have one; a pedestrian or static object stays inside
+  that area when nudged;
 * ``absolute`` -- ``position`` in the ego frame at ``frame`` (the ego frame's origin is on the ground).
 
 Rules per kind (``scenario.metrics.kind_of``): a vehicle ends up on a lane centre line, oriented along the
-lane (snapped from within :data:`LANE_SNAP_M`), and still on the requested side of its anchor; a pedestrian
-may stand on sidewalks, crosswalks or the road, a static object on the road or a sidewalk (anywhere, on a
-map without sidewalks). A box overlapping an agent at that frame is nudged along its lane (or heading) by
-up to :data:`NUDGE_M`; otherwise the placement is refused, naming the object in the way. Refusals are
-``EditRefused(reason="infeasible_placement")`` ("cannot place a car on the sidewalk", "no lane to the left of
-the white van").
+lane (snapped from within :data:`LANE_SNAP_M`), and still on the requested side of its anchor -- except
+behind / in front of a vehicle parked on the road outside the lanes (a parking strip, a shoulder): there it
+parks in line with it, on the anchor's heading line, its whole box on the drivable area and off the sidewalks
+(area ``"road"``, no lane); a pedestrian may stand on sidewalks, crosswalks or the road, a static object on the
+road or a sidewalk (anywhere, on a map without sidewalks). A pedestrian about to cross the road
+(``crossing=True``) placed behind / in front of its anchor stands at the edge of the road beside that spot
+(within :data:`KERB_REACH_M`), facing across it. A box overlapping an agent at that frame is nudged along its
+lane (or heading) by up to :data:`NUDGE_M` (or :func:`distance_slack` of a given distance, when more; away from
+the anchor only when no distance is given); otherwise the placement is refused, naming the object in the way.
+Refusals are ``EditRefused(reason="infeasible_placement")`` ("cannot place a car on the sidewalk", "no lane to
+the left of the white van").
 """
 
 from __future__ import annotations
@@ -32,10 +39,21 @@ import numpy as np
 
 from simsplat_core.editing.commands import Placement
 from simsplat_core.editing.motion_routes import crosswalk_ends, nearest_lane_segment
+from simsplat_core.editing.placement_areas import (
+    AREA_SEARCH_M,
+    area_polygons,
+    box_within,
+    fitting_point,
+    fitting_point_ahead,
+    in_any,
+    lane_samples,
+    longest_run_heading,
+    road_edge_offset,
+)
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import yaw_of_rotation
 from simsplat_core.scenario.agents import EGO_ID, EGO_SIZE, AgentStates
-from simsplat_core.scenario.geometry import box_footprints, footprints_overlap, points_in_polygon
+from simsplat_core.scenario.geometry import box_footprints, footprints_overlap
 from simsplat_core.scenario.lane_graph import LaneGraph, LaneMatch
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.metrics import STATIC, kind_of
@@ -51,11 +69,20 @@ LONG_GAP_M = 3.0
 LANE_AHEAD_M = 10.0
 #: A vehicle is snapped onto a lane centre line within this distance, m.
 LANE_SNAP_M = 2.5
-#: Boxes are nudged by up to this much (in 0.5 m steps) to clear another agent; clearance kept, m.
+#: Boxes are nudged by up to this much (in ``NUDGE_STEP_M`` steps) to clear another agent; clearance kept, m.
 NUDGE_M = 4.0
+NUDGE_STEP_M = 0.5
 CLEARANCE_M = 0.3
-#: Search radius for ``on_crosswalk`` / ``on_sidewalk`` / ``on_road`` spots, m.
-AREA_SEARCH_M = 80.0
+#: A said distance may be met this loosely (share of it, at least ``NUDGE_M``) when the exact spot is taken or
+#: is not of the asked kind of area.
+DISTANCE_SLACK_SHARE = 0.25
+#: The road edge a crossing pedestrian starts at is looked for this far to either side, m; it stands this far
+#: inside it (besides half its width), m.
+KERB_REACH_M = 10.0
+KERB_INSET_M = 0.2
+#: The side of the road nearest the anchor (for ``on_sidewalk`` etc. ``distance_m`` ahead) is looked for this
+#: far to either side of it, m.
+EDGE_SIDE_REACH_M = 30.0
 #: Words for messages.
 _NOUNS = {VEHICLE: "a car", PEDESTRIAN: "a pedestrian", STATIC: "a static object"}
 _AREA_KIND = {"on_crosswalk": "crosswalk", "on_sidewalk": "sidewalk", "on_road": "road"}
@@ -120,6 +147,7 @@ class PlacedPose:
         z: box-centre height, m (the anchor's ground, or the absolute point's height, plus half the box).
         area: what it stands on: ``"lane"``, ``"road"``, ``"crosswalk"``, ``"sidewalk"`` or ``"unknown"``.
         note: adjustments made (``"nudged 1.5 m ahead to clear vehicle 'car_3'"``), ``""`` when none.
+        parked: a vehicle parked outside the lanes (in line with a parked anchor; ``lane`` is ``None``).
     """
 
     xy: np.ndarray
@@ -128,11 +156,18 @@ class PlacedPose:
     z: float = 0.0
     area: str = "unknown"
     note: str = ""
+    parked: bool = False
+
+
+def distance_slack(distance_m: float) -> float:
+    """How far (m) a placement asked ``distance_m`` away may end up from that distance: a share of it, at least
+    :data:`NUDGE_M`."""
+    return max(NUDGE_M, DISTANCE_SLACK_SHARE * abs(distance_m))
 
 
 def resolve_placement(placement: Placement, *, category: str, size: Sequence[float], anchor: AnchorPose | None,
                       ego_pose: np.ndarray, lanes: LaneGraph | None, map_ctx: MapContext, frame: int,
-                      occupied: AgentStates | None, ignore: Sequence[str] = ()) -> PlacedPose:
+                      occupied: AgentStates | None, ignore: Sequence[str] = (), crossing: bool = False) -> PlacedPose:
     """Resolve ``placement`` for an object of ``category`` and box ``size (l, w, h)`` (module docstring).
 
     Args:
@@ -141,6 +176,8 @@ def resolve_placement(placement: Placement, *, category: str, size: Sequence[flo
         lanes: the lane graph (required for vehicles and ``in_lane``).
         occupied: every agent; the box must not overlap one valid at ``frame`` (``None``: no check).
         ignore: object ids not to check against (the agent being moved).
+        crossing: the (pedestrian) object will cross the road from there: behind / in front of the anchor it
+            starts at the road's edge.
 
     Raises:
         EditRefused(reason="infeasible_placement"): see the module docstring.
@@ -150,7 +187,7 @@ def resolve_placement(placement: Placement, *, category: str, size: Sequence[flo
     anchor = anchor if anchor is not None else AnchorPose.ego(np.asarray(ego_pose, dtype=np.float64))
     ego_yaw = float(yaw_of_rotation(np.asarray(ego_pose)[:3, :3]))
     hint = None if placement.heading_deg is None else ego_yaw + np.deg2rad(placement.heading_deg)
-    ctx = _Context(placement, kind, size3, anchor, lanes, map_ctx, hint)
+    ctx = _Context(placement, kind, size3, anchor, lanes, map_ctx, hint, _parked_off_lane(anchor, lanes, map_ctx))
     rel = placement.relation
     if rel == "absolute":
         assert placement.position is not None
@@ -166,6 +203,8 @@ def resolve_placement(placement: Placement, *, category: str, size: Sequence[flo
         else:
             sides = ("right_of", "left_of") if rel == "next_to" else (rel,)
             spots = [_beside_spot(ctx, side) for side in sides]
+            if crossing and kind == PEDESTRIAN and rel in ("behind", "in_front_of"):
+                spots = [_kerb_spot(ctx, spot) for spot in spots]
     refusals: list[str] = []
     for spot in spots:
         try:
@@ -186,22 +225,35 @@ class _Context:
     lanes: LaneGraph | None
     map_ctx: MapContext
     hint: float | None
+    parked_anchor: bool = False
 
     @property
     def noun(self) -> str:
         return _NOUNS[self.kind]
 
 
+def _parked_off_lane(anchor: AnchorPose, lanes: LaneGraph | None, map_ctx: MapContext) -> bool:
+    """Whether ``anchor`` is a vehicle standing on the drivable area but off every lane (farther than
+    :data:`LANE_SNAP_M` from any centre line, off the sidewalks): parked at the roadside."""
+    if kind_of(anchor.category) != VEHICLE or lanes is None or not len(lanes) or not map_ctx.has_drivable:
+        return False
+    if lanes.nearest(anchor.xy[None], max_dist_m=LANE_SNAP_M).lane[0] >= 0:
+        return False
+    facts = map_ctx.facts(anchor.xy[None], np.array([anchor.heading]))
+    return bool(facts.on_drivable[0] and not facts.on_sidewalk[0])
+
+
 @dataclass(frozen=True)
 class _Spot:
-    """A candidate before the category rules: ``xy [2]``, heading, how it was asked (for messages), and the
-    relation side it must stay on (``"left_of"`` ...; ``None``: no side)."""
+    """A candidate before the category rules: ``xy [2]``, heading, how it was asked (for messages), the
+    relation side it must stay on (``"left_of"`` ...; ``None``: no side) and the kind of map area a pedestrian or
+    static object must stay inside (``"sidewalk"`` ...; ``None``: any)."""
 
     xy: np.ndarray
     heading: float
     phrase: str
     side: str | None
-    on_lane: LaneMatch | None = None
+    area: str | None = None
 
 
 def _refuse(message: str) -> EditRefused:
@@ -278,76 +330,68 @@ def _area_spot(ctx: _Context, area: str) -> _Spot:
     if area == "sidewalk" and ctx.kind == VEHICLE:
         raise _refuse(f"cannot place {ctx.noun} on the sidewalk: vehicles go in lanes (try 'in the lane' or "
                       "'on the road')")
-    polys = {"crosswalk": mc.crosswalks, "sidewalk": mc.sidewalks, "road": mc.drivable}[area]
+    polys = area_polygons(mc, area)
     if not polys:
         raise _refuse(f"cannot place {ctx.noun} on a {area}: this map has no {area}s")
     query = a.xy + (p.distance_m or 0.0) * a.forward
     heading = a.heading if ctx.hint is None else ctx.hint
     if ctx.kind == VEHICLE and ctx.lanes is not None and len(ctx.lanes):
         # a car on the road / a crosswalk: the nearest lane point inside such an area
-        pts, yaw = _lane_samples(ctx.lanes)
-        inside = np.flatnonzero(_in_any(pts, polys))
+        pts, yaw = lane_samples(ctx.lanes)
+        inside = np.flatnonzero(in_any(pts, polys))
         if inside.size:
             turned = np.abs(np.angle(np.exp(1j * (yaw[inside] - heading)))) > np.pi / 4
             score = np.linalg.norm(pts[inside] - query, axis=1) + 50.0 * turned  # lanes running the anchor's way
             xy = pts[inside[int(np.argmin(score))]]
             return _Spot(xy, float(heading), f"on the {area} nearest {a.name}", None)
-    xy = _fitting_point(query, polys, ctx.size)
+    if p.distance_m is None:
+        xy = fitting_point(query, polys, ctx.size)
+        where = f"within {AREA_SEARCH_M:.0f} m of {a.name}"
+    else:
+        slack = distance_slack(p.distance_m)
+        xy = fitting_point_ahead(a.xy, a.heading, p.distance_m, slack, polys, ctx.size, _edge_side(ctx))
+        where = f"{p.distance_m:g} m (+-{slack:.0f} m) ahead of {a.name}"
     if xy is None:
-        raise _refuse(f"cannot place {ctx.noun} on a {area}: none within {AREA_SEARCH_M:.0f} m of {a.name} fits it")
+        raise _refuse(f"cannot place {ctx.noun} on a {area}: none {where} fits it")
     if ctx.hint is None:
         heading = _area_heading(ctx, area, xy, polys, heading)
-    return _Spot(xy, float(heading), f"on the {area} nearest {a.name}", None)
+    return _Spot(xy, float(heading), f"on the {area} nearest {a.name}", None, area)
 
 
-def _lane_samples(lanes: LaneGraph, step: float = 0.5) -> tuple[np.ndarray, np.ndarray]:
-    """``([M, 2] points every ~step along every lane centre line, [M] lane direction there)``."""
-    d = lanes.seg_b - lanes.seg_a
-    n = np.maximum(np.ceil(np.linalg.norm(d, axis=1) / step).astype(int), 1)
-    seg = np.repeat(np.arange(len(d)), n)
-    frac = (np.arange(n.sum()) - np.repeat(np.cumsum(n) - n, n) + 0.5) / np.repeat(n, n)
-    return lanes.seg_a[seg] + frac[:, None] * d[seg], np.arctan2(d[seg, 1], d[seg, 0])
+def _edge_side(ctx: _Context) -> int:
+    """Side (``+1`` left, ``-1`` right, ``0`` unknown) of the road edge nearest the anchor."""
+    offset = road_edge_offset(ctx.map_ctx, ctx.anchor.xy, ctx.anchor.left, EDGE_SIDE_REACH_M)
+    return 0 if offset is None else int(np.sign(offset))
 
 
-def _in_any(xy: np.ndarray, polys: Sequence[np.ndarray]) -> np.ndarray:
-    out = np.zeros(len(xy), dtype=bool)
-    for poly in polys:
-        lo, hi = poly.min(axis=0), poly.max(axis=0)
-        near = ~out & np.all((xy >= lo) & (xy <= hi), axis=1)
-        if near.any():
-            out[near] |= points_in_polygon(xy[near], poly)
-    return out
-
-
-def _fitting_point(query: np.ndarray, polys: Sequence[np.ndarray], size: tuple[float, float, float],
-                   step: float = 0.5) -> np.ndarray | None:
-    """The grid point nearest ``query`` inside ``polys`` where a box of ``size`` (any heading) fits."""
-    reach = float(np.hypot(size[0], size[1])) / 2.0
-    offsets = np.array([[0.0, 0.0]] + [[reach * np.cos(t), reach * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 12,
-                                                                                                     endpoint=False)])
-    for radius in (5.0, 20.0, AREA_SEARCH_M):
-        g = np.arange(-radius, radius + step, step)
-        grid = query + np.stack(np.meshgrid(g, g), axis=-1).reshape(-1, 2)
-        grid = grid[np.argsort(np.linalg.norm(grid - query, axis=1))]
-        inside = np.flatnonzero(_in_any(grid, polys))
-        for start in range(0, len(inside), 256):
-            cand = grid[inside[start:start + 256]]
-            fits = _in_any((cand[:, None] + offsets[None]).reshape(-1, 2), polys).reshape(len(cand), -1).all(axis=1)
-            if fits.any():
-                return cand[int(np.argmax(fits))]
-    return None
+def _kerb_spot(ctx: _Context, spot: _Spot) -> _Spot:
+    """``spot`` moved sideways to just inside the nearer road edge (within :data:`KERB_REACH_M`), facing across
+    the road (``spot`` itself off the road, or with no edge in reach)."""
+    left = ctx.anchor.left
+    offset = road_edge_offset(ctx.map_ctx, spot.xy, left, KERB_REACH_M)
+    inset = ctx.size[1] / 2.0 + KERB_INSET_M
+    if offset is None or abs(offset) <= inset:
+        return spot
+    sign = float(np.sign(offset))
+    xy = spot.xy + (offset - sign * inset) * left
+    across = -sign * left
+    heading = float(np.arctan2(across[1], across[0])) if ctx.hint is None else spot.heading
+    return _Spot(xy, heading, f"{spot.phrase} at the road's edge", spot.side)
 
 
 def _area_heading(ctx: _Context, area: str, xy: np.ndarray, polys: Sequence[np.ndarray], heading: float) -> float:
-    """Along the crosswalk's long axis (away from the anchor's side), else along the nearest lane segment
-    (the way agreeing with ``heading``)."""
+    """Along the crosswalk's long axis (away from the anchor's side), along the sidewalk where it runs on the
+    longest (the way nearest ``heading`` on a tie), else along the nearest lane segment (the way agreeing with
+    ``heading``)."""
     if area == "crosswalk":
-        poly = next(p for p in polys if _in_any(xy[None], [p])[0])
+        poly = next(p for p in polys if in_any(xy[None], [p])[0])
         end_a, end_b = crosswalk_ends(poly)
         axis = (end_b - end_a) / np.linalg.norm(end_b - end_a)
         if np.dot(axis, poly.mean(axis=0) - ctx.anchor.xy) < 0:
             axis = -axis
         return float(np.arctan2(axis[1], axis[0]))
+    if area == "sidewalk":
+        return longest_run_heading(xy, polys, heading)
     nearest = nearest_lane_segment(ctx.map_ctx, xy)
     if nearest is None:
         return heading
@@ -372,10 +416,15 @@ def _settle(ctx: _Context, spot: _Spot) -> PlacedPose:
     if ctx.kind != VEHICLE:
         if area == "off-road":
             raise _refuse(f"cannot place {ctx.noun} {spot.phrase}: that spot is off the road and the sidewalk")
+        if spot.area is not None and not box_within(spot.xy, spot.heading, ctx.size,
+                                                    area_polygons(ctx.map_ctx, spot.area)):
+            raise _refuse(f"cannot place {ctx.noun} {spot.phrase}: it does not fit on the {spot.area} there")
         return PlacedPose(spot.xy, spot.heading, None, area=area)
     lanes = ctx.lanes
     if area == "sidewalk":
         raise _refuse(f"cannot place {ctx.noun} on the sidewalk ({spot.phrase}): vehicles go in lanes")
+    if ctx.parked_anchor and spot.side in ("behind", "in_front_of"):
+        return _parked_in_line(ctx, spot)
     if lanes is None or not len(lanes):
         raise _refuse(f"cannot place {ctx.noun} {spot.phrase}: this map has no lanes")
     pref = spot.heading if ctx.placement.relation != "absolute" or ctx.hint is not None else None
@@ -396,6 +445,22 @@ def _settle(ctx: _Context, spot: _Spot) -> PlacedPose:
     if spot.side is not None and not _on_side(ctx, spot.side, xy, heading):
         raise _refuse(f"no lane {spot.phrase} for {ctx.noun}")
     return PlacedPose(xy, heading, LaneMatch(m.lane.copy(), m.s.copy(), np.zeros(1), np.zeros(1)), area="lane")
+
+
+def _parked_in_line(ctx: _Context, spot: _Spot) -> PlacedPose:
+    """A vehicle behind / in front of an anchor parked off the lanes: parked at ``spot`` on the anchor's heading
+    line, when its whole box is on the drivable area, off the sidewalks and clear of the anchor."""
+    mc = ctx.map_ctx
+    if not box_within(spot.xy, spot.heading, ctx.size, mc.drivable):
+        raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is off the road")
+    corners = footprint(PlacedPose(spot.xy, spot.heading, None), ctx.size)
+    if in_any(np.vstack([spot.xy[None], corners]), mc.sidewalks).any():
+        raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is on the "
+                      "sidewalk")
+    assert spot.side is not None
+    if not _on_side(ctx, spot.side, spot.xy, spot.heading):
+        raise _refuse(f"no room for {ctx.noun} {spot.phrase}")
+    return PlacedPose(spot.xy, spot.heading, None, area="road", parked=True)
 
 
 def _on_side(ctx: _Context, side: str, xy: np.ndarray, heading: float) -> bool:
@@ -435,41 +500,47 @@ def _clear(ctx: _Context, placed: PlacedPose, spot: _Spot, occupied: AgentStates
     keeps every rule; refuses naming the object in the way."""
     blocked = _blocking(ctx, placed.xy, placed.heading, occupied, frame, ignore)
     if not blocked:
-        return PlacedPose(placed.xy, placed.heading, placed.lane, z, placed.area, "")
+        return PlacedPose(placed.xy, placed.heading, placed.lane, z, placed.area, "", placed.parked)
     assert occupied is not None
     first = occupied.object_ids[blocked[0]]
     what = f"{occupied.categories[blocked[0]]} {first!r}" if first != EGO_ID else "the ego vehicle"
-    deltas = sorted(np.arange(0.5, NUDGE_M + 0.25, 0.5).tolist() + (-np.arange(0.5, NUDGE_M + 0.25, 0.5)).tolist(),
-                    key=lambda d: (abs(d), -d))
-    if spot.side == "behind":
+    limit = NUDGE_M if ctx.placement.distance_m is None else distance_slack(ctx.placement.distance_m)
+    steps = np.arange(NUDGE_STEP_M, limit + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
+    deltas = sorted([*steps.tolist(), *(-steps).tolist()], key=lambda d: (abs(d), -d))
+    if ctx.placement.distance_m is None and spot.side == "behind":  # no distance said: only away from the anchor
         deltas = [d for d in deltas if d < 0]
-    elif spot.side == "in_front_of":
+    elif ctx.placement.distance_m is None and spot.side == "in_front_of":
         deltas = [d for d in deltas if d > 0]
-    along = _nudger(ctx, placed)
+    along = _nudger(ctx, placed, spot.side, limit)
     for d in deltas:
         xy, heading = along(d)
         try:
-            moved = _settle(ctx, _Spot(xy, heading, spot.phrase, spot.side))
+            moved = _settle(ctx, _Spot(xy, heading, spot.phrase, spot.side, spot.area))
         except EditRefused:
+            continue
+        if spot.side in ("behind", "in_front_of") and not _on_side(ctx, spot.side, moved.xy, moved.heading):
             continue
         if not _blocking(ctx, moved.xy, moved.heading, occupied, frame, ignore):
             word = "ahead" if d > 0 else "back"
             return PlacedPose(moved.xy, moved.heading, moved.lane, z, moved.area,
-                              f"nudged {abs(d):.1f} m {word} to clear {what}")
+                              f"nudged {abs(d):.1f} m {word} to clear {what}", moved.parked)
     raise _refuse(f"cannot place {ctx.noun} {spot.phrase}: the spot is taken by {what} at frame {frame} "
-                  f"(no free spot within {NUDGE_M:.0f} m)")
+                  f"(no free spot within {limit:.0f} m)")
 
 
-def _nudger(ctx: _Context, placed: PlacedPose) -> Callable[[float], tuple[np.ndarray, float]]:
-    """``d -> (xy, heading)``: ``d`` metres along the placed object's lane (or its heading)."""
+def _nudger(ctx: _Context, placed: PlacedPose, side: str | None,
+            reach: float) -> Callable[[float], tuple[np.ndarray, float]]:
+    """``d -> (xy, heading)``: ``d`` metres (``|d| <= reach``) along the placed object's lane, else along the
+    anchor's heading line (behind / in front of it), else along its own heading."""
     if placed.lane is not None and ctx.lanes is not None:
-        lp = ctx.lanes.follow(placed.xy, placed.heading, "straight", max_length_m=NUDGE_M + 20.0)
+        lp = ctx.lanes.follow(placed.xy, placed.heading, "straight", max_length_m=reach + 20.0)
 
         def along_lane(d: float) -> tuple[np.ndarray, float]:
             return lp.path.position(lp.start_s + d), float(lp.path.heading(lp.start_s + d))
 
         return along_lane
-    forward = np.array([np.cos(placed.heading), np.sin(placed.heading)])
+    along_line = side in ("behind", "in_front_of")
+    forward = ctx.anchor.forward if along_line else np.array([np.cos(placed.heading), np.sin(placed.heading)])
 
     def along_heading(d: float) -> tuple[np.ndarray, float]:
         return placed.xy + d * forward, placed.heading
@@ -487,10 +558,11 @@ def place_row(first: PlacedPose, *, count: int, spacing_m: float, size: Sequence
         lp = lanes.follow(first.xy, first.heading, "straight", max_length_m=step * count + 20.0)
         for k in range(1, count):
             s = lp.start_s + k * step
-            out.append(PlacedPose(lp.path.position(s), float(lp.path.heading(s)), None, first.z, first.area))
+            out.append(PlacedPose(lp.path.position(s), float(lp.path.heading(s)), None, first.z, first.area,
+                                  parked=first.parked))
         return out
     forward = np.array([np.cos(first.heading), np.sin(first.heading)])
-    out += [PlacedPose(first.xy + k * step * forward, first.heading, None, first.z, first.area)
+    out += [PlacedPose(first.xy + k * step * forward, first.heading, None, first.z, first.area, parked=first.parked)
             for k in range(1, count)]
     return out
 

@@ -15,6 +15,7 @@ from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import node_factory
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
+from simsplat_core.scenario.geometry import signed_polygon_distance
 from simsplat_core.scene import GaussianSet
 from simsplat_core.scene.nodes import OFFSETS
 
@@ -283,3 +284,51 @@ def test_a_speed_up_the_traffic_ahead_takes_away_is_refused_not_silently_dropped
         top = float(np.abs(edited.states.speed[edited.states.index(oid)]).max())
         outcomes["reached" if top >= SPEED_REACHED_SHARE * 12.0 else "limited"] += 1
     assert outcomes["reached"] > 0 and outcomes["refused"] > 0, outcomes
+
+
+def _parked_off_lane(ctx: EditContext) -> str:
+    """A vehicle of the log standing still over its whole track away from every lane (parked at the kerb)."""
+    from simsplat_core.editing.placement import LANE_SNAP_M
+
+    states = ctx.states
+    for r, (oid, cat) in enumerate(zip(states.object_ids, states.categories, strict=True)):
+        valid = states.valid[r]
+        if cat != "vehicle" or oid == "ego" or not valid[0] or np.abs(states.speed[r][valid]).max() > 0.1:
+            continue
+        if ctx.lanes.nearest(states.xy[r, :1], max_dist_m=LANE_SNAP_M).lane[0] < 0:
+            return oid
+    raise AssertionError("the test world has no vehicle parked off the lanes")
+
+
+def test_a_car_inserted_behind_a_parked_car_parks_in_line_with_it(ctx):
+    anchor = _parked_off_lane(ctx)
+    edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
+                                       "placement": {"relation": "behind", "anchor": {"object_id": anchor}}}))
+    st = edited.states
+    row, a = st.index("inserted_00"), st.index(anchor)
+    assert st.valid[row].all() and np.abs(st.speed[row]).max() == 0.0  # parked: it does not drive off
+    assert np.ptp(st.xy[row], axis=0).max() < 1e-9
+    heading = st.heading[a, 0]
+    forward, left = np.array([np.cos(heading), np.sin(heading)]), np.array([-np.sin(heading), np.cos(heading)])
+    rel = st.xy[row, 0] - st.xy[a, 0]
+    assert rel @ forward < -(st.size[a, 0] + st.size[row, 0]) / 2  # behind it, clear of it
+    assert abs(rel @ left) < 1e-6 and np.cos(st.heading[row, 0] - heading) > 0.999  # in line, facing its way
+    assert "parked" in edited.outcomes[0].summary
+    # asked to move, it does
+    moving = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
+                                       "placement": {"relation": "behind", "anchor": {"object_id": anchor}},
+                                       "behaviour": {"speed": {"mode": "absolute", "value": 5.0}}}))
+    assert np.abs(moving.states.speed[moving.states.index("inserted_00")]).max() > 1.0
+
+
+def test_a_pedestrian_inserted_to_cross_starts_at_the_road_edge(ctx):
+    command = {"op": "insert", "asset": {"description": "a pedestrian in a red top", "category": "pedestrian"},
+               "placement": {"relation": "behind", "distance_m": 5}}
+    standing = apply_edit(ctx, _program(command))
+    crossing = apply_edit(ctx, _program({**command, "behaviour": {"cross_street": True, "jaywalk": True}}))
+    start = [e.states.xy[e.states.index("inserted_00"), 0] for e in (standing, crossing)]
+    inside = [signed_polygon_distance(p[None], ctx.map_ctx.drivable)[0] for p in start]
+    assert 0.0 < inside[1] <= 1.0 < inside[0]  # on the road by its edge, not in the ego's lane
+    ego = ctx.log.ego_poses[0]
+    assert (np.linalg.inv(ego) @ np.r_[start[1], 0.0, 1.0])[0] == pytest.approx(
+        (np.linalg.inv(ego) @ np.r_[start[0], 0.0, 1.0])[0], abs=0.5)  # as far behind

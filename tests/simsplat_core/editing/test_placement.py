@@ -11,8 +11,10 @@ import pytest
 from simsplat_core.editing.commands import Placement
 from simsplat_core.editing.placement import (
     LANE_AHEAD_M,
+    LONG_GAP_M,
     AnchorPose,
     PlacedPose,
+    distance_slack,
     footprint,
     place_row,
     resolve_placement,
@@ -20,7 +22,7 @@ from simsplat_core.editing.placement import (
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import pose_from_yaw
 from simsplat_core.scenario.agents import AgentStates
-from simsplat_core.scenario.geometry import footprints_overlap, points_in_polygon
+from simsplat_core.scenario.geometry import footprints_overlap, points_in_polygon, signed_polygon_distance
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.world import WorldConfig, generate_log, layout_from_log
@@ -39,10 +41,11 @@ def world():
 
 
 def _place(world, placement: Placement, category: str = "vehicle", size=CAR, anchor: AnchorPose | None = None,
-           frame: int = 0, occupied: AgentStates | None = None) -> PlacedPose:
+           frame: int = 0, occupied: AgentStates | None = None, crossing: bool = False) -> PlacedPose:
+    extra = {"crossing": True} if crossing else {}
     return resolve_placement(placement, category=category, size=size, anchor=anchor,
                              ego_pose=world["log"].ego_poses[frame], lanes=world["lanes"], map_ctx=world["ctx"],
-                             frame=frame, occupied=occupied)
+                             frame=frame, occupied=occupied, **extra)
 
 
 def _lane_id(world, pose: PlacedPose) -> str:
@@ -59,6 +62,30 @@ def _refused(world, placement: Placement, words: str, **kw) -> EditRefused:
 
 def _empty_anchor(world, xy, heading: float, category: str = "vehicle", size=CAR) -> AnchorPose:
     return AnchorPose(np.asarray(xy, float), heading, size, category, "anchor_1", size[2] / 2.0, "the white van")
+
+
+def _ego_only(world) -> AgentStates:
+    """The scenario's steps with the ego as the only agent."""
+    st = world["states"]
+    return st.take([st.index("ego")])
+
+
+def _with_box(states: AgentStates, object_id: str, category: str, xy, heading: float, size) -> AgentStates:
+    """``states`` plus an agent standing at ``xy`` over every step."""
+    n = states.num_steps
+    return states.with_agent(object_id, category, "log", xy=np.tile(np.asarray(xy, float), (n, 1)),
+                             heading=np.full(n, heading), speed=np.zeros(n), valid=np.ones(n, bool), size=size)
+
+
+def _ahead(world, xy, frame: int = 0) -> np.ndarray:
+    """``[2]`` (ahead, left) of a world point in the ego frame."""
+    return (np.linalg.inv(world["log"].ego_poses[frame]) @ np.r_[np.asarray(xy, float), 0.0, 1.0])[:2]
+
+
+def _inside(world, area: str, pose: PlacedPose, size) -> bool:
+    polys = {"sidewalk": world["ctx"].sidewalks, "road": world["ctx"].drivable}[area]
+    corners = np.vstack([pose.xy[None], footprint(pose, size)])
+    return bool(all(any(points_in_polygon(c[None], poly)[0] for poly in polys) for c in corners))
 
 
 # ------------------------------------------------------------------------------------------ lanes
@@ -177,6 +204,109 @@ def test_occupied_spots_are_nudged_or_refused_naming_the_object(world) -> None:
                                   st.size[row, :2])[0]
     # without occupancy the same spot is taken as is
     assert _place(world, Placement(relation="absolute", position=(float(local[0]), float(local[1]), 0.0))).note == ""
+
+
+# ------------------------------------------------------------------------------------------ parked anchors
+def _parked_anchor(world, s: float) -> AnchorPose:
+    """A car parked in the ego's kerbside parking strip (west arm, facing east like the ego), ``s`` m from the
+    junction."""
+    layout = world["layout"]
+    xy = layout.arm_point("W", s, layout.parking_offset("W", True))
+    return AnchorPose(xy, 0.0, CAR, "vehicle", "parked_1", CAR[2] / 2.0, "the parked hatchback")
+
+
+def test_a_car_behind_or_in_front_of_a_parked_car_parks_in_line_with_it(world) -> None:
+    parked = _parked_anchor(world, 40.0)
+    assert world["lanes"].nearest(parked.xy[None], max_dist_m=2.5).lane[0] < 0  # the strip is in no lane
+    behind = _place(world, Placement(relation="behind"), anchor=parked, occupied=_ego_only(world))
+    ahead = _place(world, Placement(relation="in_front_of", distance_m=8.0), anchor=parked)
+    for pose, sign, gap in ((behind, -1.0, LONG_GAP_M), (ahead, 1.0, 8.0)):
+        rel = pose.xy - parked.xy
+        assert pose.parked and pose.lane is None and pose.area == "road"
+        assert rel[1] == pytest.approx(0.0, abs=1e-6) and pose.heading == pytest.approx(parked.heading)
+        assert sign * rel[0] == pytest.approx(CAR[0] + gap)  # bumper to bumper
+        assert _inside(world, "road", pose, CAR)
+    # a car beside the parked one still goes into the lane next to it
+    assert not _place(world, Placement(relation="left_of"), anchor=parked).parked
+
+
+def test_a_car_in_line_with_a_parked_car_is_refused_off_the_road_or_where_taken(world) -> None:
+    layout = world["layout"]
+    near_end = _parked_anchor(world, layout.arm_length - CAR[0])
+    _refused(world, Placement(relation="behind"), "off the road", anchor=near_end)
+    parked = _parked_anchor(world, 40.0)
+    spot = _place(world, Placement(relation="behind"), anchor=parked)
+    # a van in the way over a long stretch behind: nothing free within the nudge
+    taken = _with_box(_ego_only(world), "van_9", "vehicle", spot.xy + np.array([-4.0, 0.0]), 0.0, (14.0, 2.0, 2.5))
+    _refused(world, Placement(relation="behind"), "the spot is taken by vehicle 'van_9'", anchor=parked,
+             occupied=taken)
+    # a cone just behind: nudged further back along the strip, still in line
+    cone = _with_box(_ego_only(world), "cone_9", "static", spot.xy + np.array([1.5, 0.0]), 0.0, CONE)
+    nudged = _place(world, Placement(relation="behind"), anchor=parked, occupied=cone)
+    assert "cone_9" in nudged.note and nudged.parked and nudged.xy[0] < spot.xy[0]
+    assert nudged.xy[1] == pytest.approx(parked.xy[1])
+
+
+# ------------------------------------------------------------------------------------------ crossing pedestrians
+def test_a_pedestrian_about_to_cross_starts_at_the_road_edge(world) -> None:
+    ctx = world["ctx"]
+    parked = _parked_anchor(world, 40.0)
+    anchor = AnchorPose(parked.xy + np.array([0.0, world["layout"].parking_w_h / 2 + 2.0]), 0.0, CAR, "vehicle",
+                        "car_1", CAR[2] / 2.0, "the red car")  # in the ego's lane
+    plain = _place(world, Placement(relation="in_front_of", distance_m=10.0), "pedestrian", PERSON, anchor=anchor)
+    at_edge = _place(world, Placement(relation="in_front_of", distance_m=10.0), "pedestrian", PERSON, anchor=anchor,
+                     crossing=True)
+    assert at_edge.xy[0] == pytest.approx(plain.xy[0])  # as far ahead
+    assert at_edge.xy[1] < plain.xy[1]  # towards the kerb on the right, the nearer one
+    inside = signed_polygon_distance(at_edge.xy[None], ctx.drivable)[0]
+    assert 0.0 < inside <= PERSON[1]  # on the road, right at its edge
+    assert np.sin(at_edge.heading) > 0.99  # facing across the road
+
+
+def test_a_taken_spot_is_searched_along_the_line_within_the_slack_of_the_distance(world) -> None:
+    parked = _parked_anchor(world, 40.0)
+    anchor = AnchorPose(parked.xy + np.array([0.0, world["layout"].parking_w_h / 2 + 2.0]), 0.0, CAR, "vehicle",
+                        "car_1", CAR[2] / 2.0, "the red car")
+    ask = Placement(relation="in_front_of", distance_m=20.0)
+    free = _place(world, ask, "pedestrian", PERSON, anchor=anchor, crossing=True)
+    # a truck parked over the spot and 5 m beyond: more than the 4 m nudge, within the slack of 20 m
+    truck = _with_box(_ego_only(world), "truck_9", "vehicle", free.xy + np.array([2.0, 0.0]), 0.0, (10.0, 2.2, 3.0))
+    moved = _place(world, ask, "pedestrian", PERSON, anchor=anchor, crossing=True, occupied=truck)
+    assert "truck_9" in moved.note and moved.xy[1] == pytest.approx(free.xy[1])
+    assert 0.0 < abs(moved.xy[0] - free.xy[0]) <= distance_slack(20.0)
+    assert not footprints_overlap(moved.xy[None], np.array([moved.heading]), PERSON[:2], free.xy[None] + [2.0, 0.0],
+                                  np.zeros(1), (10.0, 2.2))[0]
+    # ... but not beyond it
+    long = _with_box(_ego_only(world), "train_9", "vehicle", free.xy, 0.0, (4.0 * distance_slack(20.0), 2.2, 3.0))
+    _refused(world, ask, "taken by vehicle 'train_9'", category="pedestrian", size=PERSON, anchor=anchor,
+             crossing=True, occupied=long)
+
+
+# ------------------------------------------------------------------------------------------ areas a distance ahead
+@pytest.mark.parametrize(("category", "size", "distance"), [("pedestrian", PERSON, 10.0), ("static", CONE, 15.0)])
+def test_on_the_sidewalk_ahead_of_a_junction_lands_on_the_sidewalk_about_that_far(world, category, size,
+                                                                                  distance) -> None:
+    ctx = world["ctx"]
+    query = np.asarray(world["log"].ego_poses[0] @ np.array([distance, 0.0, 0.0, 1.0]))[:2]
+    assert ctx.facts(query[None], np.zeros(1)).at_intersection[0]  # straight ahead is the junction
+    pose = _place(world, Placement(relation="on_sidewalk", distance_m=distance), category, size)
+    ahead, left = _ahead(world, pose.xy)
+    assert pose.area == "sidewalk" and _inside(world, "sidewalk", pose, size)
+    assert abs(ahead - distance) <= distance_slack(distance) and left < 0  # on the ego's (kerb) side
+    # facing along the sidewalk: a straight walk from there stays on it
+    walk = pose.xy + np.arange(0.0, 10.0, 0.5)[:, None] * np.array([np.cos(pose.heading), np.sin(pose.heading)])
+    assert ctx.facts(walk, np.full(len(walk), pose.heading)).on_sidewalk.all()
+    # someone standing there: the object is moved clear, still on the sidewalk
+    taken = _with_box(_ego_only(world), "ped_9", "pedestrian", pose.xy, 0.0, PERSON)
+    moved = _place(world, Placement(relation="on_sidewalk", distance_m=distance), category, size, occupied=taken)
+    assert "ped_9" in moved.note and moved.area == "sidewalk" and _inside(world, "sidewalk", moved, size)
+    assert abs(_ahead(world, moved.xy)[0] - distance) <= distance_slack(distance)
+
+
+def test_no_sidewalk_about_that_far_ahead_is_refused(world) -> None:
+    far = 3.0 * world["layout"].arm_length
+    _refused(world, Placement(relation="on_sidewalk", distance_m=far), "cannot place a pedestrian on a sidewalk: none",
+             category="pedestrian", size=PERSON)
 
 
 def test_a_row_of_cones_along_the_lane(world) -> None:
