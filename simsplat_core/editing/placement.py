@@ -69,6 +69,8 @@ LONG_GAP_M = 3.0
 LANE_AHEAD_M = 10.0
 #: A vehicle is snapped onto a lane centre line within this distance, m.
 LANE_SNAP_M = 2.5
+#: An anchor slower than this counts as standing (parked, when off the lanes), m/s.
+STANDING_MPS = 0.5
 #: Boxes are nudged by up to this much (in ``NUDGE_STEP_M`` steps) to clear another agent; clearance kept, m.
 NUDGE_M = 4.0
 NUDGE_STEP_M = 0.5
@@ -97,6 +99,7 @@ class AnchorPose:
         category: its category; object_id: its id (``"ego"`` for the ego).
         z: box-centre height, m (the placed object stands on the same ground).
         label: how messages name it ("the white van"); default ``"<category> '<object_id>'"``.
+        speed: its speed then, m/s (a parked anchor stands still).
     """
 
     xy: np.ndarray
@@ -106,6 +109,7 @@ class AnchorPose:
     object_id: str
     z: float = 0.0
     label: str = ""
+    speed: float = 0.0
 
     @property
     def name(self) -> str:
@@ -134,7 +138,8 @@ class AnchorPose:
             raise ValueError(f"agent {states.object_ids[row]!r} does not exist at step {step}")
         return cls(states.xy[row, step].copy(), float(states.heading[row, step]),
                    tuple(float(x) for x in states.size[row]),  # type: ignore[arg-type]
-                   states.categories[row], states.object_ids[row], float(states.z[row, step]), label)
+                   states.categories[row], states.object_ids[row], float(states.z[row, step]), label,
+                   float(states.speed[row, step]))
 
 
 @dataclass(frozen=True)
@@ -233,9 +238,10 @@ class _Context:
 
 
 def _parked_off_lane(anchor: AnchorPose, lanes: LaneGraph | None, map_ctx: MapContext) -> bool:
-    """Whether ``anchor`` is a vehicle standing on the drivable area but off every lane (farther than
-    :data:`LANE_SNAP_M` from any centre line, off the sidewalks): parked at the roadside."""
-    if kind_of(anchor.category) != VEHICLE or lanes is None or not len(lanes) or not map_ctx.has_drivable:
+    """Whether ``anchor`` is a vehicle standing (below :data:`STANDING_MPS`) on the drivable area but off every
+    lane (farther than :data:`LANE_SNAP_M` from any centre line, off the sidewalks): parked at the roadside."""
+    if (kind_of(anchor.category) != VEHICLE or abs(anchor.speed) >= STANDING_MPS or lanes is None or not len(lanes)
+            or not map_ctx.has_drivable):
         return False
     if lanes.nearest(anchor.xy[None], max_dist_m=LANE_SNAP_M).lane[0] >= 0:
         return False

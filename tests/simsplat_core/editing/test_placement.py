@@ -3,6 +3,7 @@ two-lane road) and on the real AV2 map: lanes, sides, distances, map areas, occu
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -228,6 +229,8 @@ def test_a_car_behind_or_in_front_of_a_parked_car_parks_in_line_with_it(world) -
         assert _inside(world, "road", pose, CAR)
     # a car beside the parked one still goes into the lane next to it
     assert not _place(world, Placement(relation="left_of"), anchor=parked).parked
+    # a car driving there is not parked: nothing parks behind it
+    _refused(world, Placement(relation="behind"), "in no lane", anchor=dataclasses.replace(parked, speed=5.0))
 
 
 def test_a_car_in_line_with_a_parked_car_is_refused_off_the_road_or_where_taken(world) -> None:
