@@ -44,6 +44,7 @@ from simsplat_core.editing.parser import parse_prompt
 from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.language.static_location import with_static_locations
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
@@ -63,7 +64,8 @@ class EditContext:
     Attributes:
         log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
         graph: the stored scene graph.
-        language: the graph's language scene (what grounding reads).
+        language: the graph's language scene (what grounding reads), static objects' sectors filled in from the
+            log (``language.static_location``).
         engine: the grounding engine (its text encoder also retrieves assets and parses prompts).
         bank: the asset bank (``None``: inserts and replacements are refused, naming ``simsplat assets build``).
         lanes: the log's lane graph.
@@ -91,9 +93,10 @@ class EditContext:
         """
         language.check_graph(graph)
         node_of_object = {n.object_id: n.node_id for n in graph.object_nodes}
-        return cls(log=log, graph=graph, language=language, engine=engine, bank=bank,
+        states = AgentStates.from_log(log, node_of_object)
+        return cls(log=log, graph=graph, language=with_static_locations(language, states), engine=engine, bank=bank,
                    lanes=LaneGraph.from_features(log.map_features), map_ctx=MapContext.from_features(log.map_features),
-                   states=AgentStates.from_log(log, node_of_object))
+                   states=states)
 
 
 def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = DEFAULT_OPTIONS) -> EditedScene:
