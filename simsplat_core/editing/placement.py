@@ -42,6 +42,7 @@ from simsplat_core.editing.motion_routes import crosswalk_ends, nearest_lane_seg
 from simsplat_core.editing.placement_areas import (
     AREA_SEARCH_M,
     area_polygons,
+    box_points,
     box_within,
     fitting_point,
     fitting_point_ahead,
@@ -459,8 +460,7 @@ def _parked_in_line(ctx: _Context, spot: _Spot) -> PlacedPose:
     mc = ctx.map_ctx
     if not box_within(spot.xy, spot.heading, ctx.size, mc.drivable):
         raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is off the road")
-    corners = footprint(PlacedPose(spot.xy, spot.heading, None), ctx.size)
-    if in_any(np.vstack([spot.xy[None], corners]), mc.sidewalks).any():
+    if in_any(box_points(spot.xy, spot.heading, ctx.size), mc.sidewalks).any():
         raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is on the "
                       "sidewalk")
     assert spot.side is not None
@@ -526,12 +526,22 @@ def _clear(ctx: _Context, placed: PlacedPose, spot: _Spot, occupied: AgentStates
             continue
         if spot.side in ("behind", "in_front_of") and not _on_side(ctx, spot.side, moved.xy, moved.heading):
             continue
+        if spot.area is not None and not _ahead_within_slack(ctx, moved.xy):
+            continue
         if not _blocking(ctx, moved.xy, moved.heading, occupied, frame, ignore):
             word = "ahead" if d > 0 else "back"
             return PlacedPose(moved.xy, moved.heading, moved.lane, z, moved.area,
                               f"nudged {abs(d):.1f} m {word} to clear {what}", moved.parked)
     raise _refuse(f"cannot place {ctx.noun} {spot.phrase}: the spot is taken by {what} at frame {frame} "
                   f"(no free spot within {limit:.0f} m)")
+
+
+def _ahead_within_slack(ctx: _Context, xy: np.ndarray) -> bool:
+    """Whether ``xy`` is still a said distance ahead of the anchor within :func:`distance_slack` (no distance: yes)."""
+    distance = ctx.placement.distance_m
+    if distance is None:
+        return True
+    return bool(abs(float(np.dot(xy - ctx.anchor.xy, ctx.anchor.forward)) - distance) <= distance_slack(distance))
 
 
 def _nudger(ctx: _Context, placed: PlacedPose, side: str | None,

@@ -49,12 +49,16 @@ def in_any(xy: np.ndarray, polys: Sequence[np.ndarray]) -> np.ndarray:
     return out
 
 
-def box_within(xy: np.ndarray, heading: float, size: Sequence[float], polys: Sequence[np.ndarray]) -> bool:
-    """Whether the box ``size (l, w, ...)`` at ``xy [2]`` facing ``heading`` lies inside ``polys`` (its centre and
-    four corners)."""
+def box_points(xy: np.ndarray, heading: float, size: Sequence[float]) -> np.ndarray:
+    """``[5, 2]``: the centre and the four corners of the box ``size (l, w, ...)`` at ``xy [2]`` facing ``heading``."""
     corners = box_footprints(np.asarray(xy, np.float64), np.asarray(heading, np.float64),
                              np.asarray(size, np.float64)[:2])
-    return bool(in_any(np.vstack([np.asarray(xy, np.float64)[None], corners]), polys).all())
+    return np.vstack([np.asarray(xy, np.float64)[None], corners])
+
+
+def box_within(xy: np.ndarray, heading: float, size: Sequence[float], polys: Sequence[np.ndarray]) -> bool:
+    """Whether the box ``size`` at ``xy [2]`` facing ``heading`` lies inside ``polys`` (centre and corners)."""
+    return bool(in_any(box_points(xy, heading, size), polys).all())
 
 
 def lane_samples(lanes: LaneGraph, step: float = GRID_STEP_M) -> tuple[np.ndarray, np.ndarray]:
