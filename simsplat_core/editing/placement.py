@@ -456,13 +456,17 @@ def _settle(ctx: _Context, spot: _Spot) -> PlacedPose:
 
 def _parked_in_line(ctx: _Context, spot: _Spot) -> PlacedPose:
     """A vehicle behind / in front of an anchor parked off the lanes: parked at ``spot`` on the anchor's heading
-    line, when its whole box is on the drivable area, off the sidewalks and clear of the anchor."""
+    line, when its whole box is on the drivable area, off the sidewalks, crosswalks and junctions, and clear of
+    the anchor."""
     mc = ctx.map_ctx
     if not box_within(spot.xy, spot.heading, ctx.size, mc.drivable):
         raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is off the road")
-    if in_any(box_points(spot.xy, spot.heading, ctx.size), mc.sidewalks).any():
-        raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is on the "
-                      "sidewalk")
+    points = box_points(spot.xy, spot.heading, ctx.size)
+    facts = mc.facts(points, np.full(len(points), spot.heading))
+    for inside, what in ((facts.on_sidewalk, "on the sidewalk"), (facts.in_crosswalk, "on a crosswalk"),
+                         (facts.at_intersection, "in the junction")):
+        if inside.any():
+            raise _refuse(f"cannot place {ctx.noun} {spot.phrase} (parked in line with it): that spot is {what}")
     assert spot.side is not None
     if not _on_side(ctx, spot.side, spot.xy, spot.heading):
         raise _refuse(f"no room for {ctx.noun} {spot.phrase}")

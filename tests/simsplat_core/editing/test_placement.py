@@ -237,6 +237,9 @@ def test_a_car_in_line_with_a_parked_car_is_refused_off_the_road_or_where_taken(
     layout = world["layout"]
     near_end = _parked_anchor(world, layout.arm_length - CAR[0])
     _refused(world, Placement(relation="behind"), "off the road", anchor=near_end)
+    # the strip ends at the junction: no parking on the crosswalk in front of the first parked car
+    first = _parked_anchor(world, layout.crosswalk_range("W")[1] + CAR[0])
+    _refused(world, Placement(relation="in_front_of"), "crosswalk|junction", anchor=first)
     parked = _parked_anchor(world, 40.0)
     spot = _place(world, Placement(relation="behind"), anchor=parked)
     # a van in the way over a long stretch behind: nothing free within the nudge
