@@ -40,7 +40,7 @@ from simsplat_core.types import SceneLog
 logger = logging.getLogger(__name__)
 
 #: Frames an added object is looked at (evenly spread over the steps where it exists).
-LOOK_FRAMES = 12
+LOOK_FRAMES = 20
 #: A view shows the object when at least this many pixels are its own (the evaluation's caption floor).
 MIN_LOOK_PIXELS = 40
 #: The object reads as the asked colour when the track does and the crops that do cover this share of its

@@ -34,7 +34,7 @@ from simsplat_core.editing.motion_requests import (
 )
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
-from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.vocabulary import VEHICLE
 from simsplat_core.scene.pose_track import PoseTrack
 from simsplat_core.scene.transforms import poses_from_boxes
@@ -121,6 +121,32 @@ def _other(draft: Draft, ref: TargetRef | None, index: int, role: str) -> OtherA
     return OtherAgent.from_states(draft.states, draft.row_of(found.object_ids[0]), draft.describe(found.node_ids[0]))
 
 
+#: The traffic a new vehicle joins: vehicles (the ego too) at most this far behind it in its direction, m ...
+FLOW_BEHIND_M = 40.0
+#: ... at most this far to its side, m, and heading within this angle of it, rad.
+FLOW_LATERAL_M = 2.0
+FLOW_HEADING_RAD = np.deg2rad(30.0)
+
+
+def _flow_speed(states: AgentStates, xy: np.ndarray, heading: float, step: int) -> float:
+    """Speed at ``step`` of the nearest vehicle (the ego included) driving up behind ``xy`` in its lane (within
+    ``FLOW_BEHIND_M`` behind, ``FLOW_LATERAL_M`` aside, heading within ``FLOW_HEADING_RAD``), 0 when none: a
+    car inserted ahead of traffic drives at least as fast as it, so the agents replaying their log (the ego
+    first) do not run into it."""
+    forward = np.array([np.cos(heading), np.sin(heading)])
+    side = np.array([-forward[1], forward[0]])
+    rel = states.xy[:, step] - np.asarray(xy, np.float64)[None]  # [A, 2]
+    behind, lateral = -(rel @ forward), np.abs(rel @ side)
+    same_way = np.abs(np.angle(np.exp(1j * (states.heading[:, step] - heading)))) <= FLOW_HEADING_RAD
+    vehicle = np.array([c == VEHICLE or o == EGO_ID for c, o in zip(states.categories, states.object_ids)])
+    near = (behind > 0) & (behind <= FLOW_BEHIND_M) & (lateral <= FLOW_LATERAL_M)
+    ok = states.valid[:, step] & vehicle & same_way & near
+    if not ok.any():
+        return 0.0
+    nearest = np.flatnonzero(ok)[int(np.argmin(behind[ok]))]
+    return float(abs(states.speed[nearest, step]))
+
+
 def _start_speed(behaviour: Behaviour, cruise: float) -> float:
     """Speed an inserted mover starts with: the asked absolute speed (0 parks it), else ``cruise``."""
     if behaviour.speed is not None:
@@ -189,7 +215,7 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     kind = motion_kind(asset.category, asset.caption)
     if kind == VEHICLE and placed.parked and behaviour.is_empty:
         return Motion.standing(xy, heading, steps, "parked")
-    cruise = DEFAULT_CRUISE_MPS if kind == VEHICLE else WALK_MPS
+    cruise = max(DEFAULT_CRUISE_MPS, _flow_speed(draft.states, xy, heading, step)) if kind == VEHICLE else WALK_MPS
     start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
     plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
                  object_id=None)
