@@ -9,9 +9,10 @@
    for pedestrians the path across the nearest crosswalk, straight across the road away from crosswalks
    (jaywalking), or on along their way;
 2. a longitudinal plan (``speed_profile.plan_speed``): jerk-limited tracking of the wanted speed (the log's
-   own speed where the behaviour does not change it, replayed later after a delayed start), curve speed
-   caps, a leader's gap and gaps to traffic in the way (IDM), stops at a time, before the next crosswalk /
-   intersection or behind an object, ending at rest;
+   own speed where the behaviour does not change it, replayed later after a delayed start; a turn its log
+   halts short of is driven at the log's top pace), curve speed caps (never below the log's own speed
+   where it drove the route), a leader's gap and gaps to traffic in the way (IDM), stops at a time, before
+   the next crosswalk / intersection or behind an object, ending at rest;
 3. positions and headings along the route at the planned arc lengths. Steps before the start step keep the
    log (or, with ``backfill``, run the start state backwards).
 
@@ -139,6 +140,10 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
     else:
         plan = _plan(req, s0, v0, v_ref, stop, caps, leader)
     if req.turn in ("left", "right"):
+        if cruise is None and req.log is not None and not _turn_reached(route, plan):
+            # the log slows down short of the turn (it did not make it): drive on to it at the log's own pace
+            pace = float(np.abs(req.log.speed[req.log.valid]).max(initial=abs(start.speed)))
+            plan = _plan(req, s0, v0, _speed_reference(req, pace, reverse=False), stop, caps, leader)
         _check_turn_reached(req, route, plan, s0)
     return _compose(req, route, plan)
 
@@ -251,10 +256,16 @@ def _neighbour_route(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Rout
                       "the road has one lane)", reason="infeasible_motion")
 
 
-def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan, s0: float) -> None:
+def _turn_reached(route: Route, plan: SpeedPlan) -> bool:
+    """Whether the plan gets halfway through the turn of ``route`` within the steps."""
     s_turn, s_end = route.marks["turn"], route.marks.get("turn_end", route.marks["turn"])
+    return float(plan.s[-1]) >= 0.5 * (s_turn + s_end)
+
+
+def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan, s0: float) -> None:
+    s_turn = route.marks["turn"]
     reached = float(plan.s[-1])
-    if reached < 0.5 * (s_turn + s_end):
+    if not _turn_reached(route, plan):
         horizon = float(req.times[-1] - req.times[req.start.step])
         raise EditRefused(f"turning requires an intersection ahead of {req.label} within reach: the next "
                           f"{req.turn} turn begins {s_turn - s0:.0f} m ahead, but {req.label} covers "

@@ -133,6 +133,22 @@ def test_turns_follow_the_lanes_through_the_intersection(world, turn: str, lane:
     assert plan.speed.min() < 7.0 if turn != "straight" else plan.speed.min() > 7.9  # slows for the curve
 
 
+def test_a_car_that_halts_short_of_the_intersection_drives_on_to_make_its_turn(world) -> None:
+    """Asked to turn, a car whose log brakes to a halt before the intersection drives on to it at its log's pace
+    and makes the turn (replaying the log's braking it would never get there)."""
+    layout = world["layout"]
+    times, frames = _steps(80)
+    xy0 = layout.arm_point("W", layout.stopline_s("W") + 30.0, layout.lane_offset("W", True, 1))
+    v = np.maximum(8.0 - 2.0 * times, 0.0)  # at rest after 4 s, 16 m on: 14 m short of the stop line
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(times))])
+    log = LogTrajectory(xy0 + np.c_[s, 0 * s], np.zeros(80), v, np.ones(80, bool))
+    req = VehicleMotionRequest.from_behaviour(Behaviour(turn="right"), times=times, frame_idx=frames,
+                                              start=StartState.from_log(log, times), size=CAR, log=log)
+    plan = plan_vehicle(req, world["lanes"], world["ctx"])
+    assert abs(np.rad2deg(plan.heading[-1] - plan.heading[0]) + 90.0) < 8.0
+    assert plan.speed.max() <= v.max() + 0.1 and world["lanes"].nearest(plan.xy).distance.max() < 0.3
+
+
 def test_turn_refusals_say_what_is_missing(world) -> None:
     # the inner lane has no right-turn connector in this world, and 0.5 s is not enough to reach a turn
     with pytest.raises(EditRefused, match="turning requires an intersection ahead of the target") as err:
