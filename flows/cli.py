@@ -21,6 +21,7 @@ from flows.runtime import RunnerKind
 os.environ.setdefault("PREFECT_LOGGING_EXTRA_LOGGERS", "simsplat_core,storage,tasks,flows")
 os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
 os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+os.environ.setdefault("PREFECT_LOGGING_TO_API_WHEN_MISSING_FLOW", "ignore")  # CLI work outside flows logs locally
 
 app = typer.Typer(help="SIMSplat scenario-mining pipeline.", no_args_is_help=True, add_completion=False)
 ingest_app = typer.Typer(help="Decode real driving logs into the artifact store.", no_args_is_help=True)

@@ -17,7 +17,9 @@ from simsplat_core.language.feature_field import similarity_map
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.query_result import Grounding, NodeMatch
 from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.language.static_location import with_static_locations
 from simsplat_core.language.text import default_text_encoder
+from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene import SceneGraph
 from simsplat_core.viz.grounding_view import grounding_picture
 from storage import ArtifactStore, read_scene_log
@@ -109,7 +111,10 @@ def answer_query(store_root: str, seq_id: str, text: str, *, out: str | None = N
     """
     store = ArtifactStore(store_root)
     loaded = read_language_scene(store, seq_id)
-    scene = loaded.scene
+    # static objects' sectors ("the stop sign ahead of us") come from the log's geometry
+    node_of_object = {n.object_id: n.node_id for n in loaded.scene.nodes}
+    states = AgentStates.from_log(read_scene_log(store, seq_id, load_images=False), node_of_object)
+    scene = with_static_locations(loaded.scene, states)
     engine = engine or QueryEngine(default_text_encoder())
     grounding = engine.ground(scene, text)
     logger.info("%s: %r -> %s", seq_id, text, grounding.node_ids or "no match")

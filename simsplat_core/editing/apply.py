@@ -16,8 +16,10 @@ target / anchor against the scene's language (``editing.grounding``), then
   rows of cones stand still, pedestrians walk along the sidewalk or cross when told);
 * ``modify`` re-plans a target's trajectory from its log trajectory (``editing.motion_controller``).
 
-The edited graph is :func:`~simsplat_core.editing.delta.apply_delta` of the stored graph and the
-resulting delta (the same function rebuilds a stored edit), so nothing of the stored scene changes and
+An added object whose command asked an achromatic colour is then looked at in the edited renders and
+exposure-matched when it reads as another shade (``editing.look_check``). The edited graph is
+:func:`~simsplat_core.editing.delta.apply_delta` of the stored graph and the resulting delta (the same
+function rebuilds a stored edit), so nothing of the stored scene changes and
 unchanged nodes are shared. Finally every edited and inserted agent is validated against every other
 agent (``scenario.metrics.validate_agents``). A command whose grounding fails, whose placement or motion
 is infeasible, or that changes nothing is refused (``EditRefused``, with the command's index).
@@ -25,21 +27,24 @@ is infeasible, or that changes nothing is refused (``EditRefused``, with the com
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.assets import AssetBank, wanted_from_spec
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import Draft, apply_command, node_factory
 from simsplat_core.editing.grounding import Grounder
+from simsplat_core.editing.look_check import match_exposure
 from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_LIKE, EditorOptions
 from simsplat_core.editing.parser import parse_prompt
-from simsplat_core.editing.result import EditedScene, EditRefused
+from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.language.static_location import with_static_locations
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
@@ -59,7 +64,8 @@ class EditContext:
     Attributes:
         log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
         graph: the stored scene graph.
-        language: the graph's language scene (what grounding reads).
+        language: the graph's language scene (what grounding reads), static objects' sectors filled in from the
+            log (``language.static_location``).
         engine: the grounding engine (its text encoder also retrieves assets and parses prompts).
         bank: the asset bank (``None``: inserts and replacements are refused, naming ``simsplat assets build``).
         lanes: the log's lane graph.
@@ -87,9 +93,10 @@ class EditContext:
         """
         language.check_graph(graph)
         node_of_object = {n.object_id: n.node_id for n in graph.object_nodes}
-        return cls(log=log, graph=graph, language=language, engine=engine, bank=bank,
+        states = AgentStates.from_log(log, node_of_object)
+        return cls(log=log, graph=graph, language=with_static_locations(language, states), engine=engine, bank=bank,
                    lanes=LaneGraph.from_features(log.map_features), map_ctx=MapContext.from_features(log.map_features),
-                   states=AgentStates.from_log(log, node_of_object))
+                   states=states)
 
 
 def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = DEFAULT_OPTIONS) -> EditedScene:
@@ -109,12 +116,46 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
     if delta.is_empty:
         raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
     graph = apply_delta(ctx.graph, delta, node_factory(draft.assets.__getitem__, ctx.graph.frame_indices))
+    matched, notes = match_exposure(ctx.log, graph, delta, _asked_colors(outcomes, delta), draft.states,
+                                    draft.assets.__getitem__)
+    if matched is not delta:
+        for added in matched.added:
+            if added.asset_id not in draft.assets and ctx.bank is not None:
+                draft.assets[added.asset_id] = ctx.bank.get(added.asset_id)
+        delta = matched
+        graph = apply_delta(ctx.graph, delta, node_factory(draft.assets.__getitem__, ctx.graph.frame_indices))
+        outcomes = [_with_look_notes(o, [n.describe() for n in notes if n.gain != 1.0 and n.node_id in nodes])
+                    for o, nodes in zip(outcomes, _added_nodes(outcomes, delta))]
     rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
     validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
     logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
                 "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
     return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,
                        states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation)
+
+
+def _added_nodes(outcomes: list[CommandOutcome], delta: EditDelta) -> list[set[int]]:
+    """Per outcome, the added node ids of the objects it inserted or replaced."""
+    out = []
+    for outcome in outcomes:
+        objects = set(outcome.new_object_ids) | set(outcome.changed_object_ids)
+        out.append({a.node_id for a in delta.added if a.object_id in objects} if outcome.command.asset else set())
+    return out
+
+
+def _asked_colors(outcomes: list[CommandOutcome], delta: EditDelta) -> dict[int, str]:
+    """Added node id -> the colour its command asked for (nodes of commands that asked none are left out)."""
+    asked = {}
+    for outcome, nodes in zip(outcomes, _added_nodes(outcomes, delta)):
+        spec = outcome.command.asset
+        color = wanted_from_spec(spec).color if spec is not None else None
+        if color is not None:
+            asked.update(dict.fromkeys(nodes, color))
+    return asked
+
+
+def _with_look_notes(outcome: CommandOutcome, notes: list[str]) -> CommandOutcome:
+    return dataclasses.replace(outcome, summary=f"{outcome.summary}; {'; '.join(notes)}") if notes else outcome
 
 
 class Editor:

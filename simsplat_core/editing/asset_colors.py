@@ -9,6 +9,10 @@ named the asset's colour -- every non-glass achromatic cluster but black when th
 non-black, non-glass cluster. For a pedestrian only the upper body (hips to neck) is searched: the
 asset's colour is its top's.
 
+An exposure variant (``exposed``) scales every Gaussian's colour by one gain: the same body seen under
+another scene's light (``editing.look_check`` picks the gain that makes an inserted object read as the
+asked achromatic colour where it is placed).
+
 The shift keeps the shading: each body Gaussian's luminance relative to the body's median luminance
 scales the target's display colour (``color_names.DISPLAY_RGB``), itself scaled by how the body's median
 compares with the source colour's display value (the scene's exposure), both clipped to sane ranges.
@@ -22,7 +26,7 @@ import numpy as np
 import torch
 
 from simsplat_core.color_names import ACHROMATIC_NAMES, COLOR_NAMES, DISPLAY_RGB
-from simsplat_core.editing.asset_record import RECOLOURED_FROM, VARIANT_SEP, Asset
+from simsplat_core.editing.asset_record import EXPOSED_FROM, RECOLOURED_FROM, VARIANT_SEP, Asset
 from simsplat_core.language.appearance.captioner import caption_text
 from simsplat_core.language.appearance.colors import (
     CLOTHING_SCALE,
@@ -45,6 +49,12 @@ UPPER_BODY = (0.46, 0.88)
 #: Clip ranges of the per-Gaussian shading factor and of the scene exposure.
 SHADING_RANGE = (0.35, 1.8)
 EXPOSURE_RANGE = (0.6, 1.4)
+#: Gains an exposure variant may apply (``exposed``).
+EXPOSURE_GAIN_RANGE = (0.5, 2.0)
+#: Display RGB stays inside this range (logits stay finite).
+RGB_RANGE = (0.004, 0.996)
+#: Prefix of an exposure variant's id suffix: ``<asset_id>~exp1.20``.
+EXPOSURE_TAG = "exp"
 _LUMA = np.array([0.2126, 0.7152, 0.0722])
 
 
@@ -98,7 +108,7 @@ def shifted_rgb(rgb: np.ndarray, source: str, target: str) -> np.ndarray:
     shading = np.clip(luma / max(median, 1e-4), *SHADING_RANGE)
     source_luma = float(np.asarray(DISPLAY_RGB.get(source, DISPLAY_RGB["gray"])) @ _LUMA)
     exposure = float(np.clip(median / max(source_luma, 1e-3), *EXPOSURE_RANGE))
-    return np.clip(np.asarray(DISPLAY_RGB[target])[None] * (exposure * shading)[:, None], 0.004, 0.996)
+    return np.clip(np.asarray(DISPLAY_RGB[target])[None] * (exposure * shading)[:, None], *RGB_RANGE)
 
 
 def recolored(asset: Asset, color: str) -> Asset:
@@ -125,4 +135,27 @@ def recolored(asset: Asset, color: str) -> Asset:
                                attributes={**asset.attributes, RECOLOURED_FROM: asset.asset_id})
 
 
-__all__ = ["BODY_CLUSTERS", "UPPER_BODY", "body_rows", "recolored", "shifted_rgb"]
+def exposure_suffix(gain: float) -> str:
+    """The variant suffix of ``gain`` (two decimals: ``exp1.20``)."""
+    return f"{EXPOSURE_TAG}{gain:.2f}"
+
+
+def exposed(asset: Asset, gain: float) -> Asset:
+    """A variant of ``asset`` with every Gaussian's display colour times ``gain`` (clipped to ``RGB_RANGE``;
+    id ``<asset_id>~exp<gain>``, ``attributes["exposed_from"]`` names the source).
+
+    Raises:
+        ValueError: ``gain`` outside ``EXPOSURE_GAIN_RANGE``.
+    """
+    gain = round(float(gain), 2)
+    if not EXPOSURE_GAIN_RANGE[0] <= gain <= EXPOSURE_GAIN_RANGE[1]:
+        raise ValueError(f"exposure gain {gain} outside {EXPOSURE_GAIN_RANGE}")
+    rgb = torch.clamp(asset.gaussians.rgb * gain, *RGB_RANGE)
+    colors = logit(rgb.to(asset.gaussians.colors.dtype))
+    gs = asset.gaussians.map_rows(lambda name, t: colors if name == "colors" else t)
+    return dataclasses.replace(asset, asset_id=f"{asset.asset_id}{VARIANT_SEP}{exposure_suffix(gain)}", gaussians=gs,
+                               attributes={**asset.attributes, EXPOSED_FROM: asset.asset_id})
+
+
+__all__ = ["BODY_CLUSTERS", "EXPOSURE_GAIN_RANGE", "EXPOSURE_TAG", "UPPER_BODY", "body_rows", "exposed",
+           "exposure_suffix", "recolored", "shifted_rgb"]

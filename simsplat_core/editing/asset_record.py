@@ -33,6 +33,7 @@ ASSET_CATEGORIES: tuple[str, ...] = ("vehicle", "pedestrian", "static")
 #: Attribute keys with a meaning (others are free-form facts).
 RECOLOURED_FROM = "recoloured_from"
 RESIZED_FROM = "resized_from"
+EXPOSED_FROM = "exposed_from"
 PROCEDURAL = "procedural"
 LOWER_COLOR = "lower_color"
 #: Characters allowed in a stored asset id (it names the file ``gaussians/<asset_id>.parquet``).
@@ -153,10 +154,12 @@ class Asset:
             notes.append(f"recoloured from {self.attributes[RECOLOURED_FROM]}")
         if RESIZED_FROM in self.attributes:
             notes.append(f"resized from {self.attributes[RESIZED_FROM]}")
+        if EXPOSED_FROM in self.attributes:
+            notes.append(f"exposure-matched from {self.attributes[EXPOSED_FROM]}")
         if not notes:
             notes.append("procedural" if self.procedural else f"from {self.source_seq} {self.source_object}")
         return f"{self.caption} ({'; '.join(notes)})"
 
 
-__all__ = ["ASSET_CATEGORIES", "ASSET_ID_RX", "Asset", "AssetCategoryName", "LOWER_COLOR", "PROCEDURAL",
+__all__ = ["ASSET_CATEGORIES", "ASSET_ID_RX", "Asset", "AssetCategoryName", "EXPOSED_FROM", "LOWER_COLOR", "PROCEDURAL",
            "RECOLOURED_FROM", "RESIZED_FROM", "VARIANT_SEP", "f32"]

@@ -42,7 +42,7 @@ import numpy as np
 import torch
 
 from simsplat_core.color_names import COLOR_NAMES
-from simsplat_core.editing.asset_colors import recolored
+from simsplat_core.editing.asset_colors import EXPOSURE_TAG, exposed, recolored
 from simsplat_core.editing.asset_record import (
     ASSET_CATEGORIES,
     LOWER_COLOR,
@@ -80,6 +80,7 @@ WALKING_BONUS = 0.05
 Side = Literal["front", "back", "left", "right"]
 _HASH = re.compile(r"^[0-9a-f]{8,64}$")
 _SIZE_RX = re.compile(r"^(\d+(?:\.\d+)?)x(\d+(?:\.\d+)?)x(\d+(?:\.\d+)?)$")
+_EXPOSURE_RX = re.compile(rf"^{EXPOSURE_TAG}(\d+(?:\.\d+)?)$")
 
 
 # ---------------------------------------------------------------------------------------------- the wanted thing
@@ -263,7 +264,8 @@ class AssetBank:
     # ------------------------------------------------------------------ lookup and variants
     def get(self, asset_id: str) -> Asset:
         """The asset ``asset_id``, or the variant it names: ``<id>~<colour>`` recolours, ``<id>~<l>x<w>x<h>``
-        resizes (a procedural asset is rebuilt; variants chain, colour first).
+        resizes (a procedural asset is rebuilt), ``<id>~exp<gain>`` scales the colours
+        (``asset_colors.exposed``); variants chain, in the order of the suffixes.
 
         Raises:
             EditRefused: no such asset, or a variant that cannot be made (``reason="no_asset"``).
@@ -276,8 +278,11 @@ class AssetBank:
         asset = found
         for suffix in suffixes:
             size = _SIZE_RX.match(suffix)
+            gain = _EXPOSURE_RX.match(suffix)
             try:
-                if size is not None:
+                if gain is not None:
+                    asset = exposed(asset, float(gain[1]))
+                elif size is not None:
                     asset = resized_variant(asset, (float(size[1]), float(size[2]), float(size[3])))
                 else:
                     asset = color_variant(asset, suffix)

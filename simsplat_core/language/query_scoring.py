@@ -208,10 +208,19 @@ def location_score(
     config: QueryConfig,
     books: MotionCodebooks,
 ) -> float:
-    """How far ``node`` is where the query's sector and context memberships say (their product), in ``[0, 1]``."""
+    """How far ``node`` is where the query's sector and context memberships say (their product), in ``[0, 1]``.
+
+    A static node (no motion features) answers the sector from its ``static_location`` shares; a context, or a
+    sector without shares, scores ``missing_motion``."""
     feats = node.motion
     if feats is None:
-        return config.missing_motion
+        shares = node.static_location
+        if sector is None or not shares:
+            return config.missing_motion
+        score = sum(p * shares.get(c, 0.0) for c, p in sector.items())  # the shares sum to 1
+        if context is not None:
+            score *= config.missing_motion
+        return float(np.clip(score, 0.0, 1.0))
     probs = feats.location_probs
     # sectors and contexts each hold half of the location weights
     probs = _with_label(probs, feats.labels.sector, 0.5, config.label_weight, books.sector.classes)

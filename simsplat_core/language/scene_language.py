@@ -48,6 +48,8 @@ class NodeLanguage:
             per-Gaussian features), or ``None`` when the log has no pixels of the object.
         caption: the captioner's description of the object (``None`` without pixels).
         motion: motion/location features from the trajectory aligner (``None`` for static objects).
+        static_location: for a static object, the share of its steps in each ego-relative sector
+            (``language.static_location``; derived from the log when scene and log meet, not stored).
     """
 
     node_id: int
@@ -57,6 +59,7 @@ class NodeLanguage:
     f_app: np.ndarray | None
     caption: AppearanceCaption | None
     motion: ObjectMotionFeatures | None
+    static_location: dict[str, float] | None = None
 
     @property
     def f_mot(self) -> np.ndarray | None:

@@ -1,0 +1,203 @@
+"""Does an inserted object read as the asked colour where it stands? Exposure matching of achromatic colours.
+
+An asset keeps the light of the scene it was cut from: a white car whose rear was in shade there shows a
+grey rear wherever it is inserted, and "add a white car 20 m ahead" would put a silver one on the road.
+White, silver, grey and black differ only in lightness, so the fix is an exposure gain, not a recolour.
+
+After the edited graph is built, every added node whose command asked an achromatic colour (vehicles and
+static objects; a pedestrian's clothes are two colours and are left alone) is rendered with the whole edited
+scene, occlusions included, at up to ``LOOK_FRAMES`` frames where it exists. The built-in captioner
+(``language.appearance.captioner.describe_track``, the same one that captions the scene for grounding) names
+its main colour from the crops with at least ``MIN_LOOK_PIXELS`` of its pixels. When it names another
+achromatic colour, the crops are re-captioned under the gains of ``BRIGHTER_GAINS`` (asked colour lighter)
+or ``DARKER_GAINS`` (darker), and the first gain under which the captioner names the asked colour becomes
+an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the
+variant, so a stored edit rebuilds to the same pixels. When no gain fits, or the object is too small to
+caption anywhere, the object is kept as it is and the returned note says so.
+
+    delta, notes = match_exposure(log, graph, delta, wanted, states, asset_of)
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from collections.abc import Callable, Mapping, Sequence
+
+import numpy as np
+
+from simsplat_core.color_names import ACHROMATIC_NAMES
+from simsplat_core.editing.asset_colors import exposure_suffix
+from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
+from simsplat_core.editing.renders import FrameRender, render_frames
+from simsplat_core.editing.result import AddedNode, EditDelta
+from simsplat_core.language.appearance.captioner import describe_object, describe_track
+from simsplat_core.language.appearance.crops import ObjectCrop, crop_object
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.types import SceneLog
+
+logger = logging.getLogger(__name__)
+
+#: Frames an added object is looked at (evenly spread over the steps where it exists).
+LOOK_FRAMES = 12
+#: A view shows the object when at least this many pixels are its own (the evaluation's caption floor).
+MIN_LOOK_PIXELS = 40
+#: The object reads as the asked colour when the track does and the crops that do cover this share of its
+#: pixels (the captioner lets silver win over white on a tenth of the area).
+LOOK_SHARE = 0.95
+#: Gains tried, in order, when the asked colour is lighter / darker than what the object reads as.
+BRIGHTER_GAINS = (1.1, 1.2, 1.3, 1.45, 1.6, 1.8)
+DARKER_GAINS = (0.9, 0.8, 0.7, 0.6)
+#: Categories whose colour is one body colour (a pedestrian's clothes are two).
+CHECKED_CATEGORIES = ("vehicle", "static")
+
+
+@dataclasses.dataclass(frozen=True)
+class LookNote:
+    """What the check found for one added node.
+
+    Attributes:
+        node_id: the added node.
+        wanted: the asked colour.
+        seen: the colour the captioner named before any gain (``None``: too small to caption anywhere).
+        gain: the exposure gain applied (``1.0``: none was needed or none fitted).
+    """
+
+    node_id: int
+    wanted: str
+    seen: str | None
+    gain: float
+
+    @property
+    def fitted(self) -> bool:
+        return self.seen == self.wanted or self.gain != 1.0
+
+    def describe(self) -> str:
+        if self.seen is None:
+            return f"node {self.node_id} is too small to check its colour ({self.wanted} asked)"
+        if self.gain != 1.0:
+            return f"node {self.node_id} read as {self.seen}, exposure x{self.gain:.2f} makes it {self.wanted}"
+        if self.seen != self.wanted:
+            return f"node {self.node_id} reads as {self.seen} here, not {self.wanted} (no exposure gain fits)"
+        return f"node {self.node_id} reads as {self.wanted}"
+
+
+def look_frames(states: AgentStates, object_id: str, count: int = LOOK_FRAMES) -> list[int]:
+    """Up to ``count`` log frames, evenly spread over the steps where ``object_id`` exists."""
+    valid = np.nonzero(states.valid[states.index(object_id)])[0]
+    if valid.size == 0:
+        return []
+    picks = np.unique(np.round(np.linspace(0, valid.size - 1, min(count, valid.size))).astype(np.int64))
+    return [int(states.frame_idx[valid[k]]) for k in picks]
+
+
+def node_crops(renders: Sequence[FrameRender], node_id: int, object_id: str, category: str,
+               box_size: Sequence[float], min_pixels: int = MIN_LOOK_PIXELS) -> list[ObjectCrop]:
+    """Crops of the pixels whose top node is ``node_id``, in every rendered view with ``min_pixels`` of them."""
+    out = []
+    for frame in renders:
+        if frame.node_id is None:
+            raise ValueError(f"frame {frame.frame_idx} was rendered without node ids")
+        for c, camera in enumerate(frame.cameras):
+            mask = frame.node_id[c] == node_id
+            if int(mask.sum()) < min_pixels:
+                continue
+            cut = crop_object(frame.rgb[c], mask)
+            if cut is not None:
+                rgb, m, bbox = cut
+                out.append(ObjectCrop(rgb, m, category, np.asarray(box_size, np.float64), frame.frame_idx, camera,
+                                      object_id, bbox))
+    return out
+
+
+def _read(crops: Sequence[ObjectCrop], wanted: str, gain: float = 1.0) -> tuple[str, float]:
+    """``(main colour of the track, share of the crops' area whose own main colour is wanted)`` under ``gain``."""
+    if gain != 1.0:
+        crops = [dataclasses.replace(c, rgb=np.clip(c.rgb * gain, 0.0, 1.0).astype(np.float32)) for c in crops]
+    area = np.array([c.area for c in crops], dtype=np.float64)
+    hits = np.array([describe_object(c.rgb, c.mask, c.category, c.box_size).colors[0] == wanted for c in crops])
+    return describe_track(crops).colors[0], float(area[hits].sum() / max(area.sum(), 1.0))
+
+
+def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]:
+    """``(colour the crops read as, gain)`` (module docstring): gain ``1.0`` when they already read as ``wanted``
+    in ``LOOK_SHARE`` of their area, else the first gain on the ladder that makes them, else the gain under
+    which the most area reads as ``wanted`` with the track reading so too, else ``1.0``. ``wanted`` and the
+    read colour must both be achromatic for a gain.
+
+    Raises:
+        ValueError: no crops.
+    """
+    seen, share = _read(crops, wanted)
+    if (seen == wanted and share >= LOOK_SHARE) or seen not in ACHROMATIC_NAMES or wanted not in ACHROMATIC_NAMES:
+        return seen, 1.0
+    lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(seen)
+    if seen == wanted:  # the track reads right but parts of it do not: lighter if most of the rest is darker
+        lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(_darker_or_lighter(crops, wanted))
+    best = (share if seen == wanted else -1.0, 1.0)
+    for gain in BRIGHTER_GAINS if lighter else DARKER_GAINS:
+        track, part = _read(crops, wanted, gain)
+        if track == wanted and part >= LOOK_SHARE:
+            return seen, gain
+        if track == wanted and part > best[0]:
+            best = (part, gain)
+    return seen, best[1]
+
+
+def _darker_or_lighter(crops: Sequence[ObjectCrop], wanted: str) -> str:
+    """The achromatic name the crops that do not read as ``wanted`` mostly read as (by area)."""
+    votes: dict[str, float] = {}
+    for c in crops:
+        name = describe_object(c.rgb, c.mask, c.category, c.box_size).colors[0]
+        if name != wanted and name in ACHROMATIC_NAMES:
+            votes[name] = votes.get(name, 0.0) + c.area
+    return max(votes, key=votes.__getitem__) if votes else wanted
+
+
+def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: Mapping[int, str],
+                   states: AgentStates, asset_of: Callable[[str], Asset]) -> tuple[EditDelta, list[LookNote]]:
+    """The delta with each added node of ``wanted`` (node id -> asked achromatic colour) switched to the exposure
+    variant that makes it read as that colour in ``graph`` (the edited graph), and a note per checked node.
+
+    Args:
+        log: the sequence's log (cameras).
+        graph: the edited graph (``delta`` applied).
+        delta: the edit's delta.
+        wanted: added node id -> asked colour; other colours and unknown nodes are skipped.
+        states: the edited agent states (where each added object exists).
+        asset_of: asset id -> asset (the draft's assets).
+    """
+    added = {a.node_id: a for a in delta.added}
+    checks = {n: c for n, c in wanted.items()
+              if n in added and c in ACHROMATIC_NAMES and added[n].category in CHECKED_CATEGORIES}
+    if not checks:
+        return delta, []
+    frames = sorted({f for n in checks for f in look_frames(states, added[n].object_id)})
+    renders = list(render_frames(graph, log, frames))
+    notes, gains = [], {}
+    for node_id, color in sorted(checks.items()):
+        node = added[node_id]
+        asset = asset_of(node.asset_id)
+        crops = node_crops(renders, node_id, node.object_id, asset.category, asset.size)
+        if not crops:
+            notes.append(LookNote(node_id, color, None, 1.0))
+            continue
+        seen, gain = exposure_gain(crops, color)
+        notes.append(LookNote(node_id, color, seen, gain))
+        if gain != 1.0:
+            gains[node_id] = gain
+    for note in notes:
+        (logger.info if note.fitted else logger.warning)("look check: %s", note.describe())
+    if not gains:
+        return delta, notes
+    new_added = tuple(_with_gain(a, gains[a.node_id]) if a.node_id in gains else a for a in delta.added)
+    return dataclasses.replace(delta, added=new_added), notes
+
+
+def _with_gain(added: AddedNode, gain: float) -> AddedNode:
+    return dataclasses.replace(added, asset_id=f"{added.asset_id}{VARIANT_SEP}{exposure_suffix(gain)}")
+
+
+__all__ = ["BRIGHTER_GAINS", "CHECKED_CATEGORIES", "DARKER_GAINS", "LOOK_FRAMES", "LOOK_SHARE", "MIN_LOOK_PIXELS",
+           "LookNote", "exposure_gain", "look_frames", "match_exposure", "node_crops"]

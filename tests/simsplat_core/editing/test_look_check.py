@@ -1,0 +1,99 @@
+"""Exposure matching of inserted objects: the gain ladder on crops, the exposure variant, and apply_edit
+switching a too-dark "white" asset to the variant that reads white where it stands."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import torch
+
+from simsplat_core.editing.apply import EditContext, apply_edit
+from simsplat_core.editing.asset_colors import exposed
+from simsplat_core.editing.asset_record import EXPOSED_FROM, Asset
+from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.commands import EditProgram
+from simsplat_core.editing.delta import apply_delta
+from simsplat_core.editing.edit_ops import node_factory
+from simsplat_core.editing.look_check import exposure_gain, look_frames, node_crops
+from simsplat_core.editing.renders import render_frames
+from simsplat_core.language.appearance.captioner import describe_track
+from simsplat_core.language.appearance.crops import ObjectCrop
+from simsplat_core.scene import GaussianSet, SceneGraph
+
+CAR = (4.4, 1.9, 1.5)
+
+
+def _crop(value: float, size: int = 24) -> ObjectCrop:
+    """A flat neutral square of display value ``value``."""
+    rgb = np.full((size, size, 3), value, np.float32)
+    return ObjectCrop(rgb, np.ones((size, size), bool), "vehicle", np.asarray(CAR), 0, "front", "obj")
+
+
+def _dim_white_car(value: float) -> Asset:
+    g = torch.Generator().manual_seed(3)
+    means = (torch.rand((400, 3), generator=g) - 0.5) * torch.tensor(CAR)
+    gs = GaussianSet.create(means, torch.full((400,), 0.2), torch.full((400, 3), value), 0.95)
+    return Asset(asset_id="unit.dimwhite", category="vehicle", subtype="sedan", caption="a white sedan",
+                 color="white", size=CAR, source_seq="unit", source_object="car", gaussians=gs)
+
+
+def test_a_grey_looking_object_asked_white_gets_a_brightening_gain():
+    crops = [_crop(0.45)] * 3
+    seen, gain = exposure_gain(crops, "white")
+    assert seen != "white" and gain > 1.0
+    brighter = [ObjectCrop(np.clip(c.rgb * gain, 0, 1), c.mask, c.category, c.box_size, 0, "front", "obj")
+                for c in crops]
+    assert describe_track(brighter).colors[0] == "white"
+
+
+def test_an_object_asked_darker_gets_a_darkening_gain_and_one_that_reads_right_none():
+    seen, gain = exposure_gain([_crop(0.62)] * 2, "silver")
+    assert seen == "white" and gain < 1.0
+    seen, gain = exposure_gain([_crop(0.95)] * 2, "white")
+    assert (seen, gain) == ("white", 1.0)
+
+
+def test_chromatic_colours_are_not_exposure_matched():
+    red = ObjectCrop(np.tile(np.array([0.7, 0.1, 0.1], np.float32), (20, 20, 1)), np.ones((20, 20), bool),
+                     "vehicle", np.asarray(CAR), 0, "front", "obj")
+    assert exposure_gain([red], "blue")[1] == 1.0
+    assert exposure_gain([red], "white")[1] == 1.0
+
+
+def test_the_exposure_variant_scales_colours_and_round_trips_through_the_bank():
+    asset = _dim_white_car(0.4)
+    bank = AssetBank.from_assets([asset])
+    variant = bank.get("unit.dimwhite~exp1.50")
+    assert variant.asset_id == "unit.dimwhite~exp1.50"
+    assert variant.attributes[EXPOSED_FROM] == "unit.dimwhite"
+    assert torch.allclose(variant.gaussians.rgb, asset.gaussians.rgb * 1.5, atol=1e-4)
+    assert torch.equal(variant.gaussians.means, asset.gaussians.means)
+    with pytest.raises(ValueError, match="exposure gain"):
+        exposed(asset, 5.0)
+
+
+def _clear_background(graph: SceneGraph) -> SceneGraph:
+    """The graph with its (random-cloud) background made transparent, so inserted objects are seen."""
+    bg = graph.nodes[0]
+    clear = bg.gaussians.map_rows(lambda name, t: torch.full_like(t, -30.0) if name == "opacity_logits" else t)
+    return dataclasses.replace(graph, nodes=(dataclasses.replace(bg, gaussians=clear), *graph.nodes[1:]))
+
+
+def test_apply_edit_switches_a_dark_white_asset_to_a_variant_that_reads_white(edit_log, edit_graph, edit_language,
+                                                                               engine):
+    bank = AssetBank.from_assets([_dim_white_car(0.5)])
+    ctx = EditContext.create(edit_log, _clear_background(edit_graph), edit_language, engine, bank)
+    program = EditProgram.model_validate({"commands": [{"op": "insert", "asset": {"description": "a white sedan"},
+                                                        "placement": {"relation": "in_lane", "distance_m": 6}}]})
+    edited = apply_edit(ctx, program)
+    added = edited.delta.added[0]
+    assert added.asset_id.startswith("unit.dimwhite~exp")
+    renders = list(render_frames(edited.graph, edit_log, look_frames(edited.states, added.object_id)))
+    crops = node_crops(renders, added.node_id, added.object_id, "vehicle", CAR)
+    assert crops and describe_track(crops).colors[0] == "white"
+    rebuilt = apply_delta(ctx.graph, edited.delta, node_factory(bank.get, ctx.graph.frame_indices))
+    assert torch.allclose(rebuilt.at(5.0).colors, edited.graph.at(5.0).colors)
+    assert "exposure" in edited.outcomes[0].summary
+
