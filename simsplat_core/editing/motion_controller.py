@@ -9,9 +9,10 @@
    for pedestrians the path across the nearest crosswalk, straight across the road away from crosswalks
    (jaywalking), or on along their way;
 2. a longitudinal plan (``speed_profile.plan_speed``): jerk-limited tracking of the wanted speed (the log's
-   own speed where the behaviour does not change it, replayed later after a delayed start), curve speed
-   caps, a leader's gap and gaps to traffic in the way (IDM), stops at a time, before the next crosswalk /
-   intersection or behind an object, ending at rest;
+   own speed where the behaviour does not change it, replayed later after a delayed start; a turn its log
+   halts short of is driven at the log's top pace), curve speed caps (never below the log's own speed
+   where it drove the route), a leader's gap and gaps to traffic in the way (IDM), stops at a time, before
+   the next crosswalk / intersection or behind an object, ending at rest;
 3. positions and headings along the route at the planned arc lengths. Steps before the start step keep the
    log (or, with ``backfill``, run the start state backwards).
 
@@ -66,6 +67,8 @@ logger = logging.getLogger(__name__)
 ON_ROUTE_M = 2.5
 #: Traffic about to enter the route within this time blocks it where it will enter (crossing traffic), s.
 ANTICIPATE_S = 2.0
+#: The agent's own log counts as on its edited route within this lateral distance, m.
+LOG_ON_ROUTE_M = 0.5
 #: Length of the ramp that eases a log path onto a lane path (turns), m.
 MERGE_M = 15.0
 #: Sideways shifts are eased in over this time at the cruise speed (at least ``MIN_RAMP_M``), s / m.
@@ -131,14 +134,31 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
     v0 = 0.0 if req.hold_until_s is not None and _first_step(req) else start.speed
     horizon = float(req.times[-1] - req.times[start.step])
     reach = s0 + max(abs(v0), cruise or 0.0, req.limits.max_speed_mps / 2) * horizon + 50.0
-    caps = curvature_caps(route, s0, reach, req.limits.lateral_accel_mps2)
+    caps = _at_least_the_log(curvature_caps(route, s0, reach, req.limits.lateral_accel_mps2), req, route)
     if own is not None and req.turn is None and _keeps_log_speed(req):
         plan = _replay_log(req, own, s0)
     else:
         plan = _plan(req, s0, v0, v_ref, stop, caps, leader)
     if req.turn in ("left", "right"):
+        if cruise is None and req.log is not None and not _turn_reached(route, plan):
+            # the log slows down short of the turn (it did not make it): drive on to it at the log's own pace
+            pace = float(np.abs(req.log.speed[req.log.valid]).max(initial=abs(start.speed)))
+            plan = _plan(req, s0, v0, _speed_reference(req, pace, reverse=False), stop, caps, leader)
         _check_turn_reached(req, route, plan, s0)
     return _compose(req, route, plan)
+
+
+def _at_least_the_log(caps: SpeedCaps | None, req: VehicleMotionRequest, route: Route) -> SpeedCaps | None:
+    """Curve speed caps no lower than the agent's own log speed where its log drives the route (the log shows
+    the curve is driven that fast: a speed-up never takes a logged curve slower than the log)."""
+    log_s, _ = _log_along(req, route)
+    if caps is None or log_s is None or req.log is None:
+        return caps
+    on = np.isfinite(log_s)
+    order = np.argsort(log_s[on])
+    s_log, v_log = log_s[on][order], np.abs(req.log.speed[on][order])
+    inside = (caps.s >= s_log[0]) & (caps.s <= s_log[-1])
+    return SpeedCaps(caps.s, np.where(inside, np.maximum(caps.v, np.interp(caps.s, s_log, v_log)), caps.v))
 
 
 def _own_route(req: _Common) -> Route | None:
@@ -236,10 +256,16 @@ def _neighbour_route(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Rout
                       "the road has one lane)", reason="infeasible_motion")
 
 
-def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan, s0: float) -> None:
+def _turn_reached(route: Route, plan: SpeedPlan) -> bool:
+    """Whether the plan gets halfway through the turn of ``route`` within the steps."""
     s_turn, s_end = route.marks["turn"], route.marks.get("turn_end", route.marks["turn"])
+    return float(plan.s[-1]) >= 0.5 * (s_turn + s_end)
+
+
+def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan, s0: float) -> None:
+    s_turn = route.marks["turn"]
     reached = float(plan.s[-1])
-    if reached < 0.5 * (s_turn + s_end):
+    if not _turn_reached(route, plan):
         horizon = float(req.times[-1] - req.times[req.start.step])
         raise EditRefused(f"turning requires an intersection ahead of {req.label} within reach: the next "
                           f"{req.turn} turn begins {s_turn - s0:.0f} m ahead, but {req.label} covers "
@@ -248,7 +274,9 @@ def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan
 
 def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderTrack | None:
     """The followed leader and the traffic, where each is on the route ahead of the start; traffic that will
-    be on the route within ``ANTICIPATE_S`` already blocks it where it will enter, standing."""
+    be on the route within ``ANTICIPATE_S`` already blocks it where it will enter, standing (unless the plan is
+    past that point by then: ``LeaderTrack.enter_t``); the agent's own log along the route lets a plan behind
+    it keep the log's gaps to the traffic (``LeaderTrack.log_s``)."""
     agents = ([req.leader] if req.leader is not None else []) + list(req.traffic)
     if not agents:
         return None
@@ -266,6 +294,7 @@ def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderT
     # anticipate: an agent about to enter the route (crossing traffic) already blocks where it will enter
     window = max(int(round(ANTICIPATE_S / max(float(np.median(np.diff(req.times))), 1e-3))), 0) if t > 1 else 0
     s_eff, v_eff, present_eff = s.copy(), v.copy(), present.copy()
+    enter_t = np.broadcast_to(req.times, s.shape).copy()
     for step in range(t):
         upcoming = present[:, step:step + window + 1]
         later = upcoming.any(axis=1) & ~present[:, step]
@@ -273,10 +302,30 @@ def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderT
             s_eff[later, step] = np.where(upcoming[later], s[later, step:step + window + 1], np.inf).min(axis=1)
             v_eff[later, step] = 0.0
             present_eff[later, step] = True
-    if req.leader is not None:  # the followed leader is followed where it is, not anticipated
-        s_eff[0], v_eff[0], present_eff[0] = s[0], v[0], present[0]
+            enter_t[later, step] = req.times[step + np.argmax(upcoming[later], axis=1)]
+    cover = np.ones(len(agents), dtype=bool)
+    if req.leader is not None:  # the followed leader is followed where it is, not anticipated, at its own gap
+        s_eff[0], v_eff[0], present_eff[0], enter_t[0], cover[0] = s[0], v[0], present[0], req.times, False
     gap = np.array([(o.size[0] + req.size[0]) / 2.0 + req.follow_gap_m for o in agents])
-    return LeaderTrack(s=s_eff, v=v_eff, present=present_eff, gap_m=gap, headway_s=req.headway_s)
+    log_s, log_v = _log_along(req, route)
+    return LeaderTrack(s=s_eff, v=v_eff, present=present_eff, gap_m=gap, headway_s=req.headway_s, enter_t=enter_t,
+                       log_s=log_s, log_v=log_v, log_cover=cover if log_s is not None else None)
+
+
+def _log_along(req: VehicleMotionRequest, route: Route) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """``([T] arc length, [T] speed)`` of the agent's own log along ``route`` where the log is on it (within
+    ``LOG_ON_ROUTE_M``; NaN elsewhere), ``(None, None)`` without a log on the route."""
+    log = req.log
+    if log is None or len(req.times) < 2:
+        return None, None
+    s = np.full(len(req.times), np.nan)
+    for k in np.flatnonzero(log.valid):
+        s_k, lat = route.project(log.xy[k])
+        if abs(lat) <= LOG_ON_ROUTE_M:
+            s[k] = s_k
+    if not np.isfinite(s).any():
+        return None, None
+    return s, np.gradient(s, req.times)
 
 
 # ------------------------------------------------------------------------------------------ pedestrians

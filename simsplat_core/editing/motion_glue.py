@@ -31,6 +31,7 @@ from simsplat_core.editing.motion_requests import (
     VehicleMotionRequest,
     motion_kind,
     traffic_from_states,
+    vehicle_target_speed,
 )
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
@@ -236,31 +237,34 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
     plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
                  object_id=states.object_ids[row])
-    if kind == VEHICLE and behaviour.speed is not None:
+    if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
-#: A faster speed counts as reached at this share of the asked speed.
+#: A faster speed counts as reached when the plan ends at this share of the asked speed or more.
 SPEED_REACHED_SHARE = 0.8
 
 
 def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behaviour, start: StartState,
                          size: tuple[float, float, float], log: LogTrajectory | None, index: int, label: str,
                          object_id: str) -> None:
-    """Refuse a speed-up that the traffic ahead takes away (never a silent no-op): when the plan keeping its gap
-    stays under :data:`SPEED_REACHED_SHARE` of the asked speed but the same plan on a free road gets there."""
-    assert behaviour.speed is not None
-    target = behaviour.speed.target_mps(abs(start.speed))
-    reached = float(np.max(np.abs(plan.speed[start.step:]), initial=0.0))
-    if target <= abs(start.speed) + 0.5 or reached >= SPEED_REACHED_SHARE * target:
+    """Refuse a speed-up (a faster speed, ``accelerate``) that the traffic ahead takes away, never a silent
+    no-op or a slow-down: when the plan keeping its gap ends under :data:`SPEED_REACHED_SHARE` of the asked
+    speed (``motion_requests.vehicle_target_speed``) but the same plan on a free road ends there."""
+    target = vehicle_target_speed(behaviour, start.speed)
+    if target is None or behaviour.reverse or target <= abs(start.speed) + 0.5:
+        return
+    reached = abs(float(plan.speed[-1]))
+    if reached >= SPEED_REACHED_SHARE * target:
         return
     free = _plan(draft, VEHICLE, behaviour, start, size, log, index, label, backfill=False, object_id=object_id,
                  with_traffic=False)
-    free_reached = float(np.max(np.abs(free.speed[start.step:]), initial=0.0))
-    if free_reached >= SPEED_REACHED_SHARE * target:
-        raise EditRefused(f"{label} cannot reach {target:.1f} m/s: keeping its gap to the traffic ahead it gets to "
-                          f"{reached:.1f} m/s (the other agents replay their log and do not make room)",
+    if abs(float(free.speed[-1])) >= SPEED_REACHED_SHARE * target:
+        top = float(np.max(np.abs(plan.speed[start.step:]), initial=0.0))
+        raise EditRefused(f"{label} cannot reach {target:.1f} m/s ({describe_behaviour(behaviour)}): keeping its gap "
+                          f"to the traffic ahead it gets to {top:.1f} m/s at most and ends at {reached:.1f} m/s (the "
+                          "other agents replay their log and do not make room)",
                           reason="infeasible_motion", command_index=index)
 
 

@@ -222,15 +222,7 @@ class VehicleMotionRequest(_Common):
         if behaviour.follow is not None and leader is None:
             raise EditRefused("follow: the agent to follow was not grounded", reason="invalid_command")
         shared = _common_fields(behaviour, times, start, log, stop_behind, label)
-        current = abs(start.speed)
-        target = shared.target_speed_mps
-        if behaviour.speed is None:
-            if behaviour.longitudinal == "accelerate":
-                target = current + ACCELERATE_DELTA_MPS
-            elif behaviour.longitudinal == "decelerate":
-                target = current * DECELERATE_FACTOR
-        if behaviour.reverse and target is None:
-            target = REVERSE_MPS
+        target = vehicle_target_speed(behaviour, start.speed)
         return cls(times=np.asarray(times, np.float64), frame_idx=np.asarray(frame_idx, np.int64), start=start,
                    size=size, log=log, target_speed_mps=target, backfill=backfill, label=label,
                    stop=shared.stop, hold_until_s=shared.hold_until_s, log_shift_s=shared.log_shift_s,
@@ -284,6 +276,20 @@ class PedestrianMotionRequest(_Common):
                    stop=shared.stop, hold_until_s=shared.hold_until_s, log_shift_s=shared.log_shift_s,
                    lateral_offset_m=shared.lateral_offset_m, limits=PEDESTRIAN_LIMITS,
                    cross_street=behaviour.cross_street, jaywalk=behaviour.jaywalk)
+
+
+def vehicle_target_speed(behaviour: Behaviour, current: float) -> float | None:
+    """The speed a vehicle driving at ``current`` m/s is asked for, m/s: the given speed (against the current
+    one), ``accelerate`` :data:`ACCELERATE_DELTA_MPS` faster, ``decelerate`` :data:`DECELERATE_FACTOR` of it,
+    reversing :data:`REVERSE_MPS`; ``None``: the behaviour keeps the log's (or the start) speed."""
+    current = abs(current)
+    if behaviour.speed is not None:
+        return behaviour.speed.target_mps(current)
+    if behaviour.longitudinal == "accelerate":
+        return current + ACCELERATE_DELTA_MPS
+    if behaviour.longitudinal == "decelerate":
+        return current * DECELERATE_FACTOR
+    return REVERSE_MPS if behaviour.reverse else None
 
 
 def traffic_from_states(states: AgentStates, exclude: tuple[str, ...] | list[str] = ()) -> tuple[OtherAgent, ...]:

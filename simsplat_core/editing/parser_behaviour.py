@@ -22,12 +22,16 @@ from simsplat_core.editing.parser_lexicon import CLASS_INTENT
 from simsplat_core.editing.parser_predicate import IGNORABLE, INTENT_FIELDS, PredicateParse, PredicateWork
 from simsplat_core.editing.parser_speed import speed_rules, stop_rules, timing_rules
 from simsplat_core.language.query_lexicon import MOTION_KEYWORDS
+from simsplat_core.scenario import vocabulary as voc
 
 __all__ = ["INTENT_FIELDS", "PredicateParse", "keyword_intent", "parse_predicate"]
 
 _N = r"(\d+(?:\.\d+)?)"
-_CROSSABLE = (r"(?: over)?(?: (?:the|a) (?:street|road|lane|lanes|carriageway|intersection|crosswalk|zebra crossing"
-              r"|junction))?")
+_CROSSABLE = (r"(?: over)?(?: (?:the|a) (?:street|road|lane|lanes|carriageway|crosswalk|zebra crossing|"
+              + voc.INTERSECTION_RX + r"))?")
+#: Where a turn is made ("at the crossroads", "through the next crossing"): words that add nothing to it.
+_TURN_PLACE = (r"(?:at|in|into|through|across|on|by) (?:the |a )?(?:next |first |upcoming |coming |nearest )?"
+               r"(?:" + voc.INTERSECTION_RX + r"|crossing)")
 _AMBIGUOUS_LANE = r"\b(?:change|changes|changing|switch|switches|swap|swaps)(?: the)? lanes?\b|\blane[- ]change\b"
 
 
@@ -81,6 +85,8 @@ def _turn_rules(w: PredicateWork) -> None:
            r"|hooks)(?: off)?(?: a| an| the)?(?: (?:next|first|upcoming))? (?:to the )?(left|right)(?:[- ]hand)?"
            r"(?: turn)?(?! lane)|(left|right)(?:[- ]hand)? turn",
            lambda m: w.set("turn", m.group(1) or m.group(2)))
+    if "turn" in w.out.fields:  # where the turn is made: a "crossing" there is the intersection, not a crosswalk
+        w.take(_TURN_PLACE)
 
 
 def _pedestrian_rules(w: PredicateWork) -> None:
@@ -132,7 +138,7 @@ def _longitudinal_rules(w: PredicateWork) -> None:
     w.take(r"speed(?:s|ing)? (?:it |them )?up|accelerat\w*|(?:go|goes|drive|drives|move|moves|walk|walks)"
            r"(?: a (?:bit|little|lot))? (?:faster|quicker)|faster|quicker|pick(?:s)? up (?:the )?(?:speed|pace)"
            r"|hurry(?: up)?|hurries(?: up)?|(?:step|steps) on (?:it|the gas)|floor it|put (?:the|its) foot down|gun it"
-           r"|pull(?:s)? (?:out|away)|move(?:s)? off"
+           r"|pull(?:s)? (?:out|away)|move(?:s)? off|(?:drive|drives|head|heads) (?:off|away)(?! (?:the|a|from) )"
            r"|increase (?:its |the )?speed",
            lambda m: w.set("longitudinal", "accelerate") if "longitudinal" not in w.out.fields else None)
 

@@ -207,8 +207,36 @@ def _names_place(words: Sequence[str]) -> bool:
     return any(w in lex.PLACE_NOUNS or w in lex.NON_OBJECTS or w in NOUNS for w in words)
 
 
-#: Words after which a verb form is a noun ("a right *turn*", "its *speed*").
-_NOUN_MARKERS = frozenset({"a", "an", "the", "its", "their", "his", "her", "left", "right", "full", "complete"})
+#: Words after which a verb form is a noun ("a *turn*", "its *speed*").
+_NOUN_MARKERS = frozenset({"a", "an", "the", "its", "their", "his", "her"})
+#: Adjectives after which some verb forms are nouns ("a right *turn*", "a full *stop*"); any other verb after
+#: them starts the predicate ("the car taking a right *do* an emergency stop", "turning left *slow* down").
+_ADJECTIVE_NOUNS: dict[str, frozenset[str]] = {
+    **dict.fromkeys(("left", "right"), frozenset({"turn", "turns"})),
+    **dict.fromkeys(("full", "complete", "dead", "sudden"), frozenset({"stop", "stops", "halt", "halts"})),
+}
+#: Words after which "turn" is the verb again ("the car on the right *turn* left").
+_TURN_COMPLEMENTS = frozenset({"left", "right", "around", "back", "into", "onto"})
+#: Words before "to" that keep "to <verb>" in a description ("the car waiting *to turn* left", "about to").
+_TO_KEEPERS = frozenset({"about", "ready", "able", "trying", "going", "waiting", "starting", "planning", "set"})
+
+
+def _verb_as_noun(tokens: Sequence[str], j: int) -> bool:
+    """Whether the verb form ``tokens[j]`` is a noun here ("making a right *turn*", "reducing its *speed*")."""
+    before = tokens[j - 1]
+    if before in _NOUN_MARKERS:
+        return True
+    after = tokens[j + 1] if j + 1 < len(tokens) else ""
+    return tokens[j] in _ADJECTIVE_NOUNS.get(before, frozenset()) and after not in _TURN_COMPLEMENTS
+
+
+def _to_verb(tokens: Sequence[str], j: int) -> bool:
+    """Whether ``tokens[j]`` is the "to" of an infinitive predicate ("get the van at the junction *to* lower its
+    speed"), not part of a description ("waiting to turn", "going to the junction")."""
+    nxt = tokens[j + 1] if j + 1 < len(tokens) else ""
+    return (tokens[j] == "to" and nxt in lex.PREDICATE_VERBS and not is_participle(nxt)
+            and nxt not in ("be", "is", "are") and tokens[j - 1] not in _TO_KEEPERS
+            and not is_participle(tokens[j - 1]))
 
 
 def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
@@ -220,12 +248,15 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
         if t == "and" and j + 1 < n and is_participle(tokens[j + 1]):  # "standing and waiting"
             j += 2
             continue
+        if t == "to" and tokens[j - 1] in _TO_KEEPERS:  # "waiting to turn left": still describing
+            j += 2
+            continue
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
-                or match(tokens, j, lex.SCENE_PHRASES)
+                or j > first and _to_verb(tokens, j) or match(tokens, j, lex.SCENE_PHRASES)
                 or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)):  # "by 1 s"
             break
         if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
-                and tokens[j - 1] not in _NOUN_MARKERS):  # "making a right *turn*", "reducing its *speed*"
+                and not _verb_as_noun(tokens, j)):
             break
         j += 1
     return j

@@ -53,10 +53,13 @@ PLACING_VERBS: tuple[str, ...] = ("move", "put", "place", "position", "relocate"
 #: Particles a target-first verb may take after its object ("slow the bus down").
 PARTICLES: tuple[str, ...] = ("down", "up", "over", "off", "out", "away", "around", "back", "in")
 
+#: Verbs that change a speed ("*reduce* its speed", "*set* the speed of the bus to 30 km/h").
+SPEED_VERBS: tuple[str, ...] = ("set", "change", "adjust", "bring", "reduce", "lower", "decrease", "cut", "drop",
+                                "increase", "raise", "boost")
 #: Base (and third-person) forms of verbs that start a predicate after the subject ("the car should *stop*").
 PREDICATE_VERBS: frozenset[str] = frozenset(
     w + s
-    for w in (
+    for w in (*SPEED_VERBS,
         "stop", "halt", "slow", "speed", "accelerate", "decelerate", "brake", "reverse", "back", "turn", "go", "drive",
         "move", "change", "switch", "merge", "cut", "shift", "swerve", "veer", "pull", "park", "cross", "jaywalk",
         "walk", "run", "jog", "sprint", "stroll", "dash", "race", "rush", "hurry", "wait", "pause", "hold", "start",
@@ -140,13 +143,13 @@ ASSET_CATEGORY: dict[str, str] = {"vehicle": "vehicle", "pedestrian": "pedestria
 NON_OBJECTS: tuple[str, ...] = (
     "sky", "road", "roads", "street", "streets", "lane", "lanes", "sidewalk", "sidewalks", "crosswalk", "building",
     "buildings", "tree", "trees", "weather", "sun", "rain", "snow", "fog", "clouds", "cloud", "grass", "ground",
-    "intersection", "junction", "lighting", "light", "lights", "night", "day", "time of day", "season", "scene",
+    *voc.INTERSECTION_NOUNS, "lighting", "light", "lights", "night", "day", "time of day", "season", "scene",
     "world", "city", "house", "houses", "wall", "walls", "camera", "image", "picture", "video", "map", "asphalt",
 )
 #: Nouns of places and parts of the road (a phrase holding one is a place, not an appearance).
 PLACE_NOUNS: tuple[str, ...] = (
     "street", "road", "lane", "lanes", "sidewalk", "pavement", "footpath", "walkway", "crosswalk", "zebra crossing",
-    "zebra", "pedestrian crossing", "intersection", "junction", "crossroads", "crossroad", "curb", "kerb", "side",
+    "zebra", "pedestrian crossing", *voc.INTERSECTION_NOUNS, "curb", "kerb", "side",
     "left", "right", "front", "back", "rear", "middle", "centre", "center", "corner", "shoulder", "roadside",
     "light", "lights", "traffic light", "traffic lights", "stop line", "scene", "lot", "parking lot", "spot", "edge",
     "block", "road work", "queue", "line", "traffic", "ego",

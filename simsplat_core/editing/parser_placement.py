@@ -26,6 +26,7 @@ from simsplat_core.editing import parser_lexicon as lex
 from simsplat_core.editing.commands import AssetSpec
 from simsplat_core.editing.parser_text import number_word
 from simsplat_core.language.query_parse import NOUNS, parse_query
+from simsplat_core.scenario import vocabulary as voc
 
 _N = r"(\d+(?:\.\d+)?)"
 _D = r"(?:(?P<d>\d+(?:\.\d+)?) m )?"
@@ -64,7 +65,7 @@ _AREAS: tuple[tuple[str, str], ...] = (
      r"|(?:on|onto|up on) (?:the |a )?(?:curb|kerb)|(?:at|on) the (?:street )?corner", "on_sidewalk"),
     (r"(?:on|at|to|by) the (?:(?:left|right)(?:[- ]hand)? )?side of the (?:road|street|lane)"
      r"|(?:on|onto|in|into|in the middle of|at) (?:the |a )?(?:road|street|roadway|carriageway"
-     r"|middle of the road|intersection|junction)|(?:by|at|next to|along|near|on) (?:the )?(?:curb|kerb|roadside"
+     r"|middle of the road|" + voc.INTERSECTION_RX + r")|(?:by|at|next to|along|near|on) (?:the )?(?:curb|kerb|roadside"
      r"|side of the road|edge of the road|shoulder)", "on_road"),
 )
 

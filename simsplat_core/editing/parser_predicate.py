@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from simsplat_core.editing import parser_chunks as chunks
+from simsplat_core.scenario import vocabulary as voc
 
 #: Behaviour fields each intent sets (``stop`` is a dict of ``StopSpec`` fields).
 INTENT_FIELDS: dict[str, dict[str, Any]] = {
@@ -26,14 +27,14 @@ INTENT_FIELDS: dict[str, dict[str, Any]] = {
 #: Words a predicate may hold that say nothing on their own.
 IGNORABLE = frozenset(
     "the a an its their his her it them they to at in on of and then also just now right away instead again bit "
-    "little lot much very really next first upcoming coming nearest intersection junction lane road street there "
+    "little lot much very really next first upcoming coming nearest lane road street there "
     "here be get is are will should must can could would may might shall as same time possible way that which who "
     "so soon please up down its own current please some more for with when while immediately straight ahead "
     "forward moving driving walking going travelling traveling running motion too well rather quite please "
     "completely entirely fully safely smoothly gradually gently normally please scene sequence clip log video "
     "from by through until till this these those one ones okay ok mode ego us me our my you your fast slow "
     "car vehicle pedestrian person please side curb kerb roadside having had has have do does did".split()
-)
+) | frozenset(voc.INTERSECTION_NOUNS)
 
 
 @dataclass

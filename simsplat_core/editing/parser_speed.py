@@ -12,14 +12,16 @@ from __future__ import annotations
 import re
 
 from simsplat_core.editing import parser_chunks as chunks
+from simsplat_core.editing import parser_lexicon as lex
 from simsplat_core.editing.commands import SpeedSpec
 from simsplat_core.editing.parser_predicate import PredicateWork
 from simsplat_core.editing.parser_text import number_word
+from simsplat_core.scenario import vocabulary as voc
 
 _N = r"(\d+(?:\.\d+)?)"
 _SPEED = _N + r" (km/h|m/s|mph)"
-_STOP_PLACES = (r"(crosswalk|zebra crossing|zebra|pedestrian crossing|crossing|intersection|junction|crossroads?"
-                r"|stop line|stop sign|traffic lights?|lights?|red light|signal)")
+_STOP_PLACES = (r"(crosswalk|zebra crossing|zebra|pedestrian crossing|crossing|" + voc.INTERSECTION_RX
+                + r"|stop line|stop sign|traffic lights?|lights?|red light|signal)")
 
 
 def _factor(word: str) -> float | None:
@@ -29,7 +31,7 @@ def _factor(word: str) -> float | None:
 
 
 #: Verbs that set a speed ("*reduce* its speed to 8 km/h", "*set* the speed of the bus to 30 km/h").
-SPEED_VERB = r"(?:set|change|adjust|bring|reduce|lower|decrease|cut|drop|increase|raise|boost)"
+SPEED_VERB = r"(?:" + "|".join(lex.SPEED_VERBS) + r")"
 #: A speed as a noun ("the *walking speed* of the man").
 SPEED_NOUN = r"(?:(?:walking|driving|travel|travelling|running|cruising) )?(?:speed|pace)"
 
@@ -115,8 +117,8 @@ def stop_rules(w: PredicateWork) -> None:
 
     def before(m: re.Match[str]) -> None:
         place = m.group(2)
-        kind = ("crosswalk" if re.match(r"cross|zebra|pedestrian", place) and "crossroad" not in place
-                else "intersection" if re.match(r"inter|junc|crossroad", place) else "stop_line")
+        kind = ("intersection" if place in voc.INTERSECTION_NOUNS
+                else "crosswalk" if re.match(r"cross|zebra|pedestrian", place) else "stop_line")
         w.stop(before=kind, **({"gap_m": float(m.group(1))} if m.group(1) else {}))
 
     w.take(r"(?:" + _N + r" m )?(?:right |just |directly )?(?:before|at|short of|in front of|ahead of|prior to|by"

@@ -10,7 +10,8 @@ substep the acceleration moves toward a wanted value by at most ``jerk * dt`` an
 * speed caps ahead (``SpeedCaps``: e.g. curvature-limited speeds along the route) lower the reference to
   what comfortable braking still allows;
 * leaders (``LeaderTrack``: a followed agent, traffic on the route) add the Intelligent Driver Model's
-  acceleration towards the nearest one ahead (the smaller acceleration wins);
+  acceleration towards each one ahead (the smallest acceleration wins), except traffic entering the route
+  behind the plan and traffic the agent's own log kept pace with while the plan stays behind that log;
 * stops are planned, not tracked: once a comfortable jerk-limited braking profile (:func:`brake_segments`:
   jerk ramp to a peak deceleration, hold, ramp back to zero exactly at standstill) would need the distance
   (or time) that is left, the decelerations are solved so that the agent comes to rest exactly there, and it
@@ -31,6 +32,8 @@ import numpy as np
 SUBSTEP_S = 0.01
 #: A stop solved by bisection is this close to the wanted distance / time (m / s).
 _SOLVE_TOL = 1e-4
+#: A plan this far ahead of its own log position still counts as behind it (``LeaderTrack.log_s``), m.
+LOG_COVER_TOL_M = 0.5
 
 
 @dataclass(frozen=True)
@@ -172,14 +175,28 @@ class SpeedCaps:
 @dataclass(frozen=True)
 class LeaderTrack:
     """Agents on the same route to keep a gap to: their arc lengths and speeds at the step times, where they
-    are on the route. At each moment the nearest one ahead (centre beyond the planned agent's) leads.
+    are on the route (or about to enter it). Every agent ahead (centre beyond the planned agent's) adds the
+    IDM acceleration towards it; the smallest wins (:meth:`accel`). Two exceptions keep the plan from
+    braking for what cannot be in its way:
+
+    * an agent about to enter the route (``enter_t`` later than now) does not bind a plan that, at its
+      current speed, is past the entry point by the gap before the agent gets there (it enters behind);
+    * with the planned agent's own log along the route (``log_s``), an agent ahead of that log position binds
+      only as far as the log did (``log_cover``): a plan at or behind its log may follow the log as closely as
+      the log followed it (the log drove there and did not hit it); a slowed car does not brake for the
+      traffic its log kept pace with.
 
     Attributes:
         s: ``[L, T]`` arc length of each agent's centre along the route; v: ``[L, T]`` its speed along it.
-        present: ``[L, T]`` bool, the agent exists and is on the route.
+        present: ``[L, T]`` bool, the agent exists and is on the route (or about to enter it).
         gap_m: ``[L]`` centre-to-centre distance at which the planned agent would touch it (half lengths
             summed) plus the standstill gap to keep.
         headway_s: time gap kept at speed.
+        enter_t: ``[L, T]`` time the agent is on the route: the step's own time where it is, a later time
+            where it is about to enter (``None``: every present agent is on the route).
+        log_s: ``[T]`` arc length of the planned agent's own log centre along the route, NaN where the log is
+            not on it; log_v: ``[T]`` its speed along it (``None``: no log, e.g. an inserted agent).
+        log_cover: ``[L]`` bool, agents the log exception applies to (traffic; not a followed leader).
     """
 
     s: np.ndarray
@@ -187,20 +204,47 @@ class LeaderTrack:
     present: np.ndarray
     gap_m: np.ndarray
     headway_s: float = 1.5
+    enter_t: np.ndarray | None = None
+    log_s: np.ndarray | None = None
+    log_v: np.ndarray | None = None
+    log_cover: np.ndarray | None = None
 
-    def ahead(self, times: np.ndarray, t: float, s_now: float) -> tuple[float, float] | None:
-        """``(net gap, speed)`` of the nearest agent ahead of ``s_now`` at time ``t`` (interpolated between
-        steps), ``None`` when none is."""
+    def accel(self, times: np.ndarray, t: float, s_now: float, v: float, v_des: float,
+              lim: LongitudinalLimits) -> float | None:
+        """Acceleration towards the agents ahead of ``s_now`` at time ``t`` (interpolated between steps) for a
+        plan at speed ``v`` wanting ``v_des`` (class docstring), ``None`` when none binds."""
         k = int(np.clip(np.searchsorted(times, t), 1, len(times) - 1))
         w = float(np.clip((t - times[k - 1]) / (times[k] - times[k - 1]), 0.0, 1.0))
         here = self.present[:, k - 1] & self.present[:, k]
         s = (1 - w) * self.s[:, k - 1] + w * self.s[:, k]
         ahead = here & (s > s_now)
+        if self.enter_t is not None:  # entering behind a plan that is past the entry point by then
+            enter = self.enter_t[:, k]
+            ahead &= ~((enter > t) & (s_now + max(v, 0.0) * (enter - t) >= s + self.gap_m))
         if not ahead.any():
             return None
-        gaps = np.where(ahead, s - s_now - self.gap_m, np.inf)
-        j = int(np.argmin(gaps))
-        return float(gaps[j]), float((1 - w) * self.v[j, k - 1] + w * self.v[j, k])
+        v_lead = (1 - w) * self.v[:, k - 1] + w * self.v[:, k]
+        acc = np.array([_idm(v, v_des, float(s[j] - s_now - self.gap_m[j]), float(v_lead[j]), self, lim)
+                        if ahead[j] else np.inf for j in range(len(s))])
+        covered = self._log_cover(k, w, s_now, v, s, lim)
+        if covered is not None:
+            a_log, cover = covered
+            acc = np.where(ahead & cover, np.maximum(acc, a_log), acc)
+        return float(acc.min())
+
+    def _log_cover(self, k: int, w: float, s_now: float, v: float, s: np.ndarray,
+                   lim: LongitudinalLimits) -> tuple[float, np.ndarray] | None:
+        """``(acceleration keeping the plan behind its log, [L] agents ahead of the log it applies to)``, ``None``
+        when the log is not on the route now or the plan is ahead of it."""
+        if self.log_s is None or self.log_v is None or self.log_cover is None:
+            return None
+        s_log = (1 - w) * self.log_s[k - 1] + w * self.log_s[k]
+        v_log = (1 - w) * self.log_v[k - 1] + w * self.log_v[k]
+        if not (np.isfinite(s_log) and np.isfinite(v_log)) or s_now > s_log + LOG_COVER_TOL_M:
+            return None
+        allowed = v_log + math.sqrt(2.0 * lim.comfort_decel_mps2 * max(s_log - s_now, 0.0))
+        a_log = float(np.clip(_track(allowed - v, lim.jerk_mps3), -lim.hard_decel_mps2, lim.max_accel_mps2))
+        return a_log, self.log_cover & (s > s_log)
 
 
 @dataclass(frozen=True)
@@ -302,9 +346,9 @@ def plan_speed(times: np.ndarray, *, t0: float, s0: float, v0: float, a0: float 
             target = min(target, caps.allowed(s, 0.8 * lim.comfort_decel_mps2))
         want = float(np.clip(_track(target - v, lim.jerk_mps3), -lim.comfort_decel_mps2, lim.max_accel_mps2))
         if leader is not None:
-            lead = leader.ahead(times, t, s)
+            lead = leader.accel(times, t, s, v, max(target, 0.1), lim)
             if lead is not None:
-                want = min(want, _idm(v, max(target, 0.1), lead[0], lead[1], leader, lim))
+                want = min(want, lead)
         jerk_lim = lim.hard_jerk_mps3 if want < -lim.comfort_decel_mps2 else lim.jerk_mps3
         a_new = float(np.clip(want, a - jerk_lim * dt, a + jerk_lim * dt))
         a_new = float(np.clip(a_new, -lim.hard_decel_mps2, lim.max_accel_mps2))

@@ -63,7 +63,7 @@ SECTOR_KEYWORDS: tuple[tuple[str, str], ...] = (
     (voc.RIGHT_OF_EGO, r"\bright\b(?! (?:ahead|in front|behind))"),
 )
 CONTEXT_KEYWORDS: tuple[tuple[str, str], ...] = (
-    (voc.AT_THE_INTERSECTION, r"intersection|junction|crossroad"),
+    (voc.AT_THE_INTERSECTION, voc.INTERSECTION_RX),
     (voc.ON_THE_CROSSWALK, r"crosswalk|zebra|pedestrian crossing"),
     (voc.ON_THE_SIDEWALK, r"sidewalk|pavement|footpath|walkway|footway"),
     (voc.BY_THE_CURB, r"\bcurb|\bkerb|roadside|side of the road|edge of the road|shoulder|parking"),

@@ -43,6 +43,7 @@ import re
 from dataclasses import dataclass
 
 from simsplat_core.color_names import COLOR_NAMES
+from simsplat_core.scenario import vocabulary as voc
 
 # ---------------------------------------------------------------------------------------------- lexicons
 
@@ -231,7 +232,7 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("context", 1, r"(?:(?:on|at|in|near|using|across|along) )?(?:the |a )?"
                    r"(?:crosswalk|zebra(?: crossing)?|pedestrian crossing)"),
     ("context", 1, r"(?:(?:at|in|inside|within|near|by|next to|around|through|into|entering|approaching"
-                   r"|in the middle of) )?(?:the |an |a )?(?:middle of the )?(?:intersection|junction|crossroads?)"),
+                   r"|in the middle of) )?(?:the |an |a )?(?:middle of the )?(?:" + voc.INTERSECTION_RX + r")"),
     ("context", 1, r"(?:(?:on|along|up on|at|near|by|onto) )?(?:the |a )?"
                    r"(?:sidewalk|pavement|footpath|walkway|footway)"),
     ("context", 1, r"(?:(?:by|at|next to|near|along|beside|against|on|to) )?(?:the )?"

@@ -299,3 +299,10 @@ MOTION_VOCABULARIES: dict[str, Vocabulary] = {VEHICLE: VEHICLE_MOTION, PEDESTRIA
 MOTION_CLASSES: tuple[str, ...] = VEHICLE_MOTION.names + PEDESTRIAN_MOTION.names
 #: The location classes (the aligner's location codebook): sectors, then map contexts.
 LOCATION_CLASSES: tuple[str, ...] = LOCATION_SECTOR.names + LOCATION_CONTEXT.names
+
+#: One-word nouns that name an intersection (the ``AT_THE_INTERSECTION`` map context); the query lexicon and
+#: the edit parser read these.
+INTERSECTION_NOUNS: tuple[str, ...] = ("intersection", "intersections", "junction", "junctions", "crossroads",
+                                       "crossroad")
+#: :data:`INTERSECTION_NOUNS` as a regex alternation (no group), longest first so a word matches whole.
+INTERSECTION_RX = "|".join(sorted(INTERSECTION_NOUNS, key=len, reverse=True))

@@ -59,6 +59,8 @@ RUN_MPS = 2.2
 NEXT_TO_M = 3.0
 #: A delayed agent keeps to its original path within this (metres).
 PATH_TOL_M = 0.75
+#: The direction a path ends in is taken over its last this many metres (``_beyond_path_end``).
+END_DIRECTION_M = 1.0
 #: An inserted static object's box is within this share of its kind's catalogue box, per dimension.
 KIND_SIZE_TOL = 0.2
 _CROSSING = (voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT)
@@ -590,10 +592,15 @@ def _check_path_kept(before: AgentStates, after: AgentStates, object_id: str, m:
 
 
 def _beyond_path_end(path: np.ndarray, xy: np.ndarray, tol: float) -> bool:
-    """Whether the points off ``path`` all lie past its end, continuing straight along its last heading."""
+    """Whether the points off ``path`` all lie past its end, continuing straight along its last heading (the
+    direction of its last ``END_DIRECTION_M``: a log that ends standing repeats its last point)."""
     off = _path_distance(xy, path) > tol
-    end, direction = path[-1], path[-1] - path[-2]
-    direction = direction / max(float(np.linalg.norm(direction)), 1e-9)
+    end = path[-1]
+    back = np.flatnonzero(np.linalg.norm(path - end, axis=1) >= END_DIRECTION_M)
+    if not back.size:
+        return False
+    direction = end - path[back[-1]]
+    direction = direction / float(np.linalg.norm(direction))
     rel = xy[off] - end
     along = rel @ direction
     across = np.abs(rel[:, 0] * direction[1] - rel[:, 1] * direction[0])

@@ -332,3 +332,28 @@ def test_a_pedestrian_inserted_to_cross_starts_at_the_road_edge(ctx):
     ego = ctx.log.ego_poses[0]
     assert (np.linalg.inv(ego) @ np.r_[start[1], 0.0, 1.0])[0] == pytest.approx(
         (np.linalg.inv(ego) @ np.r_[start[0], 0.0, 1.0])[0], abs=0.5)  # as far behind
+
+
+def test_accelerate_ends_faster_or_is_refused_naming_the_traffic(ctx):
+    """"Speed up" without a speed asks ``ACCELERATE_DELTA_MPS`` more than the start speed: every vehicle either
+    ends clearly faster than it started, or is refused naming the traffic ahead (never carried out ending slower,
+    as when it braked for traffic its log passed, or took a logged curve slower than the log)."""
+    from simsplat_core.editing.motion_requests import ACCELERATE_DELTA_MPS
+
+    outcomes = {"faster": 0, "refused": 0}
+    for oid, category in zip(ctx.states.object_ids, ctx.states.categories, strict=True):
+        row = ctx.states.index(oid)
+        if category != "vehicle" or oid == "ego" or not ctx.states.valid[row].any():
+            continue
+        start = abs(float(ctx.states.speed[row][np.flatnonzero(ctx.states.valid[row])[0]]))
+        try:
+            edited = apply_edit(ctx, EditProgram(commands=[EditCommand(
+                op="modify", target=TargetRef(object_id=oid), behaviour=Behaviour(longitudinal="accelerate"))]))
+        except EditRefused as refused:
+            assert refused.reason == "infeasible_motion" and "traffic ahead" in str(refused), str(refused)
+            outcomes["refused"] += 1
+            continue
+        end = abs(float(edited.states.speed[edited.states.index(oid)][-1]))
+        assert end >= start + 0.5 * ACCELERATE_DELTA_MPS, (oid, start, end)  # clearly faster than it started
+        outcomes["faster"] += 1
+    assert outcomes["faster"] > 0, outcomes

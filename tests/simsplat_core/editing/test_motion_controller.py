@@ -133,6 +133,22 @@ def test_turns_follow_the_lanes_through_the_intersection(world, turn: str, lane:
     assert plan.speed.min() < 7.0 if turn != "straight" else plan.speed.min() > 7.9  # slows for the curve
 
 
+def test_a_car_that_halts_short_of_the_intersection_drives_on_to_make_its_turn(world) -> None:
+    """Asked to turn, a car whose log brakes to a halt before the intersection drives on to it at its log's pace
+    and makes the turn (replaying the log's braking it would never get there)."""
+    layout = world["layout"]
+    times, frames = _steps(80)
+    xy0 = layout.arm_point("W", layout.stopline_s("W") + 30.0, layout.lane_offset("W", True, 1))
+    v = np.maximum(8.0 - 2.0 * times, 0.0)  # at rest after 4 s, 16 m on: 14 m short of the stop line
+    s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(times))])
+    log = LogTrajectory(xy0 + np.c_[s, 0 * s], np.zeros(80), v, np.ones(80, bool))
+    req = VehicleMotionRequest.from_behaviour(Behaviour(turn="right"), times=times, frame_idx=frames,
+                                              start=StartState.from_log(log, times), size=CAR, log=log)
+    plan = plan_vehicle(req, world["lanes"], world["ctx"])
+    assert abs(np.rad2deg(plan.heading[-1] - plan.heading[0]) + 90.0) < 8.0
+    assert plan.speed.max() <= v.max() + 0.1 and world["lanes"].nearest(plan.xy).distance.max() < 0.3
+
+
 def test_turn_refusals_say_what_is_missing(world) -> None:
     # the inner lane has no right-turn connector in this world, and 0.5 s is not enough to reach a turn
     with pytest.raises(EditRefused, match="turning requires an intersection ahead of the target") as err:
@@ -218,6 +234,53 @@ def test_traffic_in_the_way_is_given_room(world) -> None:
             assert overlap.any() == hits, other.label
         # braking for what is in the way may use the hard limits
         _within_limits(plan, decel=VEHICLE_LIMITS.hard_decel_mps2, jerk=VEHICLE_LIMITS.hard_jerk_mps3)
+
+
+def test_traffic_entering_behind_a_car_does_not_hold_it_back(world) -> None:
+    """A car turning in from a side road enters the lane just ahead of where a speeding-up car is now, but only
+    after that car has passed the spot: the car speeds up instead of braking for it, and never touches it."""
+    layout = world["layout"]
+    times, _ = _steps(40)
+    start = layout.arm_point("W", layout.stopline_s("W") + 75.0, layout.lane_offset("W", True, 0))
+    entry, arrive, side_v = start + [CAR[0], 0.0], 2.0, 6.0  # reaches the lane's centre line at 2 s
+    before = times < arrive
+    xy = np.where(before[:, None], entry + np.c_[0 * times, -side_v * (arrive - times)],
+                  entry + np.c_[5.0 * (times - arrive), 0 * times])
+    turner = OtherAgent("turner", "a turning car", xy, np.where(before, np.pi / 2, 0.0), np.ones(40, bool), CAR)
+    plan = _car(world, Behaviour(longitudinal="accelerate"), before_stop_m=75.0, speed=8.0, n=40, traffic=(turner,))
+    free = _car(world, Behaviour(longitudinal="accelerate"), before_stop_m=75.0, speed=8.0, n=40)
+    np.testing.assert_allclose(plan.speed, free.speed, atol=1e-6)  # as if the road were free
+    assert plan.speed[-1] > plan.speed[0]
+    assert not footprints_overlap(plan.xy, plan.heading, CAR[:2], turner.xy, turner.heading, CAR[:2]).any()
+    assert not footprints_overlap(plan.xy, plan.heading, CAR[:2], turner.xy, turner.heading, CAR[:2]).any()
+
+
+def test_a_slowed_car_keeps_the_gap_its_log_kept(world) -> None:
+    """A car that in its log follows the car ahead closely (much closer than the planner's own headway) and is
+    asked to go slower only drops back: it slows to the asked speed without braking below it, and stays at least
+    as far behind as its log did; placed there without a log it brakes to open the gap it wants."""
+    layout = world["layout"]
+    times, frames = _steps(40)
+    xy0 = layout.arm_point("W", layout.stopline_s("W") + 75.0, layout.lane_offset("W", True, 0))
+    v_log = 10.0
+    log = LogTrajectory(xy0 + np.c_[v_log * times, 0 * times], np.zeros(40), np.full(40, v_log), np.ones(40, bool))
+    lead = OtherAgent("lead", "the car ahead", log.xy + [CAR[0] + 2.5, 0.0], np.zeros(40), np.ones(40, bool), CAR)
+    slower = Behaviour(speed=SpeedSpec(mode="delta", value=-3.0, unit="m/s"))
+
+    def plan(with_log: bool) -> tuple[VehicleMotionRequest, PlannedTrajectory]:
+        req = VehicleMotionRequest.from_behaviour(slower, times=times, frame_idx=frames,
+                                                  start=StartState.from_log(log, times), size=CAR,
+                                                  log=log if with_log else None, traffic=(lead,))
+        return req, plan_vehicle(req, world["lanes"], world["ctx"])
+
+    req, edited = plan(True)
+    assert req.target_speed_mps is not None
+    assert edited.speed[-1] == pytest.approx(req.target_speed_mps, abs=0.05)
+    assert edited.speed.min() >= req.target_speed_mps - 0.05
+    assert np.all(lead.xy[:, 0] - edited.xy[:, 0] >= lead.xy[:, 0] - log.xy[:, 0] - 1e-6)
+    _within_limits(edited)
+    _, inserted = plan(False)
+    assert inserted.speed.min() < req.target_speed_mps - 0.5
 
 
 def test_modify_keeps_the_log_where_the_behaviour_does_not_change_it(world) -> None:

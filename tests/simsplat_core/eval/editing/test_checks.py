@@ -273,3 +273,30 @@ def test_a_static_kind_needs_its_box(truth, before) -> None:
     assert "a barrel is" not in barrel.reason
     cone = check_states(truth, intent, _obs(before, _insert(before, "new_0", "static", spot, h, (0.42, 0.42, 0.72))))
     assert not cone.passed and "a barrel is 0.60 x 0.60 x 1.00 m" in cone.reason
+
+
+def test_a_speed_up_runs_on_past_a_log_that_ends_standing(truth, before) -> None:
+    """A log that brakes to a halt repeats its last point; a faster edit carries on straight past that end (the
+    way the log faced) and keeps its path, while one that swerves off it there does not."""
+    oid = _cruiser(truth)
+    row = before.index(oid)
+    v0 = float(truth.agent(oid).traj["speed"][0])
+    heading = float(before.heading[row, 0])
+    direction = np.array([np.cos(heading), np.sin(heading)])
+    left = np.array([-direction[1], direction[0]])
+    t = before.times - before.times[0]
+
+    def straight(s, side):
+        xy = before.xy[row, 0] + s[:, None] * direction + side[:, None] * left
+        return before.with_agent(oid, "vehicle", "edited", xy=xy, heading=np.full(len(s), heading),
+                                 speed=np.gradient(s, before.times), valid=np.ones(len(s), bool),
+                                 size=before.size[row], node_id=int(before.node_ids[row]))
+
+    stop_s = v0 * t[len(t) // 3]
+    halting = straight(np.minimum(v0 * t, stop_s), np.zeros(len(t)))  # drives, then stands where it stopped
+    s_fast = v0 * t + t * t
+    intent = EditIntent("modify", (oid,), motion=MotionIntent(longitudinal="accelerate"))
+    ok = check_states(truth, intent, _obs(halting, straight(s_fast, np.zeros(len(t)))))
+    assert ok.passed, ok.reason
+    swerving = straight(s_fast, np.where(s_fast > stop_s + 5.0, 3.0, 0.0))
+    assert "leaves its path" in check_states(truth, intent, _obs(halting, swerving)).reason
