@@ -17,7 +17,8 @@ target / anchor against the scene's language (``editing.grounding``), then
 * ``modify`` re-plans a target's trajectory from its log trajectory (``editing.motion_controller``).
 
 An added object whose command asked an achromatic colour is then looked at in the edited renders and
-exposure-matched when it reads as another shade (``editing.look_check``). The edited graph is
+exposure-matched when it reads as another shade (``editing.look_check``); when no gain makes it read as asked,
+the program is applied again without that asset (at most ``LOOK_RETRIES`` times). The edited graph is
 :func:`~simsplat_core.editing.delta.apply_delta` of the stored graph and the resulting delta (the same
 function rebuilds a stored edit), so nothing of the stored scene changes and
 unchanged nodes are shared. Finally every edited and inserted agent is validated against every other
@@ -33,6 +34,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
 from simsplat_core.editing.assets import AssetBank, wanted_from_spec
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.delta import apply_delta
@@ -106,8 +108,31 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
         EditRefused: a command cannot be carried out (its ``command_index`` says which), or the program as a
             whole changes nothing.
     """
+    excluded: frozenset[str] = frozenset()
+    for attempt in range(LOOK_RETRIES + 1):
+        draft, outcomes, delta = _run_commands(ctx, program, options, excluded)
+        graph, delta, outcomes, misfits = _looked(ctx, draft, outcomes, delta)
+        if not misfits or attempt == LOOK_RETRIES:
+            break
+        logger.info("%s: %s do(es) not read as asked here; trying other assets", ctx.log.seq_id, sorted(misfits))
+        excluded |= misfits
+    rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
+    validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
+    logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
+                "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
+    return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,
+                       states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation)
+
+
+#: Times a program is re-applied with other assets when an inserted object does not read as the asked colour.
+LOOK_RETRIES = 1
+
+
+def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str]
+                  ) -> tuple[Draft, list[CommandOutcome], EditDelta]:
+    """Every command on a fresh draft (assets in ``excluded`` are not retrieved when another fits)."""
     grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding)
-    draft = Draft.start(ctx, grounder, options)
+    draft = Draft.start(ctx, grounder, options, excluded)
     outcomes = []
     for index, command in enumerate(program.commands):
         options.check(command, index)
@@ -115,23 +140,28 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
     delta = draft.delta()
     if delta.is_empty:
         raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
-    graph = apply_delta(ctx.graph, delta, node_factory(draft.assets.__getitem__, ctx.graph.frame_indices))
-    matched, notes = match_exposure(ctx.log, graph, delta, _asked_colors(outcomes, delta), draft.states,
-                                    draft.assets.__getitem__)
-    if matched is not delta:
-        for added in matched.added:
-            if added.asset_id not in draft.assets and ctx.bank is not None:
-                draft.assets[added.asset_id] = ctx.bank.get(added.asset_id)
-        delta = matched
-        graph = apply_delta(ctx.graph, delta, node_factory(draft.assets.__getitem__, ctx.graph.frame_indices))
-        outcomes = [_with_look_notes(o, [n.describe() for n in notes if n.gain != 1.0 and n.node_id in nodes])
-                    for o, nodes in zip(outcomes, _added_nodes(outcomes, delta))]
-    rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
-    validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
-    logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
-                "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
-    return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,
-                       states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation)
+    return draft, outcomes, delta
+
+
+def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delta: EditDelta
+            ) -> tuple[SceneGraph, EditDelta, list[CommandOutcome], frozenset[str]]:
+    """The edited graph after the look check (``editing.look_check``): exposure-matched delta and graph, outcomes
+    noting the gains, and the stored asset ids of added objects that read as another colour than asked."""
+    def asset_of(asset_id: str) -> Asset:
+        if asset_id not in draft.assets and ctx.bank is not None:
+            draft.assets[asset_id] = ctx.bank.get(asset_id)
+        return draft.assets[asset_id]
+
+    def build(changed: EditDelta) -> SceneGraph:
+        return apply_delta(ctx.graph, changed, node_factory(asset_of, ctx.graph.frame_indices))
+
+    stored_asset = {a.node_id: a.asset_id.split(VARIANT_SEP, 1)[0] for a in delta.added}
+    matched, graph, notes = match_exposure(ctx.log, build(delta), delta, _asked_colors(outcomes, delta),
+                                           draft.states, asset_of, build)
+    misfits = frozenset(stored_asset[n.node_id] for n in notes if n.seen is not None and not n.fitted)
+    outcomes = [_with_look_notes(o, [n.describe() for n in notes if n.gain != 1.0 and n.node_id in nodes])
+                for o, nodes in zip(outcomes, _added_nodes(outcomes, matched))]
+    return graph, matched, outcomes, misfits
 
 
 def _added_nodes(outcomes: list[CommandOutcome], delta: EditDelta) -> list[set[int]]:

@@ -300,7 +300,7 @@ class AssetBank:
         return cached
 
     def retrieve(self, spec: AssetSpec, encoder: TextEncoder, *, seen_from: Side | None = None,
-                 walking: bool | None = None) -> Asset:
+                 walking: bool | None = None, exclude: frozenset[str] = frozenset()) -> Asset:
         """The asset that best fits ``spec`` (module docstring), recoloured / rebuilt when needed.
 
         Args:
@@ -308,6 +308,7 @@ class AssetBank:
             encoder: the text encoder (E5) captions and descriptions are compared in.
             seen_from: the side of the object the camera will mostly see (ranks by that side's coverage).
             walking: for pedestrians: prefer sources that walked (``True``) or stood (``False``).
+            exclude: stored asset ids not to use while another asset fits the type (and size).
 
         Raises:
             EditRefused: ``reason="no_asset"``, saying what was asked and what the bank has.
@@ -323,6 +324,7 @@ class AssetBank:
             typed = [k for k in typed if _size_fits(self.assets[k].size, size) or _rebuildable(self.assets[k], size)]
         if not typed:
             raise EditRefused(self._refusal(spec.description, wanted), reason="no_asset")
+        typed = [k for k in typed if self.assets[k].asset_id not in exclude] or typed
         exact = [k for k in typed if wanted.color is None or _has_color(self.assets[k], wanted.color)]
         pool = exact or typed
         recolour = None if exact else wanted.color

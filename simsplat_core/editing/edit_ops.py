@@ -98,11 +98,13 @@ class Draft:
     assets: dict[str, Asset] = field(default_factory=dict)
     gone: set[int] = field(default_factory=set)
     replaced: dict[int, int] = field(default_factory=dict)
+    excluded_assets: frozenset[str] = frozenset()
 
     @classmethod
-    def start(cls, ctx: EditContext, grounder: Grounder, options: EditorOptions) -> Draft:
+    def start(cls, ctx: EditContext, grounder: Grounder, options: EditorOptions,
+              excluded_assets: frozenset[str] = frozenset()) -> Draft:
         return cls(ctx=ctx, grounder=grounder, options=options, states=ctx.states,
-                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1)
+                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1, excluded_assets=excluded_assets)
 
     def delta(self) -> EditDelta:
         return EditDelta(removed_node_ids=tuple(self.removed), added=tuple(self.added), retracked=dict(self.retracked))
@@ -125,7 +127,7 @@ class Draft:
             raise EditRefused("the store has no asset bank to insert or replace objects from: run "
                               "`simsplat assets build --store DIR` first", reason="no_asset", command_index=index)
         try:
-            asset = bank.retrieve(spec, self.ctx.engine.text_encoder)
+            asset = bank.retrieve(spec, self.ctx.engine.text_encoder, exclude=self.excluded_assets)
         except EditRefused as exc:
             raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
         self.assets[asset.asset_id] = asset

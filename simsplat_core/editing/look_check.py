@@ -15,7 +15,7 @@ an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gai
 variant, so a stored edit rebuilds to the same pixels. When no gain fits, or the object is too small to
 caption anywhere, the object is kept as it is and the returned note says so.
 
-    delta, notes = match_exposure(log, graph, delta, wanted, states, asset_of)
+    delta, graph, notes = match_exposure(log, graph, delta, wanted, states, asset_of, build)
 """
 
 from __future__ import annotations
@@ -45,10 +45,12 @@ LOOK_FRAMES = 20
 MIN_LOOK_PIXELS = 40
 #: The object reads as the asked colour when the track does and the crops that do cover this share of its
 #: pixels (the captioner lets silver win over white on a tenth of the area).
-LOOK_SHARE = 0.95
+LOOK_SHARE = 0.98
 #: Gains tried, in order, when the asked colour is lighter / darker than what the object reads as.
 BRIGHTER_GAINS = (1.1, 1.2, 1.3, 1.45, 1.6, 1.8)
 DARKER_GAINS = (0.9, 0.8, 0.7, 0.6)
+#: Renders verifying (and, when needed, raising) the gains.
+VERIFY_ROUNDS = 2
 #: Categories whose colour is one body colour (a pedestrian's clothes are two).
 CHECKED_CATEGORIES = ("vehicle", "static")
 
@@ -62,22 +64,26 @@ class LookNote:
         wanted: the asked colour.
         seen: the colour the captioner named before any gain (``None``: too small to caption anywhere).
         gain: the exposure gain applied (``1.0``: none was needed or none fitted).
+        verified: a render (of the variant, when a gain is applied) reads as ``wanted``.
     """
 
     node_id: int
     wanted: str
     seen: str | None
     gain: float
+    verified: bool = False
 
     @property
     def fitted(self) -> bool:
-        return self.seen == self.wanted or self.gain != 1.0
+        """It reads as asked (as it was, or under its gain, verified on a render)."""
+        return self.verified
 
     def describe(self) -> str:
         if self.seen is None:
             return f"node {self.node_id} is too small to check its colour ({self.wanted} asked)"
         if self.gain != 1.0:
-            return f"node {self.node_id} read as {self.seen}, exposure x{self.gain:.2f} makes it {self.wanted}"
+            return (f"node {self.node_id} read as {self.seen}, exposure x{self.gain:.2f} "
+                    + (f"makes it {self.wanted}" if self.verified else f"does not make it {self.wanted} everywhere"))
         if self.seen != self.wanted:
             return f"node {self.node_id} reads as {self.seen} here, not {self.wanted} (no exposure gain fits)"
         return f"node {self.node_id} reads as {self.wanted}"
@@ -156,9 +162,14 @@ def _darker_or_lighter(crops: Sequence[ObjectCrop], wanted: str) -> str:
 
 
 def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: Mapping[int, str],
-                   states: AgentStates, asset_of: Callable[[str], Asset]) -> tuple[EditDelta, list[LookNote]]:
-    """The delta with each added node of ``wanted`` (node id -> asked achromatic colour) switched to the exposure
-    variant that makes it read as that colour in ``graph`` (the edited graph), and a note per checked node.
+                   states: AgentStates, asset_of: Callable[[str], Asset], build: Callable[[EditDelta], SceneGraph]
+                   ) -> tuple[EditDelta, SceneGraph, list[LookNote]]:
+    """The delta and graph with each added node of ``wanted`` (node id -> asked achromatic colour) switched to the
+    exposure variant that makes it read as that colour, and a note per checked node (module docstring).
+
+    A gain picked on the crops is verified on a render of the variant (scaling a crop also brightens the
+    background blended into its edge pixels; the render does not): one that does not read right yet moves
+    one step further along its ladder, for at most ``VERIFY_ROUNDS`` renders.
 
     Args:
         log: the sequence's log (cameras).
@@ -167,32 +178,57 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
         wanted: added node id -> asked colour; other colours and unknown nodes are skipped.
         states: the edited agent states (where each added object exists).
         asset_of: asset id -> asset (the draft's assets).
+        build: the edited graph of a delta (variants resolvable).
     """
     added = {a.node_id: a for a in delta.added}
     checks = {n: c for n, c in wanted.items()
               if n in added and c in ACHROMATIC_NAMES and added[n].category in CHECKED_CATEGORIES}
     if not checks:
-        return delta, []
+        return delta, graph, []
     frames = sorted({f for n in checks for f in look_frames(states, added[n].object_id)})
     renders = list(render_frames(graph, log, frames))
-    notes, gains = [], {}
+    notes: dict[int, LookNote] = {}
+    gains: dict[int, float] = {}
     for node_id, color in sorted(checks.items()):
-        node = added[node_id]
-        asset = asset_of(node.asset_id)
-        crops = node_crops(renders, node_id, node.object_id, asset.category, asset.size)
-        if not crops:
-            notes.append(LookNote(node_id, color, None, 1.0))
-            continue
-        seen, gain = exposure_gain(crops, color)
-        notes.append(LookNote(node_id, color, seen, gain))
+        crops = _crops(renders, added[node_id], asset_of)
+        seen, gain = exposure_gain(crops, color) if crops else (None, 1.0)
+        notes[node_id] = LookNote(node_id, color, seen, gain, verified=seen == color)
         if gain != 1.0:
             gains[node_id] = gain
-    for note in notes:
+    out_delta, out_graph = delta, graph
+    for _ in range(VERIFY_ROUNDS):
+        if not gains:
+            break
+        out_delta = dataclasses.replace(delta, added=tuple(_with_gain(a, gains[a.node_id]) if a.node_id in gains
+                                                           else a for a in delta.added))
+        out_graph = build(out_delta)
+        renders = list(render_frames(out_graph, log, frames))
+        unsure: dict[int, float] = {}
+        for node_id, gain in gains.items():
+            variant = next(a for a in out_delta.added if a.node_id == node_id)
+            track, share = _read(_crops(renders, variant, asset_of), checks[node_id])
+            ok = track == checks[node_id] and share >= LOOK_SHARE
+            notes[node_id] = dataclasses.replace(notes[node_id], gain=gain, verified=ok)
+            further = _next_gain(gain)
+            if not ok and further is not None:
+                unsure[node_id] = further
+        if not unsure:
+            break
+        gains = {**gains, **unsure}
+    for note in notes.values():
         (logger.info if note.fitted else logger.warning)("look check: %s", note.describe())
-    if not gains:
-        return delta, notes
-    new_added = tuple(_with_gain(a, gains[a.node_id]) if a.node_id in gains else a for a in delta.added)
-    return dataclasses.replace(delta, added=new_added), notes
+    return out_delta, out_graph, list(notes.values())
+
+
+def _crops(renders: Sequence[FrameRender], node: AddedNode, asset_of: Callable[[str], Asset]) -> list[ObjectCrop]:
+    asset = asset_of(node.asset_id)
+    return node_crops(renders, node.node_id, node.object_id, asset.category, asset.size)
+
+
+def _next_gain(gain: float) -> float | None:
+    """The gain one step further from 1 on ``gain`` 's ladder (``None`` at its end)."""
+    ladder = BRIGHTER_GAINS if gain > 1.0 else DARKER_GAINS
+    return next((g for g in ladder if abs(g - 1.0) > abs(gain - 1.0) + 1e-9), None)
 
 
 def _with_gain(added: AddedNode, gain: float) -> AddedNode:
@@ -200,4 +236,4 @@ def _with_gain(added: AddedNode, gain: float) -> AddedNode:
 
 
 __all__ = ["BRIGHTER_GAINS", "CHECKED_CATEGORIES", "DARKER_GAINS", "LOOK_FRAMES", "LOOK_SHARE", "MIN_LOOK_PIXELS",
-           "LookNote", "exposure_gain", "look_frames", "match_exposure", "node_crops"]
+           "VERIFY_ROUNDS", "LookNote", "exposure_gain", "look_frames", "match_exposure", "node_crops"]

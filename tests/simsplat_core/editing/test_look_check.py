@@ -23,6 +23,9 @@ from simsplat_core.language.appearance.crops import ObjectCrop
 from simsplat_core.scene import GaussianSet, SceneGraph
 
 CAR = (4.4, 1.9, 1.5)
+#: Insert a white sedan 6 m ahead in the ego lane (near enough to be captioned in the 96 x 64 test cameras).
+PROGRAM = {"commands": [{"op": "insert", "asset": {"description": "a white sedan"},
+                         "placement": {"relation": "in_lane", "distance_m": 6}}]}
 
 
 def _crop(value: float, size: int = 24) -> ObjectCrop:
@@ -31,11 +34,11 @@ def _crop(value: float, size: int = 24) -> ObjectCrop:
     return ObjectCrop(rgb, np.ones((size, size), bool), "vehicle", np.asarray(CAR), 0, "front", "obj")
 
 
-def _dim_white_car(value: float) -> Asset:
+def _dim_white_car(value: float, asset_id: str = "unit.dimwhite", n: int = 400) -> Asset:
     g = torch.Generator().manual_seed(3)
-    means = (torch.rand((400, 3), generator=g) - 0.5) * torch.tensor(CAR)
-    gs = GaussianSet.create(means, torch.full((400,), 0.2), torch.full((400, 3), value), 0.95)
-    return Asset(asset_id="unit.dimwhite", category="vehicle", subtype="sedan", caption="a white sedan",
+    means = (torch.rand((n, 3), generator=g) - 0.5) * torch.tensor(CAR)
+    gs = GaussianSet.create(means, torch.full((n,), 0.2), torch.full((n, 3), value), 0.95)
+    return Asset(asset_id=asset_id, category="vehicle", subtype="sedan", caption="a white sedan",
                  color="white", size=CAR, source_seq="unit", source_object="car", gaussians=gs)
 
 
@@ -85,9 +88,7 @@ def test_apply_edit_switches_a_dark_white_asset_to_a_variant_that_reads_white(ed
                                                                                engine):
     bank = AssetBank.from_assets([_dim_white_car(0.5)])
     ctx = EditContext.create(edit_log, _clear_background(edit_graph), edit_language, engine, bank)
-    program = EditProgram.model_validate({"commands": [{"op": "insert", "asset": {"description": "a white sedan"},
-                                                        "placement": {"relation": "in_lane", "distance_m": 6}}]})
-    edited = apply_edit(ctx, program)
+    edited = apply_edit(ctx, EditProgram.model_validate(PROGRAM))
     added = edited.delta.added[0]
     assert added.asset_id.startswith("unit.dimwhite~exp")
     renders = list(render_frames(edited.graph, edit_log, look_frames(edited.states, added.object_id)))
@@ -97,3 +98,13 @@ def test_apply_edit_switches_a_dark_white_asset_to_a_variant_that_reads_white(ed
     assert torch.allclose(rebuilt.at(5.0).colors, edited.graph.at(5.0).colors)
     assert "exposure" in edited.outcomes[0].summary
 
+
+
+def test_an_asset_no_gain_can_make_white_is_swapped_for_another(edit_log, edit_graph, edit_language, engine):
+    # the grey one ranks first (more Gaussians break the caption tie) but reads grey even at the largest gain
+    bank = AssetBank.from_assets([_dim_white_car(0.12, "unit.grey", n=500), _dim_white_car(0.85, "unit.white")])
+    ctx = EditContext.create(edit_log, _clear_background(edit_graph), edit_language, engine, bank)
+    assert bank.retrieve(EditProgram.model_validate(PROGRAM).commands[0].asset, engine.text_encoder).asset_id == \
+        "unit.grey"
+    edited = apply_edit(ctx, EditProgram.model_validate(PROGRAM))
+    assert edited.delta.added[0].asset_id.split("~")[0] == "unit.white"
