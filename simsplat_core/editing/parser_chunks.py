@@ -187,7 +187,7 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
             break
         k = match(tokens, j, RELATIVES)
         if (k or is_participle(tokens[j])) and tokens[j] not in exclude:
-            j = _clause_tail(tokens, j + (k or 1), relative=bool(k))
+            j = clause_tail(tokens, j + (k or 1), relative=bool(k))
             continue
         break
     return j
@@ -218,7 +218,7 @@ _ADJECTIVE_NOUNS: dict[str, frozenset[str]] = {
 #: Words after which "turn" is the verb again ("the car on the right *turn* left").
 _TURN_COMPLEMENTS = frozenset({"left", "right", "around", "back", "into", "onto"})
 #: Words before "to" that keep "to <verb>" in a description ("the car waiting *to turn* left", "about to").
-_TO_KEEPERS = frozenset({"about", "ready", "able", "trying", "going", "waiting", "starting", "planning", "set"})
+TO_KEEPERS = frozenset({"about", "ready", "able", "trying", "going", "waiting", "starting", "planning", "set"})
 
 
 def _verb_as_noun(tokens: Sequence[str], j: int) -> bool:
@@ -235,11 +235,11 @@ def _to_verb(tokens: Sequence[str], j: int) -> bool:
     speed"), not part of a description ("waiting to turn", "going to the junction")."""
     nxt = tokens[j + 1] if j + 1 < len(tokens) else ""
     return (tokens[j] == "to" and nxt in lex.PREDICATE_VERBS and not is_participle(nxt)
-            and nxt not in ("be", "is", "are") and tokens[j - 1] not in _TO_KEEPERS
+            and nxt not in ("be", "is", "are") and tokens[j - 1] not in TO_KEEPERS
             and not is_participle(tokens[j - 1]))
 
 
-def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
+def clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
     """End of a participle's or relative clause's complement: up to a modal, a base verb, a clause break."""
     n = len(tokens)
     first = j
@@ -248,7 +248,7 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
         if t == "and" and j + 1 < n and is_participle(tokens[j + 1]):  # "standing and waiting"
             j += 2
             continue
-        if t == "to" and tokens[j - 1] in _TO_KEEPERS:  # "waiting to turn left": still describing
+        if t == "to" and tokens[j - 1] in TO_KEEPERS:  # "waiting to turn left": still describing
             j += 2
             continue
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
@@ -262,15 +262,21 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
     return j
 
 
-def np_after(text: str, start: int, exclude: Iterable[str] = ()) -> tuple[str, int, int]:
-    """The ``target`` noun phrase that starts at the first word of ``text[start:]``, up to any blanked word
-    (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``; ``("", start, start)``:
-    none."""
+def words_from(text: str, start: int) -> list[re.Match[str]]:
+    """The words of ``text[start:]`` up to any blanked word (one holding ``|``), as matches in ``text[start:]``."""
     words = []
     for m in re.finditer(r"\S+", text[start:]):
         if "|" in m.group(0):
             break
         words.append(m)
+    return words
+
+
+def np_after(text: str, start: int, exclude: Iterable[str] = ()) -> tuple[str, int, int]:
+    """The ``target`` noun phrase that starts at the first word of ``text[start:]``, up to any blanked word
+    (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``; ``("", start, start)``:
+    none."""
+    words = words_from(text, start)
     tokens = [m.group(0) for m in words]
     stop = chunk_np(tokens, 0, "target", exclude=exclude) if tokens else 0
     if stop == 0:
