@@ -5,7 +5,7 @@
   other modifiers ("all crossing pedestrians", "a black and white police car"); after it, in ``target``
   mode, the modifiers that tell objects apart stay with it -- prepositional phrases ("in the red shirt",
   "on the left", "between the bus and the truck"), participles ("crossing the street", "parked by the
-  curb"), relative clauses ("that is turning left") and adverbs ("ahead"). ``asset`` mode keeps only
+  curb", "not moving"), relative clauses ("that is turning left") and adverbs ("ahead"). ``asset`` mode keeps only
   appearance ("a pedestrian in a red coat"); a participle after an asset is its behaviour.
 * :func:`split_clauses` -- the prompt's clauses: a hard break (``;``, ``.``, "then", "after that") always
   ends one; ``and`` / ``,`` / "but" only when a new clause starts after it (a verb, a subject with a verb
@@ -186,6 +186,8 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
         if mode != "target":
             break
         k = match(tokens, j, RELATIVES)
+        if not k and tokens[j] == "not" and j + 1 < n and is_participle(tokens[j + 1]):
+            k = 1  # "the person *not moving*": a description (a stationary person), not a negated edit
         if (k or is_participle(tokens[j])) and tokens[j] not in exclude:
             j = clause_tail(tokens, j + (k or 1), relative=bool(k))
             continue
