@@ -69,20 +69,25 @@ def _span_at(words: Sequence[str], i: int) -> tuple[str, int] | None:
     return (span.kind, len(text[: span.end].split())) if span is not None else None
 
 
-def _names_another_object(words: Sequence[str], i: int) -> bool:
-    """Whether a location phrase ending before ``words[i]`` relates to an object named next ("to the left *of
-    the bus*", "behind *the truck*")."""
-    return i < len(words) and (words[i] == "of" or chunks.match(words, i, lex.DETERMINERS) > 0)
+def _object_after(words: Sequence[str], i: int) -> int:
+    """End of another object's noun phrase a location phrase ending before ``words[i]`` relates to ("to the
+    left *of the bus*", "behind *the truck*"); ``i``: none."""
+    j = i + 1 if i < len(words) and words[i] == "of" else i
+    if j >= len(words) or not chunks.match(words, j, lex.DETERMINERS):
+        return i
+    end = chunks.chunk_np(words, j, "inner")
+    return end if end > j else i
 
 
 def _continues(words: Sequence[str], i: int) -> bool:
-    """Whether words after a description go on with the same verb phrase (not a clause break)."""
+    """Whether words after a motion phrase go on with its verb phrase ("driving *at 30 km/h*")."""
     return (i < len(words) and words[i] not in chunks.PUNCT and words[i] not in lex.SOFT_BREAKS
             and words[i] not in RELATIVE_PRONOUNS)
 
 
 def qualifier_length(words: Sequence[str], *, anchor: str, mover: str | None) -> int:
-    """How many of ``words`` (canonical words right after an anchor's noun phrase) describe the anchor.
+    """How many of ``words`` (canonical words right after an anchor's noun phrase, ``parser_chunks`` "anchor"
+    mode) describe the anchor (module docstring).
 
     Args:
         anchor: the anchor's noun phrase ("the white van").
@@ -104,22 +109,21 @@ def qualifier_length(words: Sequence[str], *, anchor: str, mover: str | None) ->
             j += 1  # "waiting to turn left", "going to the junction"
             continue
         found = _span_at(words, j)
-        if found is None:
-            if not movable and chunks.is_participle(words[j]):
-                j = chunks.clause_tail(words, j + 1, relative=False)
-                continue
-            break
-        kind, k = found
-        if kind in _LOCATION_SPANS:
-            if _names_another_object(words, j + k):
-                break
-            j += k
+        if found is not None and found[0] in _LOCATION_SPANS:
+            j = _object_after(words, j + found[1])  # "to the left of the ego car", "on the left *of the bus*"
             motion_start = None
             continue
-        kinds = motion_kinds(" ".join(words[j : j + k]))
-        if movable and mover in kinds and anchor_kind is not None and anchor_kind not in kinds:
-            break  # "in front of the bus crossing the road": buses do not cross
-        motion_start, j = j, j + k
+        if found is not None and movable:
+            kinds = motion_kinds(" ".join(words[j : j + found[1]]))
+            if mover in kinds and anchor_kind is not None and anchor_kind not in kinds:
+                break  # "in front of the bus crossing the road": buses do not cross
+            motion_start, j = j, j + found[1]
+            continue
+        if found is not None or chunks.is_participle(words[j]):  # what the grounding does not read still describes
+            j = chunks.clause_tail(words, j + 1, relative=False)
+            motion_start = None
+            continue
+        break
     if movable and motion_start is not None and _continues(words, j):
         return motion_start  # "driving at 30 km/h": the placed object's predicate
     return j

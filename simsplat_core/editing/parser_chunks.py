@@ -107,8 +107,9 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
     """End (exclusive) of the noun phrase starting at ``tokens[i]``; ``i`` when there is none.
 
     Args:
-        mode: ``"target"`` (keeps every describing modifier), ``"asset"`` (appearance only) or ``"inner"``
-            (the object of a preposition: head and pre-modifiers only).
+        mode: ``"target"`` (keeps every describing modifier), ``"anchor"`` (prepositional phrases and adverbs,
+            no participle or relative clause: ``parser_anchor`` reads whose those are), ``"asset"`` (appearance
+            only) or ``"inner"`` (the object of a preposition: head and pre-modifiers only).
         exclude: prepositions that must not attach to the phrase (a verb's complements: "stop the van
             *before* the intersection").
     """
@@ -166,7 +167,7 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
     n = len(tokens)
     preps = APPEARANCE_PREPOSITIONS if mode == "asset" else NP_PREPOSITIONS
     while j < n:
-        if mode == "target":
+        if mode != "asset":
             k = match(tokens, j, POST_ADVERBS)
             if k and not match(tokens, j, ("in front of", "behind the", "behind a", "behind it", "behind us")):
                 j += k
@@ -274,13 +275,13 @@ def words_from(text: str, start: int) -> list[re.Match[str]]:
     return words
 
 
-def np_after(text: str, start: int, exclude: Iterable[str] = ()) -> tuple[str, int, int]:
-    """The ``target`` noun phrase that starts at the first word of ``text[start:]``, up to any blanked word
-    (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``; ``("", start, start)``:
-    none."""
+def np_after(text: str, start: int, exclude: Iterable[str] = (), mode: str = "target") -> tuple[str, int, int]:
+    """The noun phrase (``mode`` as :func:`chunk_np`'s) that starts at the first word of ``text[start:]``, up to
+    any blanked word (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``;
+    ``("", start, start)``: none."""
     words = words_from(text, start)
     tokens = [m.group(0) for m in words]
-    stop = chunk_np(tokens, 0, "target", exclude=exclude) if tokens else 0
+    stop = chunk_np(tokens, 0, mode, exclude=exclude) if tokens else 0
     if stop == 0:
         return "", start, start
     return " ".join(tokens[:stop]), start + words[0].start(), start + words[stop - 1].end()

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from simsplat_core.editing import parser_chunks as chunks
 from simsplat_core.editing import parser_lexicon as lex
 from simsplat_core.editing.commands import AssetSpec
-from simsplat_core.editing.parser_anchor import RELATIVE_PRONOUNS, qualifier_length
+from simsplat_core.editing.parser_anchor import qualifier_length
 from simsplat_core.editing.parser_text import number_word
 from simsplat_core.language.query_parse import NOUNS, parse_query
 from simsplat_core.scenario import vocabulary as voc
@@ -109,7 +109,7 @@ class _Scan:
     def anchor_after(self, end: int) -> tuple[str, int]:
         """The anchor noun phrase after character ``end`` with the words that describe it
         (``parser_anchor``), and its end; ``("", end)``: none."""
-        phrase, _, stop = chunks.np_after(self.text, end, _ANCHOR_EXCLUDE)
+        phrase, _, stop = chunks.np_after(self.text, end, _ANCHOR_EXCLUDE, mode="anchor")
         if not phrase or chunks.is_quantity(phrase.split(), 0):
             return "", end
         if re.fullmatch(_EGO, phrase):
@@ -124,12 +124,10 @@ class _Scan:
         return [t for t in self.text.split() if "|" not in t]
 
 
-#: What ends an anchor's head noun phrase: another placement's words, the inserted object's own motion, a
-#: relative clause; ``parser_anchor`` then reads which of the words after it still describe the anchor.
+#: What ends an anchor's head noun phrase (besides participles and relative clauses): another placement's
+#: words; ``parser_anchor`` then reads which of the words after it still describe the anchor.
 _ANCHOR_EXCLUDE = ("at", "in front of", "behind", "next to", "ahead of", "in", "on", "to the left of",
-                   "to the right of", "left of", "right of", "before", "after", "by", "beside", *RELATIVE_PRONOUNS,
-                   *"facing heading pointing driving going travelling traveling moving walking running crossing"
-                   .split())
+                   "to the right of", "left of", "right of", "before", "after", "by", "beside")
 
 
 def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float, float]],
@@ -176,7 +174,8 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
     relative, distance, anchor, anchor_end = _anchor_relative(s)
     for rx, lane in _LANES:
         m = s.find(rx)
-        if m and anchor is not None and relative != "in_front_of" and "|" not in s.text[anchor_end : m.start()]:
+        if (m and anchor is not None and relative != "in_front_of" and m.start() >= anchor_end
+                and "|" not in s.text[anchor_end : m.start()]):
             anchor += " " + s.text[anchor_end : m.end()].strip()  # "behind the suv in the oncoming lane": its lane
             s.blank(anchor_end, m.end())
             break
