@@ -52,9 +52,14 @@ def agent_kind(query_categories: Sequence[str]) -> str | None:
 
 
 def motion_kinds(phrase: str) -> frozenset[str]:
-    """Agent kinds whose motion vocabulary has a class the phrase names ("crossing the road" -> pedestrian)."""
-    classes = {c for rx, named in MOTION_KEYWORDS if re.search(rx, phrase) for c in named}
-    return frozenset(kind for kind, vocabulary in MOTION_VOCABULARIES.items() if classes & set(vocabulary.names))
+    """Agent kinds that can do every motion the phrase names: for each motion keyword it holds, a kind whose
+    vocabulary has one of the keyword's classes ("crossing the road" -> pedestrian, "waiting to cross" ->
+    pedestrian, "stopped at the light" -> vehicle and pedestrian)."""
+    kinds = frozenset(MOTION_VOCABULARIES)
+    for rx, named in MOTION_KEYWORDS:
+        if re.search(rx, phrase):
+            kinds &= {kind for kind, vocabulary in MOTION_VOCABULARIES.items() if set(named) & set(vocabulary.names)}
+    return kinds
 
 
 def _span_at(words: Sequence[str], i: int) -> tuple[str, int] | None:

@@ -50,7 +50,7 @@ _REMOVE_TAIL = re.compile(r"(?:(?:out|away|off|completely|entirely|too|as well|a
                           r"|from|out of|off of|of|the|this|whole|scene|road|image|picture|video|frame|frames|world"
                           r"|simulation|sim|street|clip|sequence|log|view|map|everywhere|all)\s*)*")
 #: Words an insert clause may hold that say nothing ("make a cone appear", "add a new car to the scene").
-_INSERT_FILLER = frozenset("appear appears show up there here new too as well also to into in the scene please "
+_INSERT_FILLER = frozenset("appear appears show up there here new too as well also into in the scene please "
                            "somewhere a row line road".split())
 #: Clause-opening verbs a typo may be corrected to.
 _KNOWN_VERBS = sorted({v for v in (*lex.REMOVE_VERBS, *lex.INSERT_VERBS, *lex.REPLACE_VERBS, *lex.CAUSATIVES,
