@@ -14,8 +14,10 @@ except:
 * a motion phrase of a kind the anchor cannot do and the placed object can ("add a pedestrian in front of
   the bus *crossing the road*") is the placed object's;
 * a motion phrase that goes on with words the grounding does not read ("*driving at 30 km/h*", "*going
-  slowly*") is the placed object's predicate;
-* a location phrase that relates to another object ("*to the left of the bus*") is not the anchor's.
+  slowly*") is the placed object's predicate.
+
+A location phrase relating the anchor to another object stays with it too ("the van *to the left of the
+bus*"): the grounding engine reads what it can of it.
 
 Everything a static object is placed next to is described, so "put a cone behind the bus turning left" never
 reads as a cone turning.
