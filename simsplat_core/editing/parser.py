@@ -14,7 +14,8 @@ How (one module per step):
 3. ``parser_clauses`` -- each clause's form (replace / remove / insert / "make X ..." / "stop X ..." / "X
    should ..." / a bare predicate on the previous subject); ``parser_state`` -- subjects, pronouns,
    references, category checks, merging;
-4. ``parser_placement`` (placements, assets), ``parser_speed`` and ``parser_behaviour`` (behaviours, on
+4. ``parser_placement`` (placements, assets; ``parser_anchor`` tells the anchor's describing phrases from the
+   inserted object's own verb phrases), ``parser_speed`` and ``parser_behaviour`` (behaviours, on
    ``parser_predicate``) by rule; a predicate no rule knows is matched to the scenario vocabulary through
    the grounding lexicon's motion keywords, then by E5 (``parser_semantic``) to the nearest supported
    intent, or refused. The edit language's own words are in ``parser_lexicon``.

@@ -102,7 +102,9 @@ def _pedestrian_rules(w: PredicateWork) -> None:
              "walk": r"walk|walks|walking|stroll|strolls|strolling|amble|ambles|ambling|saunter|saunters|sauntering"
                      r"|wander|wanders|wandering"}
     start = r"(?:(?:start|starts|begin|begins|break|breaks) (?:to |into a )?)?"  # "start running"
-    crossed = w.take(r"(?:(?:cross|crosses|crossing)" + _CROSSABLE + r"|(?:(?:" + gaits["run"] + "|" + gaits["walk"]
+    about_to = r"(?:(?:" + "|".join(sorted(chunks.TO_KEEPERS)) + r") to )?"  # "waiting to cross"
+    crossed = w.take(about_to + r"(?:(?:cross|crosses|crossing)" + _CROSSABLE + r"|(?:(?:" + gaits["run"] + "|"
+                     + gaits["walk"]
                      + r"|go|goes|head|heads|step|steps|hurry|hurries|make (?:his|her|their|"
                        r"its) way)(?: out)? (?:across"
                      r"|over)(?: (?:the )?(?:street|road|lane|lanes|carriageway))?))"

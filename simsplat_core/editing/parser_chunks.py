@@ -5,7 +5,7 @@
   other modifiers ("all crossing pedestrians", "a black and white police car"); after it, in ``target``
   mode, the modifiers that tell objects apart stay with it -- prepositional phrases ("in the red shirt",
   "on the left", "between the bus and the truck"), participles ("crossing the street", "parked by the
-  curb"), relative clauses ("that is turning left") and adverbs ("ahead"). ``asset`` mode keeps only
+  curb", "not moving"), relative clauses ("that is turning left") and adverbs ("ahead"). ``asset`` mode keeps only
   appearance ("a pedestrian in a red coat"); a participle after an asset is its behaviour.
 * :func:`split_clauses` -- the prompt's clauses: a hard break (``;``, ``.``, "then", "after that") always
   ends one; ``and`` / ``,`` / "but" only when a new clause starts after it (a verb, a subject with a verb
@@ -107,8 +107,9 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
     """End (exclusive) of the noun phrase starting at ``tokens[i]``; ``i`` when there is none.
 
     Args:
-        mode: ``"target"`` (keeps every describing modifier), ``"asset"`` (appearance only) or ``"inner"``
-            (the object of a preposition: head and pre-modifiers only).
+        mode: ``"target"`` (keeps every describing modifier), ``"anchor"`` (prepositional phrases and adverbs,
+            no participle or relative clause: ``parser_anchor`` reads whose those are), ``"asset"`` (appearance
+            only) or ``"inner"`` (the object of a preposition: head and pre-modifiers only).
         exclude: prepositions that must not attach to the phrase (a verb's complements: "stop the van
             *before* the intersection").
     """
@@ -166,7 +167,7 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
     n = len(tokens)
     preps = APPEARANCE_PREPOSITIONS if mode == "asset" else NP_PREPOSITIONS
     while j < n:
-        if mode == "target":
+        if mode != "asset":
             k = match(tokens, j, POST_ADVERBS)
             if k and not match(tokens, j, ("in front of", "behind the", "behind a", "behind it", "behind us")):
                 j += k
@@ -186,8 +187,10 @@ def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset
         if mode != "target":
             break
         k = match(tokens, j, RELATIVES)
+        if not k and tokens[j] == "not" and j + 1 < n and is_participle(tokens[j + 1]):
+            k = 1  # "the person *not moving*": a description (a stationary person), not a negated edit
         if (k or is_participle(tokens[j])) and tokens[j] not in exclude:
-            j = _clause_tail(tokens, j + (k or 1), relative=bool(k))
+            j = clause_tail(tokens, j + (k or 1), relative=bool(k))
             continue
         break
     return j
@@ -218,7 +221,7 @@ _ADJECTIVE_NOUNS: dict[str, frozenset[str]] = {
 #: Words after which "turn" is the verb again ("the car on the right *turn* left").
 _TURN_COMPLEMENTS = frozenset({"left", "right", "around", "back", "into", "onto"})
 #: Words before "to" that keep "to <verb>" in a description ("the car waiting *to turn* left", "about to").
-_TO_KEEPERS = frozenset({"about", "ready", "able", "trying", "going", "waiting", "starting", "planning", "set"})
+TO_KEEPERS = frozenset({"about", "ready", "able", "trying", "going", "waiting", "starting", "planning", "set"})
 
 
 def _verb_as_noun(tokens: Sequence[str], j: int) -> bool:
@@ -235,11 +238,11 @@ def _to_verb(tokens: Sequence[str], j: int) -> bool:
     speed"), not part of a description ("waiting to turn", "going to the junction")."""
     nxt = tokens[j + 1] if j + 1 < len(tokens) else ""
     return (tokens[j] == "to" and nxt in lex.PREDICATE_VERBS and not is_participle(nxt)
-            and nxt not in ("be", "is", "are") and tokens[j - 1] not in _TO_KEEPERS
+            and nxt not in ("be", "is", "are") and tokens[j - 1] not in TO_KEEPERS
             and not is_participle(tokens[j - 1]))
 
 
-def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
+def clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
     """End of a participle's or relative clause's complement: up to a modal, a base verb, a clause break."""
     n = len(tokens)
     first = j
@@ -248,7 +251,7 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
         if t == "and" and j + 1 < n and is_participle(tokens[j + 1]):  # "standing and waiting"
             j += 2
             continue
-        if t == "to" and tokens[j - 1] in _TO_KEEPERS:  # "waiting to turn left": still describing
+        if t == "to" and tokens[j - 1] in TO_KEEPERS:  # "waiting to turn left": still describing
             j += 2
             continue
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
@@ -262,17 +265,23 @@ def _clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
     return j
 
 
-def np_after(text: str, start: int, exclude: Iterable[str] = ()) -> tuple[str, int, int]:
-    """The ``target`` noun phrase that starts at the first word of ``text[start:]``, up to any blanked word
-    (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``; ``("", start, start)``:
-    none."""
+def words_from(text: str, start: int) -> list[re.Match[str]]:
+    """The words of ``text[start:]`` up to any blanked word (one holding ``|``), as matches in ``text[start:]``."""
     words = []
     for m in re.finditer(r"\S+", text[start:]):
         if "|" in m.group(0):
             break
         words.append(m)
+    return words
+
+
+def np_after(text: str, start: int, exclude: Iterable[str] = (), mode: str = "target") -> tuple[str, int, int]:
+    """The noun phrase (``mode`` as :func:`chunk_np`'s) that starts at the first word of ``text[start:]``, up to
+    any blanked word (one holding ``|``): ``(phrase, its start, its end)`` as character offsets in ``text``;
+    ``("", start, start)``: none."""
+    words = words_from(text, start)
     tokens = [m.group(0) for m in words]
-    stop = chunk_np(tokens, 0, "target", exclude=exclude) if tokens else 0
+    stop = chunk_np(tokens, 0, mode, exclude=exclude) if tokens else 0
     if stop == 0:
         return "", start, start
     return " ".join(tokens[:stop]), start + words[0].start(), start + words[stop - 1].end()

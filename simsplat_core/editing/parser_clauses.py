@@ -28,6 +28,7 @@ from pydantic import ValidationError
 
 from simsplat_core.editing import parser_chunks as chunks
 from simsplat_core.editing import parser_lexicon as lex
+from simsplat_core.editing.parser_anchor import agent_kind
 from simsplat_core.editing.parser_behaviour import parse_predicate
 from simsplat_core.editing.parser_placement import PlacementParse, find_placement, parse_asset, spacing_words
 from simsplat_core.editing.parser_predicate import INTENT_FIELDS
@@ -35,6 +36,7 @@ from simsplat_core.editing.parser_semantic import nearest_intent
 from simsplat_core.editing.parser_speed import SPEED_NOUN, SPEED_VERB
 from simsplat_core.editing.parser_state import INDEFINITE, Draft, PromptState, Subject
 from simsplat_core.editing.result import EditRefused
+from simsplat_core.language.query_parse import parse_query
 
 logger = logging.getLogger(__name__)
 
@@ -48,7 +50,7 @@ _REMOVE_TAIL = re.compile(r"(?:(?:out|away|off|completely|entirely|too|as well|a
                           r"|from|out of|off of|of|the|this|whole|scene|road|image|picture|video|frame|frames|world"
                           r"|simulation|sim|street|clip|sequence|log|view|map|everywhere|all)\s*)*")
 #: Words an insert clause may hold that say nothing ("make a cone appear", "add a new car to the scene").
-_INSERT_FILLER = frozenset("appear appears show up there here new too as well also to into in the scene please "
+_INSERT_FILLER = frozenset("appear appears show up there here new too as well also into in the scene please "
                            "somewhere a row line road".split())
 #: Clause-opening verbs a typo may be corrected to.
 _KNOWN_VERBS = sorted({v for v in (*lex.REMOVE_VERBS, *lex.INSERT_VERBS, *lex.REPLACE_VERBS, *lex.CAUSATIVES,
@@ -175,7 +177,8 @@ class PromptParser(PromptState):
             asset = parse_asset(item[:end], item[end:])
             if asset.spec is None:
                 raise self.refuse(asset.refusal or f"I could not understand {' '.join(item)!r}")
-            placement_parse, residual = find_placement(spacing_words(item[end:]), self.positions)
+            placement_parse, residual = find_placement(spacing_words(item[end:]), self.positions,
+                                                       asset.spec.category)
             subject = Subject(None, asset.spec.category, " ".join(item[:end]), inserted=len(self.drafts))
             draft = Draft("insert", " ".join(item), subject, asset=asset.spec)
             residual = [w for w in residual if w not in _INSERT_FILLER and w not in chunks.PUNCT]
@@ -224,7 +227,8 @@ class PromptParser(PromptState):
         if placing and re.fullmatch(_SIDEWAYS, " ".join(rest)):
             placing, verb = False, "shift"  # "move the car 1 m to the left": sideways, not left of the ego
         if placing:
-            placement, rest = find_placement(rest, self.positions)
+            movers = {agent_kind(parse_query(" ".join(tokens[a:b])).categories) for a, b in spans}
+            placement, rest = find_placement(rest, self.positions, movers.pop() if len(movers) == 1 else None)
             if verb in ("put", "place", "position") and placement is None and not rest:
                 return False
         subjects = [self._subject(tokens[a:b]) for a, b in spans]

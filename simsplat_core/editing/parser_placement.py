@@ -24,6 +24,7 @@ from dataclasses import dataclass
 from simsplat_core.editing import parser_chunks as chunks
 from simsplat_core.editing import parser_lexicon as lex
 from simsplat_core.editing.commands import AssetSpec
+from simsplat_core.editing.parser_anchor import qualifier_length
 from simsplat_core.editing.parser_text import number_word
 from simsplat_core.language.query_parse import NOUNS, parse_query
 from simsplat_core.scenario import vocabulary as voc
@@ -92,8 +93,9 @@ def _side(m: re.Match[str]) -> str | None:
 
 
 class _Scan:
-    def __init__(self, tokens: Sequence[str]) -> None:
+    def __init__(self, tokens: Sequence[str], mover: str | None) -> None:
         self.text = " " + " ".join(tokens) + " "
+        self.mover = mover
 
     def find(self, rx: str) -> re.Match[str] | None:
         for m in re.finditer(r"(?<![\w/-])(?:" + rx + r")(?![\w/-])", self.text):
@@ -105,26 +107,38 @@ class _Scan:
         self.text = self.text[:start] + " " + "|" * max(end - start - 2, 1) + " " + self.text[end:]
 
     def anchor_after(self, end: int) -> tuple[str, int]:
-        phrase, _, stop = chunks.np_after(self.text, end, _ANCHOR_EXCLUDE)
+        """The anchor noun phrase after character ``end`` with the words that describe it
+        (``parser_anchor``), and its end; ``("", end)``: none."""
+        phrase, _, stop = chunks.np_after(self.text, end, _ANCHOR_EXCLUDE, mode="anchor")
         if not phrase or chunks.is_quantity(phrase.split(), 0):
             return "", end
+        if re.fullmatch(_EGO, phrase):
+            return phrase, stop
+        after = chunks.words_from(self.text, stop)
+        k = qualifier_length([m.group(0) for m in after], anchor=phrase, mover=self.mover)
+        if k:
+            phrase, stop = self.text[end:stop + after[k - 1].end()].strip(), stop + after[k - 1].end()
         return phrase, stop
 
     def residual(self) -> list[str]:
         return [t for t in self.text.split() if "|" not in t]
 
 
-#: What ends an anchor's noun phrase: another placement's words, or the inserted object's own motion.
+#: What ends an anchor's head noun phrase (besides participles and relative clauses): another placement's
+#: words; ``parser_anchor`` then reads which of the words after it still describe the anchor.
 _ANCHOR_EXCLUDE = ("at", "in front of", "behind", "next to", "ahead of", "in", "on", "to the left of",
-                   "to the right of", "left of", "right of", "before", "after", "by", "beside",
-                   *"facing heading pointing driving going travelling traveling moving walking running crossing"
-                   .split())
+                   "to the right of", "left of", "right of", "before", "after", "by", "beside")
 
 
-def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float, float]]) -> tuple[
-        PlacementParse | None, list[str]]:
-    """The placement in ``tokens`` (canonical words after the asset or target) and the words it did not use."""
-    s = _Scan(tokens)
+def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float, float]],
+                   mover: str | None = None) -> tuple[PlacementParse | None, list[str]]:
+    """The placement in ``tokens`` (canonical words after the asset or target) and the words it did not use.
+
+    Args:
+        mover: agent kind of what is placed ("vehicle" / "pedestrian" / "static"; None: unknown), which decides
+            whose a motion phrase after the anchor is (``parser_anchor``).
+    """
+    s = _Scan(tokens, mover)
     out = PlacementParse()
     found = False
     m = s.find(r"between")
@@ -160,7 +174,8 @@ def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float
     relative, distance, anchor, anchor_end = _anchor_relative(s)
     for rx, lane in _LANES:
         m = s.find(rx)
-        if m and anchor is not None and relative != "in_front_of" and "|" not in s.text[anchor_end : m.start()]:
+        if (m and anchor is not None and relative != "in_front_of" and m.start() >= anchor_end
+                and "|" not in s.text[anchor_end : m.start()]):
             anchor += " " + s.text[anchor_end : m.end()].strip()  # "behind the suv in the oncoming lane": its lane
             s.blank(anchor_end, m.end())
             break

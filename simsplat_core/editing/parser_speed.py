@@ -3,7 +3,8 @@
 Speeds: absolute ("40 km/h", "at 15 m/s"; a bare number after a speed verb is km/h), factor ("twice as
 fast", "half the speed", "three times faster", "50 % faster" -> 1.5) or delta ("10 km/h slower" -> -10,
 "speed up by 5 mph"). Stops: at a time ("at 2 s", "after 1.5 seconds"), before a crosswalk, intersection
-or stop line ("stop 5 m before the crosswalk"), behind an object; "brake hard" / "slam on the brakes".
+or stop line ("stop 5 m before the crosswalk"), behind an object; "brake hard" / "slam on the brakes"; a
+stationary state ("not moving", "who is not walking": a description, not a negated edit) is a stop.
 Timing: a start time ("wait 2 s before moving", "start moving at 4 s") or a delay ("start 3 s later").
 """
 
@@ -108,7 +109,8 @@ def stop_rules(w: PredicateWork) -> None:
         r"(?: down| up| itself)? to a (?:complete |full |dead |gentle |smooth |sudden |quick )?(?:stop|halt|standstill)"
         r"|(?:stop (?:moving|walking|running|driving)|stop|stops|stopping|halt|halts|pull over|pulls over|pull up"
         r"|pulls up|park|parks|freeze|freezes|stand still|stay still|stays still|stay put|keep still|remain still"
-        r"|remain stationary|stay stationary|cease moving|yield|yields|give way|gives way|wait|waits)(?! sign| line)",
+        r"|remain stationary|stay stationary|cease moving|yield|yields|give way|gives way|wait|waits"
+        r"|(?:not|no longer) (?:moving|walking|driving|going anywhere|in motion))(?! sign| line)",
         lambda m: w.stop(), repeat=True) or "stop" in w.out.fields
     if not stopped:
         return

@@ -24,6 +24,7 @@ from typing import Any
 from simsplat_core.editing import parser_chunks as chunks
 from simsplat_core.editing import parser_lexicon as lex
 from simsplat_core.editing.commands import EGO, AssetSpec, Placement, TargetRef
+from simsplat_core.editing.parser_anchor import agent_kind
 from simsplat_core.editing.parser_behaviour import parse_predicate
 from simsplat_core.editing.parser_placement import PlacementParse
 from simsplat_core.editing.parser_predicate import INTENT_FIELDS, PredicateParse
@@ -34,14 +35,6 @@ from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS, parse_quer
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 
 INDEFINITE = ("a", "an", "another", "some", "one more")
-
-
-def _category(query_categories: Sequence[str]) -> str | None:
-    """Agent kind of a grounding query's categories ("vehicle" / "pedestrian" / "static"), None if unknown."""
-    if not query_categories:
-        return None
-    kinds = {lex.ASSET_CATEGORY[c] for c in query_categories}
-    return kinds.pop() if len(kinds) == 1 else None
 
 
 @dataclass
@@ -172,7 +165,7 @@ class PromptState:
                 raise self.refuse(f"{phrase!r} is not an object: only vehicles, pedestrians, cyclists and static "
                                   "objects (cones, barriers, signs) can be edited")
             group = query.group or phrase in ("everyone", "everybody", "everything", "all agents", "all objects")
-            subject = Subject(TargetRef(description=phrase, group=group), _category(query.categories), phrase)
+            subject = Subject(TargetRef(description=phrase, group=group), agent_kind(query.categories), phrase)
         self.mentions.append(subject)
         return subject
 

@@ -11,6 +11,7 @@
   meters, feet -> m); times ``s`` (sec, seconds, minutes -> s); ``%``; ``deg``;
 * coordinates "(10, -3, 0)", "x=12 y=3" become ``@pos<i>`` tokens (values in :attr:`Canonical.positions`);
   "t=2" becomes "at 2 s";
+* "left hand" / "right hand" are written "left-hand" / "right-hand" ("on the right hand side");
 * clause punctuation (``, ; . ! ? :``) becomes separate tokens; other punctuation goes.
 """
 
@@ -170,6 +171,7 @@ def canonical(text: str) -> Canonical:
     t = _UNIT_RX.sub(_unit_sub, t)
     t = re.sub(r"(?<=\d)\s*%", " %", t)
     t = re.sub(r"#\s*(\d)", r"\1", t)  # "node #12"
+    t = re.sub(r"\b(left|right) hand\b", r"\1-hand", t)  # "the left hand side": one word, as "left-hand"
     # clause punctuation becomes tokens (a decimal point stays inside its number)
     t = re.sub(r"(?<!\d)\.|\.(?!\d)", " . ", t)
     t = re.sub(r"([,;!?:])", r" \1 ", t)
