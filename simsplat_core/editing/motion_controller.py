@@ -263,13 +263,14 @@ def _turn_reached(route: Route, plan: SpeedPlan) -> bool:
 
 
 def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan, s0: float) -> None:
-    s_turn = route.marks["turn"]
+    s_turn, s_end = route.marks["turn"], route.marks.get("turn_end", route.marks["turn"])
     reached = float(plan.s[-1])
     if not _turn_reached(route, plan):
         horizon = float(req.times[-1] - req.times[req.start.step])
         raise EditRefused(f"turning requires an intersection ahead of {req.label} within reach: the next "
-                          f"{req.turn} turn begins {s_turn - s0:.0f} m ahead, but {req.label} covers "
-                          f"{reached - s0:.0f} m in the remaining {horizon:.1f} s", reason="infeasible_motion")
+                          f"{req.turn} turn runs from {s_turn - s0:.0f} m to {s_end - s0:.0f} m ahead, but "
+                          f"{req.label} covers {reached - s0:.0f} m in the remaining {horizon:.1f} s (it must get "
+                          f"halfway through the turn, {0.5 * (s_turn + s_end) - s0:.0f} m)", reason="infeasible_motion")
 
 
 def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderTrack | None:
