@@ -13,6 +13,8 @@ it is only read (the evaluation's tables go to ``--eval-out``, default a tempora
    cameras at 240x160), timed separately; ``--repeats`` runs, the median reported, and the first run of the
    prompt (its phrases not yet in the text encoder's cache) in full. Torch uses ``--threads`` threads (the
    target is <= 20 s on 2 cores).
+   Then the prompts of ``LOOK_PROMPTS`` (inserts in an achromatic colour, the ones the look check renders and,
+   at worst, re-applies with another asset: ``editing.look_check``) are timed the same way.
 2. **The evaluation** (``tasks.editing_eval.evaluate_editing_run``): completion per (method, category),
    infeasible prompts refused, fidelity per category next to the unedited test PSNR, failures grouped by
    reason.
@@ -55,6 +57,10 @@ from tasks.edit import load_edit_context  # noqa: E402
 
 logger = logging.getLogger("bench.editing")
 
+#: Inserts asked in white / silver / gray / black: the look check renders the edited scene for them.
+LOOK_PROMPTS = ("put a white car in our lane 20 m ahead", "add a silver van 12 m ahead of us in our lane",
+                "add a black SUV in the left lane 15 m ahead", "place a white pickup 10 m ahead of us")
+
 
 def time_one_edit_per_category(store_root: str, seq_id: str, repeats: int) -> dict:
     """Median seconds of parse / apply / render / total of one edit of each category (module docstring)."""
@@ -69,35 +75,48 @@ def time_one_edit_per_category(store_root: str, seq_id: str, repeats: int) -> di
     out = {}
     for category in CATEGORIES:
         for prompt in (p for p in prompts if p.category == category):
-            t0 = time.perf_counter()
-            try:
-                first = editor.edit(prompt.text)
-            except EditRefused:
+            timed = _time_prompt(editor, prompt.text, repeats)
+            if timed is None:
                 continue
-            list(render_frames(first.graph, ctx.log))
-            cold_s = time.perf_counter() - t0  # the text's phrases not yet in the encoder's cache
-            runs = []
-            for _ in range(repeats):
-                t0 = time.perf_counter()
-                program = editor.parse(prompt.text)
-                t1 = time.perf_counter()
-                edited = apply_edit(ctx, program)
-                t2 = time.perf_counter()
-                frames = list(render_frames(edited.graph, ctx.log))
-                t3 = time.perf_counter()
-                runs.append((t1 - t0, t2 - t1, t3 - t2, t3 - t0))
-            parse_s, apply_s, render_s, total_s = (statistics.median(r[k] for r in runs) for k in range(4))
-            out[category] = {"prompt": prompt.text, "parse_s": round(parse_s, 3), "apply_s": round(apply_s, 3),
-                             "render_s": round(render_s, 3), "total_s": round(total_s, 3),
-                             "cold_total_s": round(cold_s, 3),
-                             "frames": len(frames), "cameras": len(frames[0].cameras) if frames else 0}
-            logger.info("%-18s total %6.2f s (parse %.2f, ground+apply+validate %.2f, render %.2f; first run %.2f s):"
-                        " %s", category, total_s, parse_s, apply_s, render_s, cold_s, prompt.text)
+            out[category] = timed
             break
         else:
             out[category] = {"prompt": "", "error": "no prompt of this category was carried out"}
             logger.warning("%s: no prompt carried out, nothing timed", category)
+    for k, text in enumerate(LOOK_PROMPTS):
+        timed = _time_prompt(editor, text, repeats)
+        if timed is not None:
+            out[f"look_check_{k}"] = timed
     return out
+
+
+def _time_prompt(editor: Editor, text: str, repeats: int) -> dict | None:
+    """Timings of one prompt (module docstring, point 1), ``None`` when it is refused."""
+    ctx = editor.ctx
+    t0 = time.perf_counter()
+    try:
+        first = editor.edit(text)
+    except EditRefused:
+        return None
+    list(render_frames(first.graph, ctx.log))
+    cold_s = time.perf_counter() - t0  # the text's phrases not yet in the encoder's cache
+    runs = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        program = editor.parse(text)
+        t1 = time.perf_counter()
+        edited = apply_edit(ctx, program)
+        t2 = time.perf_counter()
+        frames = list(render_frames(edited.graph, ctx.log))
+        t3 = time.perf_counter()
+        runs.append((t1 - t0, t2 - t1, t3 - t2, t3 - t0))
+    parse_s, apply_s, render_s, total_s = (statistics.median(r[k] for r in runs) for k in range(4))
+    logger.info("total %6.2f s (parse %.2f, ground+apply+validate %.2f, render %.2f; first run %.2f s): %s",
+                total_s, parse_s, apply_s, render_s, cold_s, text)
+    return {"prompt": text, "parse_s": round(parse_s, 3), "apply_s": round(apply_s, 3),
+            "render_s": round(render_s, 3), "total_s": round(total_s, 3), "cold_total_s": round(cold_s, 3),
+            "summary": "; ".join(o.summary for o in first.outcomes),
+            "frames": len(frames), "cameras": len(frames[0].cameras) if frames else 0}
 
 
 def failure_groups(outcomes_uri: str, method: str = "ours") -> dict[str, list[str]]:

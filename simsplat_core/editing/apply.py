@@ -18,7 +18,8 @@ target / anchor against the scene's language (``editing.grounding``), then
 
 An added object whose command asked an achromatic colour is then looked at in the edited renders and
 exposure-matched when it reads as another shade (``editing.look_check``); when no gain makes it read as asked,
-the program is applied again without that asset (at most ``LOOK_RETRIES`` times). The edited graph is
+the program is applied again without that asset (at most ``LOOK_RETRIES`` times; the attempt with the most
+objects reading as asked is kept). The edited graph is
 :func:`~simsplat_core.editing.delta.apply_delta` of the stored graph and the resulting delta (the same
 function rebuilds a stored edit), so nothing of the stored scene changes and
 unchanged nodes are shared. Finally every edited and inserted agent is validated against every other
@@ -109,13 +110,18 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
             whole changes nothing.
     """
     excluded: frozenset[str] = frozenset()
+    best: tuple[int, Draft, SceneGraph, EditDelta, list[CommandOutcome]] | None = None
     for attempt in range(LOOK_RETRIES + 1):
         draft, outcomes, delta = _run_commands(ctx, program, options, excluded)
-        graph, delta, outcomes, misfits = _looked(ctx, draft, outcomes, delta)
+        graph, delta, outcomes, misfits, fitted = _looked(ctx, draft, outcomes, delta)
+        if best is None or fitted > best[0]:
+            best = (fitted, draft, graph, delta, outcomes)
         if not misfits or attempt == LOOK_RETRIES:
             break
         logger.info("%s: %s do(es) not read as asked here; trying other assets", ctx.log.seq_id, sorted(misfits))
         excluded |= misfits
+    assert best is not None  # the loop runs at least once
+    _, draft, graph, delta, outcomes = best
     rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
     validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
     logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
@@ -144,9 +150,10 @@ def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions
 
 
 def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delta: EditDelta
-            ) -> tuple[SceneGraph, EditDelta, list[CommandOutcome], frozenset[str]]:
+            ) -> tuple[SceneGraph, EditDelta, list[CommandOutcome], frozenset[str], int]:
     """The edited graph after the look check (``editing.look_check``): exposure-matched delta and graph, outcomes
-    noting the gains, and the stored asset ids of added objects that read as another colour than asked."""
+    noting the gains, the stored asset ids of added objects that do not read as asked (after their gain), and
+    how many do."""
     def asset_of(asset_id: str) -> Asset:
         if asset_id not in draft.assets and ctx.bank is not None:
             draft.assets[asset_id] = ctx.bank.get(asset_id)
@@ -161,7 +168,7 @@ def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delt
     misfits = frozenset(stored_asset[n.node_id] for n in notes if n.seen is not None and not n.fitted)
     outcomes = [_with_look_notes(o, [n.describe() for n in notes if n.gain != 1.0 and n.node_id in nodes])
                 for o, nodes in zip(outcomes, _added_nodes(outcomes, matched))]
-    return graph, matched, outcomes, misfits
+    return graph, matched, outcomes, misfits, sum(n.fitted for n in notes)
 
 
 def _added_nodes(outcomes: list[CommandOutcome], delta: EditDelta) -> list[set[int]]:

@@ -64,7 +64,9 @@ class LookNote:
         wanted: the asked colour.
         seen: the colour the captioner named before any gain (``None``: too small to caption anywhere).
         gain: the exposure gain applied (``1.0``: none was needed or none fitted).
-        verified: a render (of the variant, when a gain is applied) reads as ``wanted``.
+        verified: a render (of the variant, when a gain is applied) reads as ``wanted`` in ``LOOK_SHARE`` of the
+            object's pixels.
+        final: the colour the captioner names on the last render (``None``: too small to caption).
     """
 
     node_id: int
@@ -72,6 +74,7 @@ class LookNote:
     seen: str | None
     gain: float
     verified: bool = False
+    final: str | None = None
 
     @property
     def fitted(self) -> bool:
@@ -192,7 +195,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
     for node_id, color in sorted(checks.items()):
         crops = _crops(renders, added[node_id], asset_of)
         seen, gain = exposure_gain(crops, color) if crops else (None, 1.0)
-        notes[node_id] = LookNote(node_id, color, seen, gain, verified=seen == color)
+        notes[node_id] = LookNote(node_id, color, seen, gain, verified=seen == color, final=seen)
         if gain != 1.0:
             gains[node_id] = gain
     out_delta, out_graph = delta, graph
@@ -208,7 +211,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
             variant = next(a for a in out_delta.added if a.node_id == node_id)
             track, share = _read(_crops(renders, variant, asset_of), checks[node_id])
             ok = track == checks[node_id] and share >= LOOK_SHARE
-            notes[node_id] = dataclasses.replace(notes[node_id], gain=gain, verified=ok)
+            notes[node_id] = dataclasses.replace(notes[node_id], gain=gain, verified=ok, final=track)
             further = _next_gain(gain)
             if not ok and further is not None:
                 unsure[node_id] = further
