@@ -36,7 +36,7 @@ from simsplat_core.editing.motion_requests import (
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
-from simsplat_core.scenario.vocabulary import VEHICLE
+from simsplat_core.scenario.vocabulary import PARKED, VEHICLE
 from simsplat_core.scene.pose_track import PoseTrack
 from simsplat_core.scene.transforms import poses_from_boxes
 
@@ -215,7 +215,7 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     behaviour = behaviour or Behaviour()
     kind = motion_kind(asset.category, asset.caption)
     if kind == VEHICLE and placed.parked and behaviour.is_empty:
-        return Motion.standing(xy, heading, steps, "parked")
+        return Motion.standing(xy, heading, steps, PARKED)
     cruise = max(DEFAULT_CRUISE_MPS, _flow_speed(draft.states, xy, heading, step)) if kind == VEHICLE else WALK_MPS
     start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
     plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
