@@ -116,7 +116,11 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
         graph, delta, outcomes, misfits, fitted = _looked(ctx, draft, outcomes, delta)
         if best is None or fitted > best[0]:
             best = (fitted, draft, graph, delta, outcomes)
-        if not misfits or attempt == LOOK_RETRIES:
+        if not misfits:
+            break
+        if attempt == LOOK_RETRIES:
+            logger.warning("%s: no asset tried reads as the asked colour everywhere; keeping the closest "
+                           "(the outcome's summary says how it reads)", ctx.log.seq_id)
             break
         logger.info("%s: %s do(es) not read as asked here; trying other assets", ctx.log.seq_id, sorted(misfits))
         excluded |= misfits

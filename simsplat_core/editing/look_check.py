@@ -219,7 +219,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
             break
         gains = {**gains, **unsure}
     for note in notes.values():
-        (logger.info if note.fitted else logger.warning)("look check: %s", note.describe())
+        logger.info("look check: %s", note.describe())
     return out_delta, out_graph, list(notes.values())
 
 
