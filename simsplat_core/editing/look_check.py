@@ -6,14 +6,17 @@ White, silver, grey and black differ only in lightness, so the fix is an exposur
 
 After the edited graph is built, every added node whose command asked an achromatic colour (vehicles and
 static objects; a pedestrian's clothes are two colours and are left alone) is rendered with the whole edited
-scene, occlusions included, at up to ``LOOK_FRAMES`` frames where it exists. The built-in captioner
+scene, occlusions included, at up to ``LOOK_FRAMES`` frames where it exists, from the cameras its box (grown by
+``BOX_MARGIN_M``) may show in (``look_renders``). The built-in captioner
 (``language.appearance.captioner.describe_track``, the same one that captions the scene for grounding) names
-its main colour from the crops with at least ``MIN_LOOK_PIXELS`` of its pixels. When it names another
-achromatic colour, the crops are re-captioned under the gains of ``BRIGHTER_GAINS`` (asked colour lighter)
-or ``DARKER_GAINS`` (darker), and the first gain under which the captioner names the asked colour becomes
-an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the
-variant, so a stored edit rebuilds to the same pixels. When no gain fits, or the object is too small to
-caption anywhere, the object is kept as it is and the returned note says so.
+its main colour from the crops with at least ``MIN_LOOK_PIXELS`` of its pixels; it reads as asked when the
+track's colour is the asked one and the crops that are cover ``LOOK_SHARE`` of its pixels. Otherwise the crops
+are re-captioned under the gains of ``BRIGHTER_GAINS`` (asked colour lighter) or ``DARKER_GAINS`` (darker), and
+the first gain under which they read as asked becomes an exposure variant of the asset
+(``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the variant, so a stored edit rebuilds to
+the same pixels. The gain is verified on a render of the variant and raised along its ladder when it falls
+short (``VERIFY_ROUNDS`` renders at most). A node that still does not read as asked is reported
+(``LookNote.fitted`` false): ``editing.apply`` then tries the program once more without that asset.
 
     delta, graph, notes = match_exposure(log, graph, delta, wanted, states, asset_of, build)
 """
@@ -29,12 +32,13 @@ import numpy as np
 from simsplat_core.color_names import ACHROMATIC_NAMES
 from simsplat_core.editing.asset_colors import exposure_suffix
 from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
-from simsplat_core.editing.renders import FrameRender, render_frames
+from simsplat_core.editing.renders import FrameRender, frame_views, render_frame
 from simsplat_core.editing.result import AddedNode, EditDelta
 from simsplat_core.language.appearance.captioner import describe_object, describe_track
 from simsplat_core.language.appearance.crops import ObjectCrop, crop_object
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.scene_view import CameraView
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -49,6 +53,8 @@ LOOK_SHARE = 0.98
 #: Gains tried, in order, when the asked colour is lighter / darker than what the object reads as.
 BRIGHTER_GAINS = (1.1, 1.2, 1.3, 1.45, 1.6, 1.8)
 DARKER_GAINS = (0.9, 0.8, 0.7, 0.6)
+#: A camera is rendered when the object's box grown by this much (m) may show in it (Gaussians reach past the box).
+BOX_MARGIN_M = 0.5
 #: Renders verifying (and, when needed, raising) the gains.
 VERIFY_ROUNDS = 2
 #: Categories whose colour is one body colour (a pedestrian's clothes are two).
@@ -99,6 +105,51 @@ def look_frames(states: AgentStates, object_id: str, count: int = LOOK_FRAMES) -
         return []
     picks = np.unique(np.round(np.linspace(0, valid.size - 1, min(count, valid.size))).astype(np.int64))
     return [int(states.frame_idx[valid[k]]) for k in picks]
+
+
+def box_corners(states: AgentStates, object_id: str, step: int, margin: float = 0.0) -> np.ndarray:
+    """``[8, 3]`` world corners of ``object_id`` 's box at ``step``, grown by ``margin`` metres on every side."""
+    row = states.index(object_id)
+    length, width, height = states.size[row] + 2.0 * margin
+    c, s = np.cos(states.heading[row, step]), np.sin(states.heading[row, step])
+    signs = np.array([[a, b, h] for a in (-0.5, 0.5) for b in (-0.5, 0.5) for h in (-0.5, 0.5)])
+    local = signs * np.array([length, width, height])  # [8, 3]
+    x, y = states.xy[row, step]
+    return np.stack([x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1],
+                     states.z[row, step] + local[:, 2]], axis=1)
+
+
+def sees(view: CameraView, points: np.ndarray) -> bool:
+    """Whether the box of ``points [N, 3]`` (world corners) may show in ``view``: the bounding rectangle of the
+    corners in front of the camera overlaps the image (always, when the box straddles the camera plane)."""
+    world_to_cam = np.linalg.inv(view.cam_to_world)
+    cam = points @ world_to_cam[:3, :3].T + world_to_cam[:3, 3]  # [N, 3]
+    front = cam[:, 2] > 0.1
+    if not front.any():
+        return False
+    if not front.all():
+        return True
+    uv = cam @ np.asarray(view.K).T
+    u, v = uv[:, 0] / uv[:, 2], uv[:, 1] / uv[:, 2]
+    return bool(u.max() >= 0 and u.min() < view.width and v.max() >= 0 and v.min() < view.height)
+
+
+def look_renders(graph: SceneGraph, log: SceneLog, states: AgentStates, object_ids: Sequence[str],
+                 frames: Sequence[int]) -> list[FrameRender]:
+    """Renders of ``graph`` at ``frames`` from the log's cameras that see a box of ``object_ids`` (frames no camera
+    sees them in are skipped): the look check's views, at a third of the cost of every camera."""
+    step_of = {int(f): k for k, f in enumerate(states.frame_idx)}
+    out = []
+    for frame in frames:
+        step = step_of[int(frame)]
+        rows = [o for o in object_ids if states.valid[states.index(o), step]]
+        if not rows:
+            continue
+        points = np.concatenate([box_corners(states, o, step, BOX_MARGIN_M) for o in rows])
+        views = [v for v in frame_views(log, int(frame)) if sees(v, points)]
+        if views:
+            out.append(render_frame(graph, int(frame), views))
+    return out
 
 
 def node_crops(renders: Sequence[FrameRender], node_id: int, object_id: str, category: str,
@@ -189,7 +240,8 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
     if not checks:
         return delta, graph, []
     frames = sorted({f for n in checks for f in look_frames(states, added[n].object_id)})
-    renders = list(render_frames(graph, log, frames))
+    objects = [added[n].object_id for n in checks]
+    renders = look_renders(graph, log, states, objects, frames)
     notes: dict[int, LookNote] = {}
     gains: dict[int, float] = {}
     for node_id, color in sorted(checks.items()):
@@ -205,7 +257,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
         out_delta = dataclasses.replace(delta, added=tuple(_with_gain(a, gains[a.node_id]) if a.node_id in gains
                                                            else a for a in delta.added))
         out_graph = build(out_delta)
-        renders = list(render_frames(out_graph, log, frames))
+        renders = look_renders(out_graph, log, states, objects, frames)
         unsure: dict[int, float] = {}
         for node_id, gain in gains.items():
             variant = next(a for a in out_delta.added if a.node_id == node_id)
@@ -238,5 +290,6 @@ def _with_gain(added: AddedNode, gain: float) -> AddedNode:
     return dataclasses.replace(added, asset_id=f"{added.asset_id}{VARIANT_SEP}{exposure_suffix(gain)}")
 
 
-__all__ = ["BRIGHTER_GAINS", "CHECKED_CATEGORIES", "DARKER_GAINS", "LOOK_FRAMES", "LOOK_SHARE", "MIN_LOOK_PIXELS",
-           "VERIFY_ROUNDS", "LookNote", "exposure_gain", "look_frames", "match_exposure", "node_crops"]
+__all__ = ["BOX_MARGIN_M", "BRIGHTER_GAINS", "CHECKED_CATEGORIES", "DARKER_GAINS", "LOOK_FRAMES", "LOOK_SHARE",
+           "MIN_LOOK_PIXELS", "VERIFY_ROUNDS", "LookNote", "box_corners", "exposure_gain", "look_frames",
+           "look_renders", "match_exposure", "node_crops", "sees"]

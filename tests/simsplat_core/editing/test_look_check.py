@@ -16,7 +16,14 @@ from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import node_factory
-from simsplat_core.editing.look_check import exposure_gain, look_frames, node_crops
+from simsplat_core.editing.look_check import (
+    MIN_LOOK_PIXELS,
+    box_corners,
+    exposure_gain,
+    look_frames,
+    look_renders,
+    node_crops,
+)
 from simsplat_core.editing.renders import render_frames
 from simsplat_core.language.appearance.captioner import describe_track
 from simsplat_core.language.appearance.crops import ObjectCrop
@@ -108,3 +115,20 @@ def test_an_asset_no_gain_can_make_white_is_swapped_for_another(edit_log, edit_g
         "unit.grey"
     edited = apply_edit(ctx, EditProgram.model_validate(PROGRAM))
     assert edited.delta.added[0].asset_id.split("~")[0] == "unit.white"
+
+
+def test_look_renders_only_the_cameras_that_see_the_object(edit_log, edit_graph, edit_language, engine):
+    bank = AssetBank.from_assets([_dim_white_car(0.85, "unit.white")])
+    ctx = EditContext.create(edit_log, _clear_background(edit_graph), edit_language, engine, bank)
+    edited = apply_edit(ctx, EditProgram.model_validate(PROGRAM))
+    added = edited.delta.added[0]
+    frames = look_frames(edited.states, added.object_id)
+    some = look_renders(edited.graph, edit_log, edited.states, [added.object_id], frames)
+    every = list(render_frames(edited.graph, edit_log, frames))
+    assert 0 < sum(len(f.cameras) for f in some) < sum(len(f.cameras) for f in every)  # 6 m ahead: front cameras
+    seen = {(f.frame_idx, c) for f in every for c, ids in zip(f.cameras, f.node_id)
+            if (ids == added.node_id).sum() >= MIN_LOOK_PIXELS}
+    assert seen <= {(f.frame_idx, c) for f in some for c in f.cameras}  # no view that could be captioned is skipped
+    box = box_corners(edited.states, added.object_id, 0)
+    assert box.shape == (8, 3) and np.allclose(box[:, :2].mean(axis=0), edited.states.xy[
+        edited.states.index(added.object_id), 0])
