@@ -453,6 +453,16 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
      [{"op": INS, AS: "traffic cone", PR: "behind",
        "placement.anchor.description": "the red saloon car at the intersection continuing straight",
        "behaviour": None}]),
+    # participles joined by "and" go on describing the anchor; an area after them is the anchor's, not the relation
+    ("Put a woman wearing a green jacket and blue jeans on the right side of the pedestrian in a green shirt "
+     "standing and waiting on the sidewalk ahead of the ego car.",
+     [{"op": INS, PR: "right_of", "placement.anchor.description":
+       "the pedestrian in a green shirt standing and waiting on the sidewalk ahead of the ego car",
+       "behaviour": None}]),
+    ("put a cone behind the truck parked and waiting at the curb",
+     [{"op": INS, PR: "behind", "placement.anchor.description": "the truck parked and waiting at the curb"}]),
+    ("add a car behind the bus and make it turn left",
+     [{"op": INS, PR: "behind", "placement.anchor.description": "the bus", "behaviour.turn": "left"}]),
     ("put a barrier behind the truck that is stopped at the light",
      [{"op": INS, PR: "behind", "placement.anchor.description": "the truck that is stopped at the light"}]),
     ("place a red car behind the van driving in the opposite lane",
