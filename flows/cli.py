@@ -157,7 +157,7 @@ def run(
     if sequences == 0 and not list_logs(ArtifactStore(store)):
         raise typer.BadParameter(
             f"no driving log in {store}/logs: pass --sequences N to generate synthetic ones, "
-            "or ingest real ones first (simsplat ingest av2 / waymo-frame)",
+            "or ingest real ones first (simsplat ingest av2 / waymo-frame / waymo-scenario)",
             param_hint="--sequences",
         )
     result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
@@ -668,6 +668,16 @@ def ingest_waymo_frame(
 ) -> None:
     """Decode a Waymo Frame TFRecord (all its records, one sequence) into OUT/logs/<seq_id>/."""
     _ingest("waymo-frame", path, out, image_scale)
+
+
+@ingest_app.command("waymo-scenario")
+def ingest_waymo_scenario(
+    path: Annotated[Path, typer.Argument(help="A Waymo Open Motion Scenario TFRecord file.")],
+    out: Annotated[str, typer.Option(help="Artifact store root.")],
+) -> None:
+    """Decode the first Scenario of a Waymo Open Motion TFRecord (tracks, ego, map; no images) into
+    OUT/logs/<seq_id>/."""
+    _ingest("waymo-scenario", path, out, 1.0)
 
 
 @ingest_app.command("av2")

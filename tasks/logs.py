@@ -104,20 +104,22 @@ def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> S
 
 @task(name="ingest-real-log", retries=0, cache_policy=NO_CACHE)
 def ingest_real_log(store_root: str, source: str, path: str, image_scale: float = 1.0) -> StoredLog:
-    """Decode a real driving log (``source`` = ``waymo-frame`` or ``av2``) and store it.
+    """Decode a real driving log (``source`` = ``waymo-frame``, ``waymo-scenario`` or ``av2``) and store it.
 
     Decoding always runs (the seq_id comes from the file); the write is skipped when the store already
     holds an identical log.
     """
-    from simsplat_core.data import load_av2_log, load_waymo_frames
+    from simsplat_core.data import load_av2_log, load_waymo_frames, load_waymo_scenario
 
     started = time.perf_counter()
     if source == "waymo-frame":
         log = load_waymo_frames(Path(path), image_scale=image_scale)
+    elif source == "waymo-scenario":
+        log = load_waymo_scenario(Path(path))
     elif source == "av2":
         log = load_av2_log(Path(path))
     else:
-        raise ValueError(f"unknown log source {source!r}: expected 'waymo-frame' or 'av2'")
+        raise ValueError(f"unknown log source {source!r}: expected 'waymo-frame', 'waymo-scenario' or 'av2'")
     summary = summarize_log(log)
     provenance = {"source_path": str(path), "image_scale": image_scale, "summary": summary.to_dict()}
     written = write_scene_log(ArtifactStore(store_root), log, provenance=provenance)

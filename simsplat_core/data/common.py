@@ -2,16 +2,64 @@
 
 from __future__ import annotations
 
+import json
 import re
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar
 
 import numpy as np
 
 from simsplat_core.data.errors import CorruptLogError
+from simsplat_core.data.protowire import ProtoDecodeError
+from simsplat_core.data.tfrecord import iter_tfrecords
 from simsplat_core.geometry import box_corners_batch, invert_transform, project_box_bounds, transform_points
 from simsplat_core.types import CameraImage, LogValidationError, SceneLog, Track
+
+_Parsed = TypeVar("_Parsed")
+
+#: ``SceneLog.metadata`` key of explicit lane connectivity: JSON ``{lane feature id: [successor ids]}``.
+LANE_SUCCESSORS_KEY = "lane_successors"
+
+
+def lane_successors(log: SceneLog) -> dict[str, list[str]] | None:
+    """The explicit lane successors a loader stored (``LANE_SUCCESSORS_KEY``), or ``None`` when absent.
+
+    Pass the result as ``LaneGraph.from_features(..., successors=...)``.
+    """
+    raw = log.metadata.get(LANE_SUCCESSORS_KEY)
+    if raw is None:
+        return None
+    value = json.loads(raw)
+    if not isinstance(value, dict):
+        raise ValueError(f"{log.seq_id}: metadata {LANE_SUCCESSORS_KEY!r} is not a JSON object")
+    return {str(k): [str(v) for v in vs] for k, vs in value.items()}
+
+
+def parse_tfrecords(path: Path, parse: Callable[[bytes], _Parsed]) -> list[tuple[int, _Parsed]]:
+    """``(record index, parse(record data))`` for every CRC-verified record of a TFRecord file, in file order.
+
+    Raises:
+        CorruptLogError: framing or checksum damage (see ``tfrecord.iter_tfrecords``), a
+            ``ProtoDecodeError`` from ``parse`` (re-raised naming the record, its byte offset and the
+            field path), or a file without records.
+    """
+    parsed = []
+    for record in iter_tfrecords(path):
+        try:
+            parsed.append((record.index, parse(record.data)))
+        except ProtoDecodeError as exc:
+            raise CorruptLogError(
+                path,
+                f"record {record.index} (byte offset {record.offset}), field {exc.field_path!r}",
+                exc.reason + (f" (at byte {exc.offset} of the record)" if exc.offset >= 0 else ""),
+                record_index=record.index,
+                offset=record.offset,
+            ) from exc
+    if not parsed:
+        raise CorruptLogError(path, "file", "no records")
+    return parsed
 
 
 def safe_seq_id(name: str) -> str:

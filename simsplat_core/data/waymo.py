@@ -36,10 +36,15 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from simsplat_core.data.common import BoxObservation, boxes_visible, build_track, safe_seq_id, validated
+from simsplat_core.data.common import (
+    BoxObservation,
+    boxes_visible,
+    build_track,
+    parse_tfrecords,
+    safe_seq_id,
+    validated,
+)
 from simsplat_core.data.errors import CorruptLogError
-from simsplat_core.data.protowire import ProtoDecodeError
-from simsplat_core.data.tfrecord import iter_tfrecords
 from simsplat_core.data.waymo_proto import CAMERA_NAMES, LABEL_TYPES, WaymoCalibration, WaymoFrame, parse_frame
 from simsplat_core.geometry import CV_TO_SENSOR, invert_transform, make_transform, yaw_matrix, yaw_of_rotation
 from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, Track, node_type_for_category, split_for_frame
@@ -80,25 +85,6 @@ def decode_jpeg(jpeg: bytes, expected_size: tuple[int, int], out_size: tuple[int
         bgr = cv2.resize(bgr, tuple(out_size), interpolation=cv2.INTER_AREA)
     rgb = cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
     return rgb.astype(np.float32) * np.float32(1.0 / 255.0)
-
-
-def _read_frames(path: Path) -> list[tuple[int, WaymoFrame]]:
-    """``(record index, frame)`` for every record of the file, in file order."""
-    frames = []
-    for record in iter_tfrecords(path):
-        try:
-            frames.append((record.index, parse_frame(record.data)))
-        except ProtoDecodeError as exc:
-            raise CorruptLogError(
-                path,
-                f"record {record.index} (byte offset {record.offset}), field {exc.field_path!r}",
-                exc.reason + (f" (at byte {exc.offset} of the record)" if exc.offset >= 0 else ""),
-                record_index=record.index,
-                offset=record.offset,
-            ) from exc
-    if not frames:
-        raise CorruptLogError(path, "file", "no records")
-    return frames
 
 
 def _camera_images(
@@ -251,7 +237,7 @@ def load_waymo_frames(path: str | Path, image_scale: float = 1.0, seq_id: str | 
         raise ValueError(f"image_scale must be > 0, got {image_scale}")
     path = Path(path)
     t0 = time.perf_counter()
-    records = _read_frames(path)
+    records = parse_tfrecords(path, parse_frame)
     names = {frame.context_name for _, frame in records}
     if len(names) > 1:
         raise CorruptLogError(path, "field 'Frame.context.name'", f"records mix segments {sorted(names)}")
