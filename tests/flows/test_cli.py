@@ -34,6 +34,7 @@ def _tree_digest(root: Path) -> dict[str, str]:
         ["world"],
         ["ingest"],
         ["ingest", "waymo-frame"],
+        ["ingest", "waymo-scenario"],
         ["ingest", "av2"],
         ["inspect"],
         ["reconstruct"],
@@ -100,6 +101,21 @@ def test_ingest_av2_and_corrupt_waymo_leaves_store_unchanged(prefect_api_url, sh
     assert result.exit_code != 0
     assert "corrupt.tfrecord" in str(result.exception) + result.output
     assert _tree_digest(store) == before
+
+
+@pytest.mark.orchestration
+@pytest.mark.shared_data
+def test_ingest_waymo_scenario_reads_back(prefect_api_url, shared_data, tmp_path):
+    store = ArtifactStore(str(tmp_path / "store"))
+    sample = shared_data / "waymo" / "motion_data_one_scenario.tfrecord"
+    result = runner.invoke(app, ["ingest", "waymo-scenario", str(sample), "--out", store.root])
+    assert result.exit_code == 0, result.output
+    assert list_logs(store) == ["637f20cafde22ff8"]
+    log = read_scene_log(store, "637f20cafde22ff8")
+    assert log.source == "waymo-scenario" and log.num_frames == 91 and not log.images
+    assert len(log.tracks) == 82 and len(log.map_features) == 289
+    np.testing.assert_array_equal(log.ego_poses[0], np.eye(4))
+    assert log.metadata["current_time_index"] == "10" and "traffic_signals" in log.metadata
 
 
 @pytest.mark.orchestration
