@@ -146,16 +146,18 @@ class CollisionSteps:
 
 
 def collision_steps(states: AgentStates, rows: Sequence[int] | np.ndarray,
-                    baseline: AgentStates | None = None) -> CollisionSteps:
+                    baseline: AgentStates | None = None, *, count_log_pairs: bool = False) -> CollisionSteps:
     """Collisions of agents ``rows`` with everyone, per step, split by the other agent's kind.
 
-    ``baseline`` (the unedited scenario on the same steps): a pair of agents that already overlapped there
-    at that step is the log's overlap too (an edited car whose log box touched a parked car's keeps
-    touching it before the edit changes anything), not a collision.
+    Two agents that both replay their log are not a collision of the edit (``log_pairs``), unless
+    ``count_log_pairs`` (a rollout, where every agent's path is the predictor's). ``baseline`` (the unedited
+    scenario on the same steps): a pair of agents that already overlapped there at that step is the log's
+    overlap too (an edited car whose log box touched a parked car's keeps touching it before the edit changes
+    anything), not a collision.
     """
     rows = _as_rows(states, rows)
     hit = overlap_rows(states, rows)
-    is_log = np.array([s == "log" for s in states.sources])
+    is_log = np.array([s == "log" and not count_log_pairs for s in states.sources])
     log_pair = np.broadcast_to((is_log[rows][:, None] & is_log[None])[..., None], hit.shape).copy()  # [R, A, T]
     if baseline is not None:
         log_pair |= _baseline_overlap(states, rows, baseline)

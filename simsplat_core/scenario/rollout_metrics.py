@@ -21,7 +21,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -46,8 +46,6 @@ STOP_SPEED_MPS = 0.5
 STOP_STEPS = 10
 #: Columns of :func:`rates` (the issue's table), in table order.
 FAILURE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "offroad", "kinematic", "failure")
-#: ``source`` the agents get for the collision check of :func:`scenario_failures` (any but ``"log"``).
-_CHECKED_SOURCE = "refined"
 
 
 def _check_same_steps(rollout: AgentStates, log: AgentStates, start_step: int) -> None:
@@ -213,8 +211,7 @@ def scenario_failures(states: AgentStates, map_ctx: MapContext, rows: Sequence[i
     there at the same step is the log's overlap and does not count (``metrics.collision_steps``).
     """
     rows = np.arange(states.num_agents) if rows is None else np.asarray(rows, dtype=np.int64).reshape(-1)
-    checked = replace(states, sources=(_CHECKED_SOURCE,) * states.num_agents)
-    coll = collision_steps(checked, rows, baseline)
+    coll = collision_steps(states, rows, baseline, count_log_pairs=True)
     off = offroad_steps(states, map_ctx, rows).any(axis=1)  # [R]
     kin = kinematic_violations(states, rows=rows).any(axis=1)  # [R]
     veh, ped, sta = coll.vehicle.any(axis=1), coll.pedestrian.any(axis=1), coll.static.any(axis=1)  # [R]
