@@ -419,9 +419,20 @@ def eval_grounding(
 ) -> None:
     """Grounding benchmark (SIMSplat Tables 2 and 3): paraphrased queries from the logs' ground truth,
     accuracy and vIoU per category for the baselines, this method and its feature ablation."""
+    from tasks.grounding_eval import evaluate_grounding_run
+
+    seq_ids = _aligned_sequences(store, seq)
+    try:
+        result = evaluate_grounding_run.fn(store, seq_ids, out)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    _print_grounding(result)
+
+
+def _aligned_sequences(store: str, seq: list[str] | None) -> list[str]:
+    """``seq`` (default: every log of ``store`` with a language scene); a bad parameter naming the ones without."""
     from storage import ArtifactStore, list_logs
     from storage.language_scenes import list_language_scenes
-    from tasks.grounding_eval import evaluate_grounding_run
 
     artifacts = ArtifactStore(store)
     aligned = [s for s in list_logs(artifacts) if list_language_scenes(artifacts, s)]
@@ -430,11 +441,7 @@ def eval_grounding(
     if missing or not seq_ids:
         raise typer.BadParameter(f"no language scene for {missing or 'any log'} in {store}; aligned: {aligned} "
                                  "(run `simsplat run` or the alignment stage first)", param_hint="--seq")
-    try:
-        result = evaluate_grounding_run.fn(store, seq_ids, out)
-    except (FileNotFoundError, ValueError) as exc:
-        raise typer.BadParameter(str(exc)) from exc
-    _print_grounding(result)
+    return seq_ids
 
 
 def _print_grounding(result) -> None:
@@ -471,17 +478,9 @@ def eval_editing(
     editor and the ChatSim-like / OmniRe-like variants, infeasible prompts refused, and edit fidelity against the
     world's own rendering of each edit."""
     from flows.progress import StepBars
-    from storage import ArtifactStore, list_logs
-    from storage.language_scenes import list_language_scenes
     from tasks.editing_eval import evaluate_editing_run
 
-    artifacts = ArtifactStore(store)
-    aligned = [s for s in list_logs(artifacts) if list_language_scenes(artifacts, s)]
-    seq_ids = list(seq) if seq else aligned
-    missing = [s for s in seq_ids if s not in aligned]
-    if missing or not seq_ids:
-        raise typer.BadParameter(f"no language scene for {missing or 'any log'} in {store}; aligned: {aligned} "
-                                 "(run `simsplat run` or the alignment stage first)", param_hint="--seq")
+    seq_ids = _aligned_sequences(store, seq)
     names = [n.strip() for m in methods or () for n in m.split(",") if n.strip()] or None
     try:
         with StepBars(headline=""):

@@ -29,16 +29,16 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from simsplat_core import geometry
 from simsplat_core.color_names import ACHROMATIC_NAMES
 from simsplat_core.editing.asset_colors import exposure_suffix
 from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
 from simsplat_core.editing.renders import FrameRender, frame_views, render_frame
 from simsplat_core.editing.result import AddedNode, EditDelta
-from simsplat_core.language.appearance.captioner import describe_object, describe_track
+from simsplat_core.language.appearance.captioner import describe_object, describe_track, subtype_from_size
 from simsplat_core.language.appearance.crops import ObjectCrop, crop_object
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene.graph import SceneGraph
-from simsplat_core.scene_view import CameraView
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -108,30 +108,11 @@ def look_frames(states: AgentStates, object_id: str, count: int = LOOK_FRAMES) -
 
 
 def box_corners(states: AgentStates, object_id: str, step: int, margin: float = 0.0) -> np.ndarray:
-    """``[8, 3]`` world corners of ``object_id`` 's box at ``step``, grown by ``margin`` metres on every side."""
+    """``[8, 3]`` world corners (``geometry.box_corners`` order) of ``object_id`` 's box at ``step``, grown by
+    ``margin`` metres on every side."""
     row = states.index(object_id)
-    length, width, height = states.size[row] + 2.0 * margin
-    c, s = np.cos(states.heading[row, step]), np.sin(states.heading[row, step])
-    signs = np.array([[a, b, h] for a in (-0.5, 0.5) for b in (-0.5, 0.5) for h in (-0.5, 0.5)])
-    local = signs * np.array([length, width, height])  # [8, 3]
-    x, y = states.xy[row, step]
-    return np.stack([x + c * local[:, 0] - s * local[:, 1], y + s * local[:, 0] + c * local[:, 1],
-                     states.z[row, step] + local[:, 2]], axis=1)
-
-
-def sees(view: CameraView, points: np.ndarray) -> bool:
-    """Whether the box of ``points [N, 3]`` (world corners) may show in ``view``: the bounding rectangle of the
-    corners in front of the camera overlaps the image (always, when the box straddles the camera plane)."""
-    world_to_cam = np.linalg.inv(view.cam_to_world)
-    cam = points @ world_to_cam[:3, :3].T + world_to_cam[:3, 3]  # [N, 3]
-    front = cam[:, 2] > 0.1
-    if not front.any():
-        return False
-    if not front.all():
-        return True
-    uv = cam @ np.asarray(view.K).T
-    u, v = uv[:, 0] / uv[:, 2], uv[:, 1] / uv[:, 2]
-    return bool(u.max() >= 0 and u.min() < view.width and v.max() >= 0 and v.min() < view.height)
+    center = np.array([*states.xy[row, step], states.z[row, step]])
+    return geometry.box_corners(center, states.size[row] + 2.0 * margin, float(states.heading[row, step]))
 
 
 def look_renders(graph: SceneGraph, log: SceneLog, states: AgentStates, object_ids: Sequence[str],
@@ -145,8 +126,9 @@ def look_renders(graph: SceneGraph, log: SceneLog, states: AgentStates, object_i
         rows = [o for o in object_ids if states.valid[states.index(o), step]]
         if not rows:
             continue
-        points = np.concatenate([box_corners(states, o, step, BOX_MARGIN_M) for o in rows])
-        views = [v for v in frame_views(log, int(frame)) if sees(v, points)]
+        boxes = [box_corners(states, o, step, BOX_MARGIN_M) for o in rows]
+        views = [v for v in frame_views(log, int(frame)) if any(
+            geometry.project_box_bounds(box, v.K, v.cam_to_world, v.width, v.height) is not None for box in boxes)]
         if views:
             out.append(render_frame(graph, int(frame), views))
     return out
@@ -171,13 +153,17 @@ def node_crops(renders: Sequence[FrameRender], node_id: int, object_id: str, cat
     return out
 
 
-def _read(crops: Sequence[ObjectCrop], wanted: str, gain: float = 1.0) -> tuple[str, float]:
-    """``(main colour of the track, share of the crops' area whose own main colour is wanted)`` under ``gain``."""
+def _read(crops: Sequence[ObjectCrop], wanted: str, gain: float = 1.0) -> tuple[str, float, list[str]]:
+    """``(main colour of the track, share of the crops' area whose own main colour is wanted, each crop's main
+    colour)`` under ``gain``; every crop is described once."""
     if gain != 1.0:
         crops = [dataclasses.replace(c, rgb=np.clip(c.rgb * gain, 0.0, 1.0).astype(np.float32)) for c in crops]
+    subtype = subtype_from_size(crops[0].category, np.median([c.box_size for c in crops], axis=0))
+    views = [describe_object(c.rgb, c.mask, c.category, c.box_size, subtype) for c in crops]
+    names = [v.colors[0] for v in views]
     area = np.array([c.area for c in crops], dtype=np.float64)
-    hits = np.array([describe_object(c.rgb, c.mask, c.category, c.box_size).colors[0] == wanted for c in crops])
-    return describe_track(crops).colors[0], float(area[hits].sum() / max(area.sum(), 1.0))
+    hits = np.array([name == wanted for name in names])
+    return describe_track(crops, views=views).colors[0], float(area[hits].sum() / max(area.sum(), 1.0)), names
 
 
 def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]:
@@ -189,15 +175,17 @@ def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]
     Raises:
         ValueError: no crops.
     """
-    seen, share = _read(crops, wanted)
+    if not crops:
+        raise ValueError("exposure_gain needs at least one crop")
+    seen, share, names = _read(crops, wanted)
     if (seen == wanted and share >= LOOK_SHARE) or seen not in ACHROMATIC_NAMES or wanted not in ACHROMATIC_NAMES:
         return seen, 1.0
-    lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(seen)
-    if seen == wanted:  # the track reads right but parts of it do not: lighter if most of the rest is darker
-        lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(_darker_or_lighter(crops, wanted))
+    # the track reads right but parts of it do not: lighter if most of the rest reads darker
+    off = _main_other(crops, names, wanted) if seen == wanted else seen
+    lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(off)
     best = (share if seen == wanted else -1.0, 1.0)
     for gain in BRIGHTER_GAINS if lighter else DARKER_GAINS:
-        track, part = _read(crops, wanted, gain)
+        track, part, _ = _read(crops, wanted, gain)
         if track == wanted and part >= LOOK_SHARE:
             return seen, gain
         if track == wanted and part > best[0]:
@@ -205,11 +193,11 @@ def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]
     return seen, best[1]
 
 
-def _darker_or_lighter(crops: Sequence[ObjectCrop], wanted: str) -> str:
-    """The achromatic name the crops that do not read as ``wanted`` mostly read as (by area)."""
+def _main_other(crops: Sequence[ObjectCrop], names: Sequence[str], wanted: str) -> str:
+    """The achromatic name the crops that do not read as ``wanted`` mostly read as (by area; ``names``: each
+    crop's main colour)."""
     votes: dict[str, float] = {}
-    for c in crops:
-        name = describe_object(c.rgb, c.mask, c.category, c.box_size).colors[0]
+    for c, name in zip(crops, names):
         if name != wanted and name in ACHROMATIC_NAMES:
             votes[name] = votes.get(name, 0.0) + c.area
     return max(votes, key=votes.__getitem__) if votes else wanted
@@ -261,7 +249,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
         unsure: dict[int, float] = {}
         for node_id, gain in gains.items():
             variant = next(a for a in out_delta.added if a.node_id == node_id)
-            track, share = _read(_crops(renders, variant, asset_of), checks[node_id])
+            track, share, _ = _read(_crops(renders, variant, asset_of), checks[node_id])
             ok = track == checks[node_id] and share >= LOOK_SHARE
             notes[node_id] = dataclasses.replace(notes[node_id], gain=gain, verified=ok, final=track)
             further = _next_gain(gain)
@@ -292,4 +280,4 @@ def _with_gain(added: AddedNode, gain: float) -> AddedNode:
 
 __all__ = ["BOX_MARGIN_M", "BRIGHTER_GAINS", "CHECKED_CATEGORIES", "DARKER_GAINS", "LOOK_FRAMES", "LOOK_SHARE",
            "MIN_LOOK_PIXELS", "VERIFY_ROUNDS", "LookNote", "box_corners", "exposure_gain", "look_frames",
-           "look_renders", "match_exposure", "node_crops", "sees"]
+           "look_renders", "match_exposure", "node_crops"]

@@ -35,7 +35,9 @@ from simsplat_core.editing.motion_requests import (
 )
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
-from simsplat_core.scenario.agents import EGO_ID, AgentStates
+from simsplat_core.geometry import wrap_angle
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scenario.vocabulary import PARKED, VEHICLE
 from simsplat_core.scene.pose_track import PoseTrack
 from simsplat_core.scene.transforms import poses_from_boxes
@@ -138,8 +140,8 @@ def _flow_speed(states: AgentStates, xy: np.ndarray, heading: float, step: int) 
     side = np.array([-forward[1], forward[0]])
     rel = states.xy[:, step] - np.asarray(xy, np.float64)[None]  # [A, 2]
     behind, lateral = -(rel @ forward), np.abs(rel @ side)
-    same_way = np.abs(np.angle(np.exp(1j * (states.heading[:, step] - heading)))) <= FLOW_HEADING_RAD
-    vehicle = np.array([c == VEHICLE or o == EGO_ID for c, o in zip(states.categories, states.object_ids)])
+    same_way = np.abs(wrap_angle(states.heading[:, step] - heading)) <= FLOW_HEADING_RAD
+    vehicle = np.array([agent_kind(c) == VEHICLE for c in states.categories])  # the ego's category is vehicle
     near = (behind > 0) & (behind <= FLOW_BEHIND_M) & (lateral <= FLOW_LATERAL_M)
     ok = states.valid[:, step] & vehicle & same_way & near
     if not ok.any():

@@ -174,10 +174,12 @@ def _vote(weights: dict[str, float]) -> tuple[str, float]:
     return name, weights[name] / total
 
 
-def describe_track(crops: Sequence[ObjectCrop], subtype_hint: str | None = None) -> AppearanceCaption:
+def describe_track(crops: Sequence[ObjectCrop], subtype_hint: str | None = None,
+                   views: Sequence[AppearanceCaption] | None = None) -> AppearanceCaption:
     """One caption for an object seen in several crops (frames and cameras).
 
-    Every crop is described by ``describe_object``; each colour slot (main and second colour, or
+    Every crop is described by ``describe_object`` (``views``: those descriptions, already made, one per crop,
+    with the same ``subtype_hint``); each colour slot (main and second colour, or
     upper and lower clothing) is decided by a vote of the crops' names weighted by mask area, except
     that silver wins over white with ``SILVER_OVER_WHITE_SHARE`` of the area; the subtype comes from
     the hint or the median box size (then, for signs, the voted colour).
@@ -193,9 +195,12 @@ def describe_track(crops: Sequence[ObjectCrop], subtype_hint: str | None = None)
     category = crops[0].category
     box = np.median(np.stack([np.asarray(c.box_size, dtype=np.float64) for c in crops]), axis=0)
     subtype = subtype_hint or subtype_from_size(category, box)
+    if views is not None and len(views) != len(crops):
+        raise ValueError(f"describe_track got {len(views)} views for {len(crops)} crops")
     slots: list[dict[str, float]] = [defaultdict(float), defaultdict(float)]
-    for crop in crops:
-        cap = describe_object(crop.rgb, crop.mask, category, crop.box_size, subtype_hint or subtype)
+    for k, crop in enumerate(crops):
+        cap = views[k] if views is not None else describe_object(crop.rgb, crop.mask, category, crop.box_size,
+                                                                 subtype_hint or subtype)
         for slot, name in zip(slots, cap.colors):
             slot[name] += crop.area
     first, share1 = _vote(slots[0])
