@@ -1,0 +1,1 @@
+"""Multi-agent motion: the ``MotionPredictor`` protocol, the reactive traffic model and refinement."""
