@@ -6,12 +6,23 @@ Vectorised with numpy, metres, world (or any common) frame:
 * oriented-box overlap by the separating-axis test, vectorised over frames and agent pairs (``footprints_overlap``;
   the world's population step rejects candidates with it);
 * signed distances of box corners to the drivable area's boundary (``corner_road_distances``,
-  ``offroad``): positive inside the drivable area, negative outside.
+  ``offroad``): positive inside the drivable area, negative outside;
+* on maps with road edges but no drivable polygons (Waymo Open Motion), Waymax's definition
+  (``waymax.metrics.roadgraph.compute_signed_distance_to_nearest_road_edge_point``): the distance to the
+  nearest road-edge segment, signed by the side of that segment the point is on (``polyline_segments``,
+  ``signed_road_edge_distance``, ``offroad_by_road_edges``). Waymax's sign is the opposite of ours
+  (positive = off-road there); ours stays positive on the road like the polygon distances.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+#: Side of a road edge's direction where the road is, in Waymo Open Motion's map (and Waymax): the
+#: road lies to the LEFT of each road-edge polyline (Waymax: ``cross(point - edge, edge_dir) > 0``, the
+#: point to the right, is off-road). Checked on the WOMD sample: logged vehicles are on the left.
+ROAD_EDGE_ROAD_SIDE = "left"
+_EDGE_CHUNK = 256  # query points per vectorised block of ``signed_road_edge_distance``
 
 
 def points_in_polygon(xy: np.ndarray, polygon: np.ndarray) -> np.ndarray:
@@ -178,3 +189,123 @@ def offroad(
             dist = np.minimum(dist, segment_distances(flat[rows], a, b).min(axis=1))
         outside[rows] = dist > tolerance_m
     return np.asarray(outside.reshape(corners.shape[:-1]).any(axis=-1))
+
+
+def polyline_segments(polylines: list[np.ndarray] | tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray,
+                                                                                 np.ndarray, np.ndarray]:
+    """The segments of ``[P_k, 2+]`` polylines, with their neighbours along the same polyline.
+
+    Returns:
+        ``(seg_a [E, 2], seg_b [E, 2], next_seg [E], prev_seg [E])``: segment ``e`` runs ``seg_a[e] ->
+        seg_b[e]`` (polyline order kept); ``next_seg`` / ``prev_seg`` index the segment that continues /
+        precedes it on the same polyline, ``-1`` at the polyline's ends (a closed polyline, first point
+        equal to the last, wraps around). Zero-length segments are dropped.
+    """
+    seg_a, seg_b, nxt, prv = [], [], [], []
+    offset = 0
+    for line in polylines:
+        pts = np.asarray(line, dtype=np.float64)[:, :2]
+        if len(pts) >= 2:
+            keep = np.concatenate([[True], np.linalg.norm(np.diff(pts, axis=0), axis=1) > 1e-6])
+            pts = pts[keep]
+        if len(pts) < 2:
+            continue
+        n = len(pts) - 1
+        idx = offset + np.arange(n)
+        closed = n >= 3 and bool(np.linalg.norm(pts[0] - pts[-1]) <= 1e-6)
+        nxt_k = np.append(idx[1:], idx[0] if closed else -1)
+        prv_k = np.concatenate([[idx[-1] if closed else -1], idx[:-1]])
+        seg_a.append(pts[:-1])
+        seg_b.append(pts[1:])
+        nxt.append(nxt_k)
+        prv.append(prv_k)
+        offset += n
+    if not seg_a:
+        return np.zeros((0, 2)), np.zeros((0, 2)), np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return (np.concatenate(seg_a), np.concatenate(seg_b), np.concatenate(nxt).astype(np.int64),
+            np.concatenate(prv).astype(np.int64))
+
+
+def signed_road_edge_distance(
+    xy: np.ndarray,
+    seg_a: np.ndarray,
+    seg_b: np.ndarray,
+    next_seg: np.ndarray | None = None,
+    prev_seg: np.ndarray | None = None,
+    road_side: str = ROAD_EDGE_ROAD_SIDE,
+) -> np.ndarray:
+    """``[N]`` signed distance of ``[N, 2]`` points to the nearest road-edge segment: positive on the road
+    side (``road_side`` of the segment's direction, ``"left"`` or ``"right"``), negative off it, ``+inf``
+    without segments (nothing is off-road on a map without edges).
+
+    Where the nearest point is a vertex joining two segments of one polyline (``next_seg`` / ``prev_seg``
+    from :func:`polyline_segments`), the side is taken against the sum of both unit directions (the
+    vertex's bisector), which is right at convex and concave bends alike (Waymax compares the two
+    half-planes instead, and calls a point beyond a convex corner on-road).
+    """
+    if road_side not in ("left", "right"):
+        raise ValueError(f"road_side must be 'left' or 'right', got {road_side!r}")
+    xy = np.atleast_2d(np.asarray(xy, dtype=np.float64))[:, :2]
+    out = np.full(len(xy), np.inf)
+    if len(seg_a) == 0 or len(xy) == 0:
+        return out
+    e = len(seg_a)
+    next_seg = np.full(e, -1) if next_seg is None else np.asarray(next_seg, dtype=np.int64)
+    prev_seg = np.full(e, -1) if prev_seg is None else np.asarray(prev_seg, dtype=np.int64)
+    ab = seg_b - seg_a  # [E, 2]
+    length2 = np.maximum((ab * ab).sum(-1), 1e-12)
+    unit = ab / np.sqrt(length2)[:, None]
+    side = 1.0 if road_side == "left" else -1.0
+    seg_lo, seg_hi = np.minimum(seg_a, seg_b), np.maximum(seg_a, seg_b)  # [E, 2] segment bounding boxes
+    for start in range(0, len(xy), _EDGE_CHUNK):
+        p = xy[start:start + _EDGE_CHUNK]  # [n, 2]
+        # Candidates: segments whose bounding box is no farther from the chunk's than some segment's far end
+        # is from every corner of it (an upper bound of each point's nearest distance).
+        lo, hi = p.min(axis=0), p.max(axis=0)
+        box = np.array([[lo[0], lo[1]], [hi[0], lo[1]], [hi[0], hi[1]], [lo[0], hi[1]]])  # [4, 2]
+        upper = np.sqrt(((box[None] - seg_a[:, None]) ** 2).sum(-1)).max(axis=1).min()
+        gap = np.maximum(np.maximum(seg_lo - hi, lo - seg_hi), 0.0)  # [E, 2]
+        cand = np.flatnonzero(np.sqrt((gap ** 2).sum(-1)) <= upper + 1e-9)  # [C], never empty
+        rel = p[:, None, :] - seg_a[cand][None]  # [n, C, 2]
+        t_c = np.clip((rel * ab[cand][None]).sum(-1) / length2[cand][None], 0.0, 1.0)  # [n, C]
+        d2_c = ((rel - t_c[..., None] * ab[cand][None]) ** 2).sum(-1)
+        best = np.argmin(d2_c, axis=1)  # [n]
+        k = cand[best]
+        rows = np.arange(len(p))
+        tk = t_c[rows, best]
+        nearest = seg_a[k] + tk[:, None] * ab[k]
+        direction = unit[k].copy()
+        at_end = (tk >= 1.0 - 1e-9) & (next_seg[k] >= 0)
+        at_start = (tk <= 1e-9) & (prev_seg[k] >= 0)
+        direction[at_end] += unit[next_seg[k[at_end]]]
+        direction[at_start] += unit[prev_seg[k[at_start]]]
+        flat = np.linalg.norm(direction, axis=1) < 1e-9  # a hairpin: the two directions cancel
+        direction[flat] = unit[k[flat]]
+        to_p = p - nearest
+        cross = direction[:, 0] * to_p[:, 1] - direction[:, 1] * to_p[:, 0]  # > 0: left of the edge
+        dist = np.sqrt(d2_c[rows, best])
+        out[start:start + len(p)] = np.where(side * cross >= 0.0, dist, -dist)
+    return out
+
+
+def offroad_by_road_edges(
+    center: np.ndarray,
+    heading: np.ndarray,
+    size: np.ndarray,
+    seg_a: np.ndarray,
+    seg_b: np.ndarray,
+    next_seg: np.ndarray | None = None,
+    prev_seg: np.ndarray | None = None,
+    tolerance_m: float = 0.0,
+    road_side: str = ROAD_EDGE_ROAD_SIDE,
+) -> np.ndarray:
+    """``[T]`` bool: some box corner lies more than ``tolerance_m`` on the non-road side of its nearest
+    road edge (Waymax ``is_offroad``; see :func:`signed_road_edge_distance`).
+
+    Args:
+        center: ``[T, 2]`` box centres; heading: ``[T]``; size: ``(length, width)``.
+        seg_a, seg_b, next_seg, prev_seg: road-edge segments (:func:`polyline_segments`).
+    """
+    corners = box_footprints(center, heading, size)  # [T, 4, 2]
+    dist = signed_road_edge_distance(corners.reshape(-1, 2), seg_a, seg_b, next_seg, prev_seg, road_side)
+    return np.asarray((dist.reshape(corners.shape[:-1]) < -tolerance_m).any(axis=-1))

@@ -17,7 +17,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.scenario.geometry import convex_hull, points_in_polygon, polygon_edges, segment_distances
+from simsplat_core.scenario.geometry import (
+    ROAD_EDGE_ROAD_SIDE,
+    convex_hull,
+    points_in_polygon,
+    polygon_edges,
+    polyline_segments,
+    segment_distances,
+    signed_road_edge_distance,
+)
 from simsplat_core.types import MapFeature
 
 _CHUNK = 512  # points per vectorised block (bounds the [points, segments] temporaries)
@@ -82,6 +90,10 @@ class MapContext:
         lane_a, lane_b: ``[S, 2]`` lane centre-line segments (in the direction of travel).
         margin_m: growth of the intersection hulls.
         aligned_lane_m, align_deg: search radius and angular tolerance of ``MapFacts.lane_offset``.
+        edge_a, edge_b: ``[E, 2]`` road-edge segments (polyline order kept: the road is on their
+            ``road_side``), edge_next / edge_prev ``[E]`` the neighbouring segment on the same polyline
+            (``-1`` at ends); see ``geometry.polyline_segments``.
+        road_side: side of the road-edge direction where the road is (``"left"`` in Waymo Open Motion).
     """
 
     drivable: tuple[np.ndarray, ...] = ()
@@ -93,6 +105,11 @@ class MapContext:
     margin_m: float = 1.5
     aligned_lane_m: float = 4.0
     align_deg: float = 35.0
+    edge_a: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    edge_b: np.ndarray = field(default_factory=lambda: np.zeros((0, 2)))
+    edge_next: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    edge_prev: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    road_side: str = ROAD_EDGE_ROAD_SIDE
 
     @classmethod
     def from_features(cls, features: tuple[MapFeature, ...] | list[MapFeature], cluster_m: float = 40.0,
@@ -112,6 +129,7 @@ class MapContext:
         lane_a = np.concatenate([p[:-1] for p in lanes]) if lanes else np.zeros((0, 2))
         lane_b = np.concatenate([p[1:] for p in lanes]) if lanes else np.zeros((0, 2))
         keep = np.linalg.norm(lane_b - lane_a, axis=1) > 1e-6
+        edge_a, edge_b, edge_next, edge_prev = polyline_segments(by_kind.get("road_edge", []))
         return cls(
             drivable=tuple(p for p in by_kind.get("drivable_area", []) if len(p) >= 3),
             sidewalks=tuple(p for p in by_kind.get("sidewalk", []) if len(p) >= 3),
@@ -120,6 +138,10 @@ class MapContext:
             lane_a=lane_a[keep],
             lane_b=lane_b[keep],
             margin_m=margin_m,
+            edge_a=edge_a,
+            edge_b=edge_b,
+            edge_next=edge_next,
+            edge_prev=edge_prev,
         )
 
     @property
@@ -133,6 +155,21 @@ class MapContext:
     @property
     def has_lanes(self) -> bool:
         return len(self.lane_a) > 0
+
+    @property
+    def has_road_edges(self) -> bool:
+        return len(self.edge_a) > 0
+
+    @property
+    def road_edges(self) -> np.ndarray:
+        """``[E, 2, 2]`` road-edge segments ``(a, b)`` (``MotionMap.road_edges``)."""
+        return np.stack([self.edge_a, self.edge_b], axis=1) if self.has_road_edges else np.zeros((0, 2, 2))
+
+    def road_edge_distance(self, xy: np.ndarray) -> np.ndarray:
+        """``[N]`` signed distance of ``[N, 2]`` points to the nearest road edge: positive on the road side,
+        ``+inf`` without road edges (``geometry.signed_road_edge_distance``)."""
+        return signed_road_edge_distance(np.asarray(xy, dtype=np.float64).reshape(-1, 2), self.edge_a, self.edge_b,
+                                         self.edge_next, self.edge_prev, self.road_side)
 
     def _inside_any(self, xy: np.ndarray, polygons: tuple[np.ndarray, ...]) -> np.ndarray:
         out = np.zeros(len(xy), dtype=bool)

@@ -13,9 +13,12 @@ refinement of the next issue scores rollouts with the same ones.
   unedited scenario (``baseline``), neither is a pair that overlapped there at the same step. They are
   left out and counted separately (``CollisionSteps.log_pairs``).
 * :func:`offroad_steps` -- Waymax's ``OffroadMetric``: some box corner lies outside the drivable area
-  (``geometry.offroad``), for vehicles and cyclists. Pedestrians and static objects may stand on sidewalks:
-  they are off-road only where the map says where people may be (it has sidewalks) and their box centre
-  is on none of sidewalk, crosswalk or drivable area. Nothing is off-road on a map without a drivable area.
+  (``geometry.offroad``), for vehicles and cyclists. On a map without drivable-area polygons but with road
+  edges (Waymo Open Motion), Waymax's own definition: some corner lies on the non-road side of its nearest
+  road edge (``geometry.offroad_by_road_edges``). Pedestrians and static objects may stand on sidewalks:
+  they are off-road only where the map says where people may be (it has sidewalks and a drivable area) and
+  their box centre is on none of sidewalk, crosswalk or drivable area. Nothing is off-road on a map with
+  neither a drivable area nor road edges.
 * :func:`kinematics` / :func:`kinematic_violations` -- Waymax's ``KinematicsInfeasibilityMetric`` (bounds on
   acceleration and steering curvature, from the motion itself: velocities are local line fits of the box
   centres, not the stored ``speed``), plus jerk, yaw-rate and speed bounds; limits per agent kind
@@ -36,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from simsplat_core.scenario.agents import AgentStates
-from simsplat_core.scenario.geometry import footprints_overlap, offroad
+from simsplat_core.scenario.geometry import footprints_overlap, offroad, offroad_by_road_edges
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.trajectory import agent_kind, smoothed_velocity, yaw_rate
 from simsplat_core.scenario.vocabulary import PEDESTRIAN, VEHICLE
@@ -193,22 +196,30 @@ def offroad_steps(states: AgentStates, map_ctx: MapContext, rows: Sequence[int] 
                   tolerance_m: float = 0.0) -> np.ndarray:
     """``[R, T]`` bool off-road flags of ``rows`` (default: every agent), see the module docstring.
 
-    Vehicles (and cyclists): some box corner more than ``tolerance_m`` outside the drivable area.
-    Pedestrians and static objects: only on maps with sidewalks, the box centre on no sidewalk, crosswalk
-    or drivable area. All false without a drivable area, and at invalid steps.
+    Vehicles (and cyclists): some box corner more than ``tolerance_m`` outside the drivable area, or, on a
+    map without one, more than ``tolerance_m`` on the non-road side of its nearest road edge.
+    Pedestrians and static objects: only on maps with sidewalks and a drivable area, the box centre on no
+    sidewalk, crosswalk or drivable area. All false without a drivable area and road edges, and at invalid
+    steps.
     """
     rows = _as_rows(states, rows)
     out = np.zeros((len(rows), states.num_steps), dtype=bool)
-    if not map_ctx.has_drivable:
+    by_edges = not map_ctx.has_drivable and map_ctx.has_road_edges
+    if not (map_ctx.has_drivable or by_edges):
         return out
     for r, row in enumerate(rows):
         steps = np.flatnonzero(states.valid[row])
         if not steps.size:
             continue
         if kind_of(states.categories[row]) == VEHICLE:
-            out[r, steps] = offroad(states.xy[row, steps], states.heading[row, steps], states.size[row, :2],
-                                    map_ctx.drivable, tolerance_m)
-        elif map_ctx.has_sidewalks:
+            if by_edges:
+                out[r, steps] = offroad_by_road_edges(
+                    states.xy[row, steps], states.heading[row, steps], states.size[row, :2], map_ctx.edge_a,
+                    map_ctx.edge_b, map_ctx.edge_next, map_ctx.edge_prev, tolerance_m, map_ctx.road_side)
+            else:
+                out[r, steps] = offroad(states.xy[row, steps], states.heading[row, steps], states.size[row, :2],
+                                        map_ctx.drivable, tolerance_m)
+        elif map_ctx.has_sidewalks and map_ctx.has_drivable:
             facts = map_ctx.facts(states.xy[row, steps], states.heading[row, steps])
             out[r, steps] = ~(facts.on_drivable | facts.on_sidewalk | facts.in_crosswalk)
     return out
