@@ -18,6 +18,7 @@ from typing import Any
 
 import pyarrow as pa
 
+from storage.schemas import motion_table_schema
 from storage.store import ArtifactStore, join_relpath
 
 RUNS_DIR = "runs"
@@ -60,3 +61,16 @@ def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, Ru
             "tables": sorted(tables), **dict(manifest or {})}
     store.write_json(join_relpath(relpath, "manifest.json"), body)
     return uris
+
+
+def write_motion_table(store: ArtifactStore, relpath: str, table: pa.Table, markdown: str,
+                       manifest: Mapping[str, Any] | None = None) -> str:
+    """Write the ``motion`` table as ``<relpath>/tables/motion.{parquet,md}`` (validated, atomic) and the
+    manifest; returns the Parquet URI."""
+    uris = write_run_tables(store, relpath, {"motion": RunTable(table, motion_table_schema(), markdown)}, manifest)
+    return uris["motion"]
+
+
+def read_motion_table(store: ArtifactStore, relpath: str) -> pa.Table:
+    """``<relpath>/tables/motion.parquet``, validated (``SchemaError`` names the file and the column)."""
+    return store.read_table(join_relpath(relpath, "tables", "motion.parquet"), motion_table_schema())

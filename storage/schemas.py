@@ -329,6 +329,7 @@ TABLES: dict[str, TableSpec] = {
         TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA), min_version=2),
         TableSpec("edit_pose_tracks", _fixed(EDIT_POSE_TRACKS_SCHEMA)),
         TableSpec("metrics", _fixed(METRICS_SCHEMA)),
+        TableSpec("motion", lambda: motion_table_schema()),
     )
 }
 
@@ -556,3 +557,18 @@ def editing_table_schema(name: str) -> pa.Schema:
     if name not in TABLE_COLUMNS:
         raise KeyError(f"no editing table {name!r}; known: {list(TABLE_COLUMNS)}")
     return _schema(name, 1, list(TABLE_COLUMNS[name]))
+
+
+# ----------------------------------------------------------------------------- motion evaluation (run table)
+#: ``schema_version`` of the ``motion`` table.
+MOTION_SCHEMA_VERSION = 1
+
+
+def motion_table_schema() -> pa.Schema:
+    """Schema of ``tables/motion.parquet`` of ``simsplat eval motion``: one row per (dataset, method); columns
+    from ``simsplat_core.eval.refinement.table.MOTION_COLUMNS`` (dataset, method, scenarios, the failure rates,
+    progress, stopped_share, ade_3s / ade_8s nullable, agent_collision, agent_offroad)."""
+    from simsplat_core.eval.refinement.table import MOTION_COLUMNS  # imported here: storage loads without the core
+
+    metadata = {SCHEMA_NAME_KEY: "motion", SCHEMA_VERSION_KEY: str(MOTION_SCHEMA_VERSION)}
+    return pa.schema([pa.field(n, t, nullable=nullable) for n, t, nullable in MOTION_COLUMNS], metadata=metadata)

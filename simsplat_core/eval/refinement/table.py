@@ -1,0 +1,81 @@
+"""The ``motion`` table (DESIGN.md): one row per (dataset, method).
+
+Columns (:data:`MOTION_COLUMNS`, the schema ``storage.schemas.motion_table_schema`` is built from them):
+``dataset``, ``method``, ``scenarios``; failure rates over scenarios in ``[0, 1]`` (``collision_vehicle``,
+``collision_pedestrian``, ``offroad``, ``kinematic``, ``failure``: a scenario fails when any agent fails);
+``progress`` and ``stopped_share`` (NaN where no agent moved); ``ade_3s`` / ``ade_8s`` (null for the log row
+and where the data ends before the horizon); ``agent_collision`` / ``agent_offroad``, the share of agents
+that collide / leave the road (informative where there are few scenarios).
+
+    rows = motion_rows(real_rows(...).rows, synthetic_rows(...))   # synthetic rows: the edit-based part
+    table = motion_table(rows); text = motion_markdown(table)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import pyarrow as pa
+
+from simsplat_core.eval.tables import markdown
+
+#: ``(name, type, nullable)`` of the ``motion`` table's columns, in order.
+MOTION_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
+    ("dataset", pa.string(), False),
+    ("method", pa.string(), False),
+    ("scenarios", pa.int64(), False),
+    ("collision_vehicle", pa.float64(), False),
+    ("collision_pedestrian", pa.float64(), False),
+    ("offroad", pa.float64(), False),
+    ("kinematic", pa.float64(), False),
+    ("failure", pa.float64(), False),
+    ("progress", pa.float64(), False),
+    ("stopped_share", pa.float64(), False),
+    ("ade_3s", pa.float64(), True),
+    ("ade_8s", pa.float64(), True),
+    ("agent_collision", pa.float64(), False),
+    ("agent_offroad", pa.float64(), False),
+)
+#: Columns that are shares in ``[0, 1]``.
+RATE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "offroad", "kinematic", "failure",
+                                 "agent_collision", "agent_offroad")
+
+
+def motion_rows(real: Sequence[Mapping[str, Any]], synthetic: Sequence[Mapping[str, Any]] = ()) -> list[dict]:
+    """The table's rows: the real-data rows, then the synthetic (edit-based) ones."""
+    return [dict(r) for r in real] + [dict(r) for r in synthetic]
+
+
+def motion_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
+    """Rows -> a pyarrow table of :data:`MOTION_COLUMNS` (``None`` floats of non-nullable columns -> NaN).
+
+    Raises:
+        KeyError: a row lacks a column (named).
+        ValueError: a rate outside ``[0, 1]`` (named with its row).
+    """
+    data: dict[str, list] = {}
+    for name, _, nullable in MOTION_COLUMNS:
+        values = []
+        for k, row in enumerate(rows):
+            if name not in row:
+                raise KeyError(f"motion row {k} ({row.get('dataset')}, {row.get('method')}) has no column {name!r}")
+            value = row[name]
+            if value is None and not nullable and name not in ("dataset", "method", "scenarios"):
+                value = math.nan
+            if name in RATE_COLUMNS and value is not None and not math.isnan(value) and not 0.0 <= value <= 1.0:
+                raise ValueError(f"motion row {k} ({row['dataset']}, {row['method']}): {name} = {value} "
+                                 "is not in [0, 1]")
+            values.append(value)
+        data[name] = values
+    schema = pa.schema([pa.field(n, t, nullable=nl) for n, t, nl in MOTION_COLUMNS])
+    return pa.Table.from_pydict(data, schema=schema)
+
+
+def motion_markdown(table: pa.Table, digits: int = 3) -> str:
+    """The table as GitHub Markdown (null ADE blank, NaN as ``–``)."""
+    return markdown(table, digits, tuple(n for n, _, _ in MOTION_COLUMNS))
+
+
+__all__ = ["MOTION_COLUMNS", "RATE_COLUMNS", "motion_markdown", "motion_rows", "motion_table"]
