@@ -523,6 +523,71 @@ def _print_editing(result) -> None:
         console.print(f"{name}: {uri}")
 
 
+#: Real driving-log samples beside the repository (``../shared/data``), the default of ``eval motion --real``.
+SHARED_REAL_LOGS: tuple[str, ...] = ("waymo/motion_data_one_scenario.tfrecord", "av2/sensor-log-7fab2350")
+
+
+def default_real_logs(root: Path | None = None) -> list[Path]:
+    """The real-log samples under ``<repo>/../shared/data`` that exist (none when it is absent)."""
+    base = (root if root is not None else Path(__file__).resolve().parents[1]).parent / "shared" / "data"
+    return [base / rel for rel in SHARED_REAL_LOGS if (base / rel).exists()]
+
+
+@eval_app.command("motion")
+def eval_motion(
+    out: Annotated[str, typer.Option(help="Run directory: tables/motion.parquet + tables/motion.md + manifest.json.")],
+    store: Annotated[str | None, typer.Option(help="Artifact store root with synthetic scenes (the edit-based rows; "
+                                              "not evaluated yet).")] = None,
+    real: Annotated[list[Path] | None, typer.Option(help="A Waymo Open Motion scenario TFRecord or an Argoverse 2 "
+                                                    "log directory (repeatable; default: the samples under "
+                                                    "../shared/data when present).")] = None,
+    predictor: Annotated[list[str] | None, typer.Option(help="reactive / constant-velocity / log (repeatable or "
+                                                        "comma separated; default: every available one).")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Multi-agent refinement (issue 11): roll the predictors out on real logs (the ego replays its log, every
+    other agent is predicted from 1.1 s of history) and score them against the logged future: collision,
+    off-road, kinematic and overall failure rates (per scenario and per agent), progress, stopped agents, ADE
+    at 3 s and 8 s, next to the log's own rates."""
+    from simsplat_core.data.errors import CorruptLogError
+    from simsplat_core.motion.registry import available_predictors
+    from tasks.motion_eval import evaluate_motion_run
+
+    names = [n.strip() for p in predictor or () for n in p.split(",") if n.strip()] or [
+        n for n in available_predictors() if n != "log"]
+    paths = list(real) if real else default_real_logs()
+    if not paths:
+        raise typer.BadParameter("no real logs given and no samples under ../shared/data", param_hint="--real")
+    try:
+        result = evaluate_motion_run.fn(out, paths, names, store_root=store)
+    except CorruptLogError as exc:
+        raise typer.BadParameter(f"damaged log: {exc}", param_hint="--real") from exc
+    except KeyError as exc:
+        raise typer.BadParameter(str(exc.args[0]) if exc.args else str(exc), param_hint="--predictor") from exc
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--real") from exc
+    if as_json:
+        from dataclasses import asdict
+
+        typer.echo(json.dumps(asdict(result), default=float))
+        return
+    _print_motion(result)
+
+
+def _print_motion(result) -> None:
+    from simsplat_core.eval.refinement.table import MOTION_COLUMNS
+
+    table = Table(title=f"Motion on {len(result.real)} real log(s): failure rates, progress, ADE (m)")
+    names = [n for n, _, _ in MOTION_COLUMNS]
+    for name in names:
+        table.add_column(name)
+    for row in result.rows:
+        table.add_row(*("" if row[n] is None else f"{row[n]:.3f}" if isinstance(row[n], float) else str(row[n])
+                        for n in names))
+    console.print(table)
+    console.print(f"motion: {result.table}")
+
+
 BankOption = Annotated[str | None, typer.Option("--bank", help="Bank hash (or unique prefix); default: the newest.")]
 
 

@@ -1,0 +1,62 @@
+"""The ``motion`` table: schema (columns, nullable ADE, schema_version), atomic write + validated read round trip,
+and a clear error naming the file and the column for a bad file."""
+
+from __future__ import annotations
+
+import math
+
+import pyarrow as pa
+import pyarrow.parquet as pq
+import pytest
+
+from simsplat_core.eval.refinement.table import motion_markdown, motion_table
+from storage import ArtifactStore
+from storage.errors import SchemaError
+from storage.runs import read_motion_table, write_motion_table
+from storage.schemas import TABLES, motion_table_schema, schema_version
+
+COLUMNS = ["dataset", "method", "scenarios", "collision_vehicle", "collision_pedestrian", "offroad", "kinematic",
+           "failure", "progress", "stopped_share", "ade_3s", "ade_8s", "agent_collision", "agent_offroad"]
+
+
+def _rows() -> list[dict]:
+    base = dict(scenarios=1, collision_vehicle=0.0, collision_pedestrian=1.0, offroad=1.0, kinematic=0.0, failure=1.0,
+                progress=1.0, stopped_share=0.1, agent_collision=0.08, agent_offroad=0.06)
+    return [base | {"dataset": "waymo-motion", "method": "log", "ade_3s": None, "ade_8s": None},
+            base | {"dataset": "waymo-motion", "method": "constant-velocity", "ade_3s": 0.38, "ade_8s": 0.70,
+                    "progress": math.nan}]
+
+
+def test_schema_columns_and_version() -> None:
+    schema = motion_table_schema()
+    assert schema.names == COLUMNS
+    assert schema_version(schema) == 1 and "motion" in TABLES and TABLES["motion"].version == 1
+    assert schema.field("ade_3s").nullable and not schema.field("failure").nullable
+    assert schema.field("scenarios").type == pa.int64() and schema.field("dataset").type == pa.string()
+
+
+def test_round_trip(store: ArtifactStore, tmp_path) -> None:
+    table = motion_table(_rows())
+    uri = write_motion_table(store, "run1", table, motion_markdown(table), {"stage": "motion"})
+    assert uri.endswith("run1/tables/motion.parquet")
+    back = read_motion_table(store, "run1")
+    assert back.to_pylist()[0]["ade_3s"] is None and back.to_pylist()[1]["ade_3s"] == pytest.approx(0.38)
+    assert math.isnan(back.to_pylist()[1]["progress"])
+    assert "| waymo-motion | log | 1 |" in (tmp_path / "root" / "run1" / "tables" / "motion.md").read_text()
+    assert store.read_table("run1/tables/motion.parquet", "motion").num_rows == 2  # by name from the registry
+
+
+def test_bad_file_names_file_and_column(store: ArtifactStore, tmp_path) -> None:
+    table = motion_table(_rows())
+    write_motion_table(store, "run1", table, motion_markdown(table))
+    path = tmp_path / "root" / "run1" / "tables" / "motion.parquet"
+    damaged = pq.read_table(path).drop(["agent_offroad"])
+    pq.write_table(damaged.replace_schema_metadata(motion_table_schema().metadata), path)
+    with pytest.raises(SchemaError, match=r"motion\.parquet.*'agent_offroad' is missing"):
+        read_motion_table(store, "run1")
+
+
+def test_nulls_in_non_nullable_columns_are_refused(store: ArtifactStore) -> None:
+    table = motion_table(_rows()).set_column(7, "failure", pa.array([None, 1.0], pa.float64()))
+    with pytest.raises(SchemaError, match="'failure' has 1 null"):
+        write_motion_table(store, "run2", table, "")
