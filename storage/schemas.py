@@ -329,7 +329,6 @@ TABLES: dict[str, TableSpec] = {
         TableSpec("trajectories", _fixed(TRAJECTORIES_SCHEMA), min_version=2),
         TableSpec("edit_pose_tracks", _fixed(EDIT_POSE_TRACKS_SCHEMA)),
         TableSpec("metrics", _fixed(METRICS_SCHEMA)),
-        TableSpec("motion", lambda: motion_table_schema()),
     )
 }
 
@@ -567,7 +566,11 @@ MOTION_SCHEMA_VERSION = 1
 def motion_table_schema() -> pa.Schema:
     """Schema of ``tables/motion.parquet`` of ``simsplat eval motion``: one row per (dataset, method); columns
     from ``simsplat_core.eval.refinement.table.MOTION_COLUMNS`` (dataset, method, scenarios, the failure rates,
-    progress, stopped_share, ade_3s / ade_8s nullable, agent_collision, agent_offroad)."""
+    progress, stopped_share, ade_3s / ade_8s nullable, agent_collision, agent_offroad).
+
+    A run table like the editing ones (read it with this schema, ``storage.runs.read_motion_table``), not in
+    ``TABLES``: its two ADE columns are nullable (undefined for the log row), which the registry's tables never
+    are."""
     from simsplat_core.eval.refinement.table import MOTION_COLUMNS  # imported here: storage loads without the core
 
     metadata = {SCHEMA_NAME_KEY: "motion", SCHEMA_VERSION_KEY: str(MOTION_SCHEMA_VERSION)}

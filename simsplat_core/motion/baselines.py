@@ -21,7 +21,7 @@ from simsplat_core.motion.predictor import Rollout, RolloutRequest
 NOT_OBSERVED = "not observed at the last history step"
 
 
-@dataclass(frozen=True)
+@dataclass
 class LogReplayPredictor:
     """Returns the log: every agent's logged states (the request's ``states`` unchanged)."""
 
@@ -31,7 +31,7 @@ class LogReplayPredictor:
         return Rollout(states=request.states, replayed={}, predictor=self.name)
 
 
-@dataclass(frozen=True)
+@dataclass
 class ConstantVelocityPredictor:
     """Extrapolates each free agent from its last history step at constant velocity (module docstring).
 

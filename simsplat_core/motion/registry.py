@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from collections.abc import Callable
 
 from simsplat_core.motion.baselines import ConstantVelocityPredictor, LogReplayPredictor
