@@ -15,8 +15,9 @@ every method) and over every agent:
   labels' overlaps, not the predictor's collisions), the ``"log"`` row without (the labels' own rate);
 * per agent: the share of agents that collide with anyone (``agent_collision``) / leave the road at some
   step (``agent_offroad``), since one scenario's rates are 0 or 1;
-* ADE / FDE at 3 s and 8 s (``displacement_errors`` from the last history step), per agent type too;
-* progress and stopped share (``progress_and_stops``).
+* ADE / FDE at 3 s and 8 s (``displacement_errors`` from the last history step), per agent type too, and
+  progress and stopped share (``progress_and_stops``), both over the agents observed at the last history
+  step (agents that appear later are replayed by every predictor).
 
 Rows (:func:`real_rows`) aggregate scenarios of one dataset and method: rates over scenarios, per-agent
 shares, ADE and progress over the agents of all scenarios (pooled).
@@ -215,11 +216,15 @@ def score_rollout(scenario: RealScenario, rollout: Rollout | None) -> RolloutSco
     baseline = None if rollout is None else log
     failures = scenario_failures(states, scenario.map.context, baseline=baseline)
     collided, off = _agent_failures(states, scenario, baseline)
-    errors = None if rollout is None else displacement_errors(states, log, scenario.last_given, HORIZONS_S)
+    # ADE and progress over the agents observed at the last history step (as Waymo motion scores them): an
+    # agent that appears later is replayed by every predictor and would only dilute the means.
+    seen = np.flatnonzero(log.valid[:, scenario.last_given])
+    errors = None if rollout is None else displacement_errors(states.take(seen), log.take(seen),
+                                                              scenario.last_given, HORIZONS_S)
     return RolloutScore(dataset=scenario.dataset, seq_id=scenario.seq_id,
                         method=LOG_METHOD if rollout is None else rollout.predictor, failures=failures,
                         agents=states.num_agents, collided=collided, offroad=off, errors=errors,
-                        progress=progress_and_stops(states, log, scenario.last_given),
+                        progress=progress_and_stops(states.take(seen), log.take(seen), scenario.last_given),
                         replayed={} if rollout is None else dict(rollout.replayed))
 
 

@@ -96,7 +96,7 @@ def test_rows_on_a_map_without_lanes() -> None:
     for row in (log, cv):
         assert row["failure"] == 0.0 and row["agent_collision"] == 0.0 and row["agent_offroad"] == 0.0
         assert row["progress"] == pytest.approx(1.0)
-    assert set(evaluation.per_type["hand"]["constant-velocity"]) == {"vehicle", "pedestrian"}
+    assert set(evaluation.per_type["hand"]["constant-velocity"]) == {"vehicle"}  # "p" appears after the history
     table = motion_table(motion_rows(evaluation.rows))
     assert table.column_names == [n for n, _, _ in MOTION_COLUMNS] and table.num_rows == 2
     assert "| hand | log | 1 |" in motion_markdown(table)
