@@ -9,7 +9,7 @@ catching up at no more than ``max(a, logged acceleration)``; the interaction ter
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -28,13 +28,27 @@ class IDMArrays:
     comfortable_decel: np.ndarray
     max_decel: np.ndarray
     clearance: np.ndarray
+    min_time_headway: np.ndarray
+    min_min_gap: np.ndarray
 
     @classmethod
     def per_agent(cls, params: list[IDMParams]) -> IDMArrays:
         """Stack one :class:`IDMParams` per agent."""
         return cls(*(np.array([getattr(p, f) for p in params], dtype=np.float64) for f in (
             "desired_time_headway_s", "min_gap_m", "max_accel_mps2", "comfortable_decel_mps2", "max_decel_mps2",
-            "standstill_clearance_m")))
+            "standstill_clearance_m", "min_time_headway_s", "min_standstill_gap_m")))
+
+    def calibrated(self, v: np.ndarray, v_leader: np.ndarray, gap: np.ndarray) -> IDMArrays:
+        """The parameters with ``T`` and ``s0`` lowered for agents whose observed ``gap [N]`` (at speed ``v``
+        behind a leader at ``v_leader``) is below their desired gap: they keep the headway they drive with,
+        no lower than ``min_time_headway`` / ``min_min_gap``."""
+        has = np.isfinite(gap)
+        g = np.where(has, gap, np.inf)
+        min_gap = np.clip(g, self.min_min_gap, self.min_gap)
+        dyn = v * (v - v_leader) / (2.0 * np.sqrt(self.max_accel * self.comfortable_decel))
+        headway = (g - min_gap - np.maximum(dyn, 0.0)) / np.maximum(v, _EPS)
+        headway = np.where(v > _EPS, np.clip(headway, self.min_time_headway, self.time_headway), self.time_headway)
+        return replace(self, min_gap=min_gap, time_headway=headway)
 
 
 def desired_gap(v: np.ndarray, dv: np.ndarray, p: IDMArrays) -> np.ndarray:

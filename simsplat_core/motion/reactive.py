@@ -165,21 +165,29 @@ class ReactivePredictor:
             pairs = route_pairs(grid, k0, width, cur_xy[drv.rows], drv.rows, cur_xy, cur_heading, size2, vel,
                                 cur_valid, reach)
             offset = drv.profiles.offset(pairs.i, pairs.along)
-            lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m)
+            crossing = np.abs(np.cos(cur_heading[pairs.j] - pairs.yaw)) < cos_cross
+            moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
+            lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
+                                 mask=~(crossing & moving))  # moving crossing agents: gap acceptance
+            if t == start:  # the log's own following distances
+                drv.idm = drv.idm.calibrated(drv.v, lead.speed, lead.gap)
             a_lead = interaction_accel(drv.v, lead.speed, lead.gap, drv.idm)
             # gap acceptance against every agent's predicted positions
             v_plan = np.maximum(drv.v, drv.v_ref[:, t])
             pred = self._predictions(states, grid, drv, t, tau, v_plan, given, is_vehicle, is_ped_all, cur_xy,
                                      cur_valid, crosswalks)
-            crossing = np.abs(np.cos(cur_heading[pairs.j] - pairs.yaw)) < cos_cross
             agents = DrivenAgents(s=drv.s, v=drv.v, v_plan=v_plan, half_length=drv.half_length,
                                   half_width=drv.half_width, critical_s=drv.critical_s, lookahead_m=drv.lookahead_m,
-                                  max_decel=drv.idm.max_decel, is_pedestrian=drv.is_pedestrian, row=drv.rows)
-            y_gap = yield_gaps(grid, k0, width, pairs, crossing, agents, drv.profiles, pred, size2, cur_heading,
-                               p.gap.stop_margin_m, p.corridor.lateral_margin_m)
+                                  max_decel=drv.idm.max_decel, max_accel=drv.idm.max_accel,
+                                  is_pedestrian=drv.is_pedestrian, row=drv.rows)
+            y_gap, y_other = yield_gaps(grid, k0, width, pairs, crossing, agents, drv.profiles, pred, size2,
+                                        p.gap.stop_margin_m, p.corridor.lateral_margin_m,
+                                        p.gap.clearance_time_s)
             a_yield = interaction_accel(drv.v, np.zeros(n), y_gap, drv.idm)
             a_free = free_accel(drv.v, drv.v_ref[:, t], drv.v_ref[:, t - 1], dt, drv.idm)
             accel = np.minimum(np.minimum(a_free, a_lead), a_yield)
+            if logger.isEnabledFor(logging.DEBUG):
+                self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
             self._lane_change(drv, pairs, lead, a_lead)
             v_new = next_speed(drv.v, accel, dt, np.minimum(lead.gap, y_gap), drv.idm)
             drv.s = drv.s + v_new * dt
@@ -190,6 +198,20 @@ class ReactivePredictor:
             log_ok = states.valid[drv.rows, t]
             last_z = np.where(log_ok, states.z[drv.rows, t], last_z)
             z[drv.rows, t] = last_z
+
+    @staticmethod
+    def _log_limits(states: AgentStates, t: int, drv: _Driven, a_free: np.ndarray, a_lead: np.ndarray,
+                    a_yield: np.ndarray, leader: np.ndarray, yielded_to: np.ndarray) -> None:
+        """Debug: the driven agents held back by a leader or by giving way at step ``t``."""
+        ids = states.object_ids
+        for k in np.flatnonzero(np.minimum(a_lead, a_yield) < a_free - 1e-9).tolist():
+            row = int(drv.rows[k])
+            if a_lead[k] <= a_yield[k]:
+                logger.debug("t=%d %s follows %s (a=%.2f, free %.2f)", t, ids[row], ids[int(leader[k])], a_lead[k],
+                             a_free[k])
+            else:
+                logger.debug("t=%d %s gives way to %s (a=%.2f, free %.2f)", t, ids[row], ids[int(yielded_to[k])],
+                             a_yield[k], a_free[k])
 
     def _pose(self, grid: RouteGrid, drv: _Driven) -> tuple[np.ndarray, np.ndarray]:
         """``([N, 2] centre, [N] yaw)`` of the driven agents: route point plus lateral offset."""
@@ -208,11 +230,13 @@ class ReactivePredictor:
         step_dt = float(np.median(np.diff(states.times)))
         idx = np.clip(t - 1 + np.rint(tau / step_dt).astype(np.int64), 0, t_count - 1)  # [H]
         pred_xy = states.xy[:, idx].copy()  # [A, H, 2]
+        pred_heading = states.heading[:, idx].copy()  # [A, H]
         pred_valid = states.valid[:, idx] & cur_valid[:, None]
         s_future = drv.s[:, None] + v_plan[:, None] * tau[None]  # [N, H]
         base, yaw = grid.pose(s_future)
         off = drv.profiles.offset(np.arange(len(drv.s))[:, None], s_future)
         pred_xy[drv.rows] = base + off[..., None] * np.stack([-np.sin(yaw), np.cos(yaw)], axis=-1)
+        pred_heading[drv.rows] = yaw + np.arctan(drv.profiles.slope(np.arange(len(drv.s))[:, None], s_future))
         pred_valid[drv.rows] = cur_valid[drv.rows, None]
         priority = np.zeros(len(given), dtype=bool)
         peds = np.flatnonzero(is_ped & cur_valid)
@@ -221,8 +245,8 @@ class ReactivePredictor:
                 priority[peds] |= points_in_polygon(cur_xy[peds], poly)
         driven = np.where(given, -1, 0)
         driven[drv.rows] = np.arange(len(drv.rows))
-        return Predictions(pred_xy, pred_valid, driven, priority, is_vehicle, float(tau[1] - tau[0]) if len(tau) > 1
-                           else step_dt)
+        sample_dt = float(tau[1] - tau[0]) if len(tau) > 1 else step_dt
+        return Predictions(pred_xy, pred_heading, pred_valid, driven, priority, is_vehicle, sample_dt)
 
     def _lane_change(self, drv: _Driven, pairs: Pairs, lead: Nearest, a_lead: np.ndarray) -> None:
         """MOBIL: start a move into a neighbour lane for vehicles closing on an obstacle standing in their lane."""

@@ -15,18 +15,22 @@ import numpy as np
 
 from simsplat_core.scenario.path import Path
 
+#: Stride of the coarse nearest-point search in ``RouteGrid.project`` (grid points).
+COARSE = 4
+
 
 @dataclass(frozen=True)
 class RouteGrid:
     """``N`` routes on an arc-length grid.
 
     Attributes:
-        xy: ``[N, K, 2]`` route points at ``s = k * step``.
+        x, y: ``[N, K]`` route point coordinates at ``s = k * step``.
         heading: ``[N, K]`` tangent yaw there (unwrapped along each route).
         step: grid spacing, metres.
     """
 
-    xy: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
     heading: np.ndarray
     step: float
 
@@ -36,14 +40,14 @@ class RouteGrid:
         k = int(np.ceil(length_m / step)) + 2
         s = np.arange(k) * step
         if not paths:
-            return cls(np.zeros((0, k, 2)), np.zeros((0, k)), step)
+            return cls(np.zeros((0, k)), np.zeros((0, k)), np.zeros((0, k)), step)
         xy = np.stack([p.position(s) for p in paths])
         heading = np.stack([p.heading(s) for p in paths])
-        return cls(xy, heading, step)
+        return cls(np.ascontiguousarray(xy[..., 0]), np.ascontiguousarray(xy[..., 1]), heading, step)
 
     @property
     def num_points(self) -> int:
-        return self.xy.shape[1]
+        return self.x.shape[1]
 
     def _cell(self, s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``([N] index of the grid point at or before s, [N] fraction to the next one)``."""
@@ -57,9 +61,10 @@ class RouteGrid:
         k, f = self._cell(s)
         n = np.arange(len(s)) if rows is None else np.asarray(rows)
         n = n.reshape((-1,) + (1,) * (s.ndim - 1))
-        xy = self.xy[n, k] * (1.0 - f)[..., None] + self.xy[n, k + 1] * f[..., None]
+        x = self.x[n, k] * (1.0 - f) + self.x[n, k + 1] * f
+        y = self.y[n, k] * (1.0 - f) + self.y[n, k + 1] * f
         heading = self.heading[n, k] * (1.0 - f) + self.heading[n, k + 1] * f
-        return xy, heading
+        return np.stack([x, y], axis=-1), heading
 
     def window_start(self, s: np.ndarray, behind_m: float, width: int) -> np.ndarray:
         """``[N]`` first grid index of each route's window of ``width`` points starting ``behind_m`` before ``s``."""
@@ -69,6 +74,9 @@ class RouteGrid:
     def project(self, rows: np.ndarray, k0: np.ndarray, width: int,
                 points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Project points onto windows of the routes.
+
+        The nearest grid point is found coarse to fine (every ``COARSE``-th point of the window, then the
+        points around the best one), then the point is projected along that grid point's tangent.
 
         Args:
             rows: ``[P]`` route of each query.
@@ -80,15 +88,29 @@ class RouteGrid:
             ``([P, H] arc length along the route, [P, H] signed lateral offset (left positive), [P, H] route
             tangent yaw at the projection)``.
         """
-        idx = k0[rows][:, None] + np.arange(width)[None]  # [P, W]
-        win = self.xy[rows[:, None], idx]  # [P, W, 2]
-        d2 = ((points[:, :, None, :] - win[:, None]) ** 2).sum(-1)  # [P, H, W]
-        best = np.argmin(d2, axis=-1)  # [P, H]
-        k = np.take_along_axis(idx, best, axis=1)  # [P, H]
-        near = self.xy[rows[:, None], k]  # [P, H, 2]
-        yaw = self.heading[rows[:, None], k]
+        px, py = points[..., 0], points[..., 1]  # [P, H]
+        start = k0[rows]  # [P]
+        coarse = start[:, None] + np.arange(0, width, COARSE)[None]  # [P, Wc]
+        best = self._nearest(rows, coarse, px, py)  # [P, H] grid index
+        last = start[:, None, None] + width - 1
+        fine = np.clip(best[..., None] + np.arange(-COARSE, COARSE + 1), start[:, None, None], last)  # [P, H, F]
+        k = self._nearest(rows, fine, px, py)
+        r = rows[:, None]
+        yaw = self.heading[r, k]
         tx, ty = np.cos(yaw), np.sin(yaw)
-        rel = points - near
-        along = k * self.step + rel[..., 0] * tx + rel[..., 1] * ty
-        lateral = tx * rel[..., 1] - ty * rel[..., 0]
+        rx, ry = px - self.x[r, k], py - self.y[r, k]
+        along = k * self.step + rx * tx + ry * ty
+        lateral = tx * ry - ty * rx
         return along, lateral, yaw
+
+    def _nearest(self, rows: np.ndarray, cand: np.ndarray, px: np.ndarray, py: np.ndarray) -> np.ndarray:
+        """``[P, H]`` the candidate grid index (``cand [P, C]`` shared by a query's points, or ``[P, H, C]``)
+        nearest to each point ``(px, py) [P, H]`` on route ``rows [P]``."""
+        r = rows.reshape((-1,) + (1,) * (cand.ndim - 1))
+        gx, gy = self.x[r, cand], self.y[r, cand]
+        if cand.ndim == 2:
+            gx, gy = gx[:, None, :], gy[:, None, :]
+            cand = np.broadcast_to(cand[:, None, :], px.shape + cand.shape[-1:])
+        dx, dy = gx - px[..., None], gy - py[..., None]
+        pick = np.argmin(dx * dx + dy * dy, axis=-1)
+        return np.take_along_axis(cand, pick[..., None], axis=-1)[..., 0]

@@ -34,6 +34,8 @@ class IDMParams:
         max_decel_mps2: hard-brake limit, the largest deceleration ever commanded (emergencies).
         accel_exponent: ``delta`` (only the interaction term is used here: the free-road term is the log's
             speed profile, see ``motion.longitudinal``; kept for completeness and documentation).
+        min_time_headway_s, min_standstill_gap_m: a driver whose log follows its leader closer than ``T`` /
+            ``s0`` at the first predicted step keeps its own (logged) headway, never below these.
         standstill_clearance_m: last-resort positional bound: an agent never advances closer than this to
             the obstacle ahead within one step, whatever the deceleration it takes.
     """
@@ -44,6 +46,8 @@ class IDMParams:
     comfortable_decel_mps2: float = 2.0
     max_decel_mps2: float = 8.0
     accel_exponent: float = 4.0
+    min_time_headway_s: float = 0.6
+    min_standstill_gap_m: float = 1.0
     standstill_clearance_m: float = 0.5
 
 
@@ -56,12 +60,15 @@ class GapAcceptanceParams:
             the agent accepts: it stops before the conflict point.
         horizon_s: how far ahead the other agents' positions are predicted.
         sample_dt_s: spacing of those predicted positions.
+        clearance_time_s: post-encroachment margin: an agent goes first when it clears the conflict point
+            at least this long before the other arrives (accelerating at most at ``a`` up to its desired speed).
         crossing_deg: agents whose heading differs from the route's by more than this cross it (smaller:
             same direction, handled as leaders).
         stop_margin_m: distance kept before the conflict zone when yielding.
     """
 
     critical_gap_s: float = 4.0
+    clearance_time_s: float = 1.0
     horizon_s: float = 6.0
     sample_dt_s: float = 0.3
     crossing_deg: float = 30.0
@@ -110,7 +117,7 @@ class PedestrianParams:
     time_to_conflict_s: float = 3.0
     following: IDMParams = field(default_factory=lambda: IDMParams(
         desired_time_headway_s=0.5, min_gap_m=0.5, max_accel_mps2=1.0, comfortable_decel_mps2=1.5,
-        max_decel_mps2=4.0, standstill_clearance_m=0.2))
+        max_decel_mps2=4.0, min_time_headway_s=0.3, min_standstill_gap_m=0.3, standstill_clearance_m=0.2))
 
 
 @dataclass(frozen=True)

@@ -113,7 +113,7 @@ def test_car_yields_to_a_fixed_agent_crossing_its_path() -> None:
     car_x = out.states.xy[1, :, 0]
     assert car_x[int(3.75 / DT)] < 50.0 - 2.25 - 1.0  # held back while the crosser passes
     assert car_x[-1] > 60.0  # and went on afterwards
-    assert out.states.speed[1, START:].min() < 5.0
+    assert out.states.speed[1, START:].min() < 7.0  # slowed down to let it pass
 
 
 # ------------------------------------------------------------------------------------------ (d) pedestrian
