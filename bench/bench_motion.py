@@ -69,11 +69,13 @@ def scene(n_agents: int, seed: int = 0) -> AgentStates:
     cats, sizes = [], []
     spacing = 25.0  # metres of lane per vehicle
     for a in range(n_agents):
-        if a % 10 == 9:  # a pedestrian crossing at a crosswalk
-            x = 100.0 + 150.0 * rng.integers(0, max(1, int(n_agents * spacing / LANES / 150.0)) + 1)
+        if a % 10 == 9:  # a pedestrian crossing at a crosswalk, side by side with the others there
+            k = a // 10
+            n_cw = max(1, int(n_agents * spacing / LANES / 150.0))
+            x = 100.0 + 150.0 * (k % n_cw) + 1.2 * ((k // n_cw) % 3 - 1)
             v = rng.uniform(1.0, 1.6)
-            y = -4.0 + v * (times - rng.uniform(0.0, 4.0))
-            xy[a] = np.stack([np.full(t_count, x + rng.uniform(-1.5, 1.5)), y], 1)
+            y = -4.0 - 1.5 * ((k // n_cw) // 3) + v * (times - rng.uniform(0.0, 4.0))
+            xy[a] = np.stack([np.full(t_count, x), y], 1)
             heading[a], speed[a] = np.pi / 2, v
             cats.append("pedestrian")
             sizes.append(PERSON)

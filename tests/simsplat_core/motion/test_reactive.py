@@ -14,7 +14,7 @@ from simsplat_core.motion.routes import APPEARS_LATER, NO_LANE, project_points
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
-from simsplat_core.scenario.metrics import collision_steps
+from simsplat_core.scenario.metrics import collision_steps, kinematic_violations
 from simsplat_core.scenario.path import Path
 from tests.simsplat_core.language.scenes import lane, polygon
 
@@ -69,6 +69,11 @@ def collides(st: AgentStates, row: int) -> bool:
     return bool(collision_steps(st, [row], count_log_pairs=True).pairs.any())
 
 
+def feasible(st: AgentStates, row: int) -> bool:
+    """No Waymax-style kinematic bound (acceleration, jerk, curvature, ...) exceeded over the future."""
+    return not kinematic_violations(st, rows=[row])[:, START:].any()
+
+
 # ------------------------------------------------------------------------------------------ (a) free road
 def test_protocol_and_free_road_reproduces_the_log() -> None:
     assert isinstance(ReactivePredictor(), MotionPredictor)
@@ -89,6 +94,22 @@ def test_protocol_and_free_road_reproduces_the_log() -> None:
     assert out.states.valid.all()
 
 
+def test_a_logged_right_turn_stays_a_right_turn() -> None:
+    """Off the lane graph (a turn at a junction the map does not cover), the logged arc is followed."""
+    radius, v = 15.0, 7.0
+    ang = np.clip(v * (TIMES - 2.0) / radius, 0.0, np.pi / 2)
+    straight = np.clip(v * TIMES, None, 2.0 * v)
+    x = np.where(TIMES < 2.0, straight, 2.0 * v + radius * np.sin(ang)) - 10.0
+    y = np.where(TIMES < 2.0, 0.0, -radius * (1.0 - np.cos(ang)))
+    tail = np.clip(v * (TIMES - 2.0) - radius * np.pi / 2, 0.0, None)  # southbound after the quarter circle
+    y = y - tail
+    st = states([("ego", "vehicle", track(-40.0 + 5.0 * TIMES, 3.5), CAR), ("turner", "vehicle", track(x, y), CAR)])
+    out = rollout(st, ["ego"])
+    err = np.linalg.norm(out.states.xy[1, START:] - st.xy[1, START:], axis=-1)
+    assert err.max() < 0.5
+    assert abs(np.angle(np.exp(1j * (out.states.heading[1, -1] + np.pi / 2)))) < 0.1  # heading south at the end
+
+
 # ------------------------------------------------------------------------------------------ (b) braking leader
 def test_follower_brakes_behind_a_leader_that_stops_hard() -> None:
     v_lead = np.clip(12.0 - 8.0 * np.clip(TIMES - 3.0, 0.0, None), 0.0, None)
@@ -96,7 +117,7 @@ def test_follower_brakes_behind_a_leader_that_stops_hard() -> None:
     st = states([("lead", "vehicle", track(x_lead, 0.0), CAR), ("f", "vehicle", track(12.0 * TIMES, 0.0), CAR)])
     assert collides(st, 1)  # replaying the log, the follower drives into the leader
     out = rollout(st, ["lead"])
-    assert not collides(out.states, 1)
+    assert not collides(out.states, 1) and feasible(out.states, 1)
     assert out.states.speed[1, -1] < 0.5 and out.states.sources[1] == "refined"
     gap = out.states.xy[0, START:, 0] - out.states.xy[1, START:, 0] - CAR[0]
     assert gap.min() > 1.5 and gap[-1] < 3.0  # closing in on IDM's standstill gap (2 m)
@@ -109,7 +130,7 @@ def test_car_yields_to_a_fixed_agent_crossing_its_path() -> None:
     st = states([("x", "vehicle", crosser, CAR), ("car", "vehicle", track(12.5 + 10.0 * TIMES, 0.0), CAR)])
     assert collides(st, 1)
     out = rollout(st, ["x"])
-    assert not collides(out.states, 1)
+    assert not collides(out.states, 1) and feasible(out.states, 1)
     car_x = out.states.xy[1, :, 0]
     assert car_x[int(3.75 / DT)] < 50.0 - 2.25 - 1.0  # held back while the crosser passes
     assert car_x[-1] > 60.0  # and went on afterwards
@@ -123,7 +144,7 @@ def test_pedestrian_waits_for_a_vehicle_about_to_pass_its_crosswalk() -> None:
     st = states([("car", "vehicle", track(10.0 * TIMES, 0.0), CAR), ("p", "pedestrian", walker, PERSON)])
     assert collides(st, 1)
     out = rollout(st, ["car"], road(with_crosswalk=True))
-    assert not collides(out.states, 1)
+    assert not collides(out.states, 1) and feasible(out.states, 1)
     y = out.states.xy[1, :, 1]
     assert y[int(3.0 / DT)] < -1.0 - 0.3  # waiting short of the car's side
     assert y[-1] > 3.0  # crossed after the car had passed
@@ -141,7 +162,7 @@ def test_follower_detours_around_or_stops_behind_a_stopped_truck(left_lane_busy:
     assert collides(st, 1)
     fixed = [o for o in st.object_ids if o != "f"]
     out = rollout(st, fixed)
-    assert not collides(out.states, 1)
+    assert not collides(out.states, 1) and feasible(out.states, 1)
     end_y = out.states.xy[1, -1, 1]
     if left_lane_busy:
         assert abs(end_y) < 0.5 and out.states.xy[1, -1, 0] < 80.0 - 4.0 - 2.25
