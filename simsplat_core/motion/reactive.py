@@ -167,8 +167,9 @@ class ReactivePredictor:
             offset = drv.profiles.offset(pairs.i, pairs.along)
             crossing = np.abs(np.cos(cur_heading[pairs.j] - pairs.yaw)) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
+            follows = ~(crossing & moving)  # moving crossing agents are left to gap acceptance
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
-                                 mask=~(crossing & moving))  # moving crossing agents: gap acceptance
+                                 mask=follows)
             if t == start:  # the log's own following distances
                 drv.idm = drv.idm.calibrated(drv.v, lead.speed, lead.gap)
             a_lead = interaction_accel(drv.v, lead.speed, lead.gap, drv.idm)
@@ -188,7 +189,7 @@ class ReactivePredictor:
             accel = np.minimum(np.minimum(a_free, a_lead), a_yield)
             if logger.isEnabledFor(logging.DEBUG):
                 self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
-            self._lane_change(drv, pairs, lead, a_lead)
+            self._lane_change(drv, pairs, follows, lead, a_lead)
             v_new = next_speed(drv.v, accel, dt, np.minimum(lead.gap, y_gap), drv.idm)
             drv.s = drv.s + v_new * dt
             drv.v = v_new
@@ -248,12 +249,13 @@ class ReactivePredictor:
         sample_dt = float(tau[1] - tau[0]) if len(tau) > 1 else step_dt
         return Predictions(pred_xy, pred_heading, pred_valid, driven, priority, is_vehicle, sample_dt)
 
-    def _lane_change(self, drv: _Driven, pairs: Pairs, lead: Nearest, a_lead: np.ndarray) -> None:
-        """MOBIL: start a move into a neighbour lane for vehicles closing on an obstacle standing in their lane."""
+    def _lane_change(self, drv: _Driven, pairs: Pairs, follows: np.ndarray, lead: Nearest, a_lead: np.ndarray) -> None:
+        """MOBIL: start a move into a neighbour lane for vehicles closing on an obstacle standing in their lane
+        (``follows [P]``: the pairs that count as leaders, ``lead`` / ``a_lead``: the current leader and IDM term)."""
         p = self.params
         lc, margin = p.lane_change, p.corridor.lateral_margin_m
         blocked = (~drv.is_pedestrian & drv.profiles.settled(drv.s) & (lead.other >= 0)
-                   & (lead.speed < lc.blocked_speed_mps) & (lead.gap < lc.trigger_gap_m))
+                   & (np.abs(lead.speed) < lc.blocked_speed_mps) & (lead.gap < lc.trigger_gap_m))
         if not blocked.any():
             return
         length = change_length(drv.v, lead.gap, lc.duration_s, lc.min_length_m, lc.clearance_m)
@@ -267,7 +269,7 @@ class ReactivePredictor:
                 continue
             target = drv.profiles.target + np.where(ok, shift, 0.0)
             off = target[pairs.i]
-            new_lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, off, margin)
+            new_lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, off, margin, mask=follows)
             a_new = interaction_accel(drv.v, new_lead.speed, new_lead.gap, drv.idm)
             foll = nearest_behind(pairs, drv.s, drv.half_length, drv.half_width, off, margin)
             v_f = np.maximum(foll.speed, 0.0)

@@ -10,7 +10,7 @@ from simsplat_core.motion.corridor import box_extents, nearest_ahead, route_pair
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor, RolloutRequest
 from simsplat_core.motion.reactive import ReactivePredictor
 from simsplat_core.motion.route_grid import RouteGrid
-from simsplat_core.motion.routes import APPEARS_LATER, NO_LANE, project_points
+from simsplat_core.motion.routes import APPEARS_LATER, NO_LANE, STATIC_OBJECT, STATIONARY, project_points
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
@@ -179,9 +179,11 @@ def test_agents_without_a_route_are_replayed_with_a_reason() -> None:
     valid_lost = np.arange(T) < START
     valid_late = np.arange(T) >= 30
     st = states([("ego", "vehicle", track(10.0 * TIMES, 3.5), CAR), ("lost", "vehicle", lost, CAR),
-                 ("late", "vehicle", late, CAR)], valid={"lost": valid_lost, "late": valid_late})
+                 ("late", "vehicle", late, CAR), ("parked", "vehicle", track(np.full(T, 60.0), -3.0), CAR),
+                 ("cone", "static", track(np.full(T, 70.0), -2.5), (0.4, 0.4, 0.7))],
+                valid={"lost": valid_lost, "late": valid_late})
     out = rollout(st, ["ego"])
-    assert out.replayed == {"lost": NO_LANE, "late": APPEARS_LATER}
+    assert out.replayed == {"lost": NO_LANE, "late": APPEARS_LATER, "parked": STATIONARY, "cone": STATIC_OBJECT}
     for name in ("xy", "heading", "speed", "valid"):
         np.testing.assert_array_equal(getattr(out.states, name)[1:], getattr(st, name)[1:])
 
