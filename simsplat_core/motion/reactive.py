@@ -170,8 +170,10 @@ class ReactivePredictor:
             follows = ~(crossing & moving)  # moving crossing agents are left to gap acceptance
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
                                  mask=follows)
-            if t == start:  # the log's own following distances
-                drv.idm = drv.idm.calibrated(drv.v, lead.speed, lead.gap)
+            if t == start:  # the log's own following distances (behind unedited agents only)
+                log_leader = np.array([lead.other[k] >= 0 and states.sources[lead.other[k]] == "log"
+                                       for k in range(n)], dtype=bool)
+                drv.idm = drv.idm.calibrated(drv.v, lead.speed, np.where(log_leader, lead.gap, np.inf))
             a_lead = interaction_accel(drv.v, lead.speed, lead.gap, drv.idm)
             # gap acceptance against every agent's predicted positions
             v_plan = np.maximum(drv.v, drv.v_ref[:, t])
