@@ -106,6 +106,13 @@ def yield_gaps(grid: RouteGrid, k0: np.ndarray, width: int, pairs: Pairs, crossi
     c = np.flatnonzero(crossing & (pred.is_vehicle[pairs.j] | ~agents.is_pedestrian[pairs.i]))
     if not c.size:
         return np.full(n, np.inf), np.full(n, -1)
+    # only others whose predicted path comes within the agent's look-ahead of it (cheap, before projecting)
+    here, _ = grid.pose(agents.s)  # [N, 2]
+    reach = agents.lookahead_m[pairs.i[c]] + 2.0 * agents.half_length[pairs.i[c]] + size[pairs.j[c]].max(axis=1)
+    d2 = ((pred.xy[pairs.j[c]] - here[pairs.i[c]][:, None]) ** 2).sum(-1).min(axis=1)  # [C]
+    c = c[d2 < reach**2]
+    if not c.size:
+        return np.full(n, np.inf), np.full(n, -1)
     i, j = pairs.i[c], pairs.j[c]
     along, lateral, yaw = grid.project(i, k0, width, pred.xy[j])  # [C, H]
     ext_along, ext_lat = box_extents(size[j, 0:1], size[j, 1:2], pred.heading[j] - yaw)

@@ -144,6 +144,7 @@ class ReactivePredictor:
         kinds = [kind_of(c) for c in states.categories]
         is_vehicle = np.array([k == VEHICLE for k in kinds])
         is_ped_all = np.array([k == PEDESTRIAN for k in kinds])
+        is_log = np.array([src == "log" for src in states.sources])
         driven_of = np.full(states.num_agents, -1)
         driven_of[drv.rows] = np.arange(n)
         given = driven_of < 0
@@ -171,8 +172,7 @@ class ReactivePredictor:
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
                                  mask=follows)
             if t == start:  # the log's own following distances (behind unedited agents only)
-                log_leader = np.array([lead.other[k] >= 0 and states.sources[lead.other[k]] == "log"
-                                       for k in range(n)], dtype=bool)
+                log_leader = (lead.other >= 0) & is_log[np.maximum(lead.other, 0)]
                 drv.idm = drv.idm.calibrated(drv.v, lead.speed, np.where(log_leader, lead.gap, np.inf))
             a_lead = interaction_accel(drv.v, lead.speed, lead.gap, drv.idm)
             # gap acceptance against every agent's predicted positions
