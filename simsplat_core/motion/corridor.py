@@ -119,9 +119,11 @@ def nearest_ahead(pairs: Pairs, s: np.ndarray, half_length: np.ndarray, half_wid
 
 
 def nearest_behind(pairs: Pairs, s: np.ndarray, half_length: np.ndarray, half_width: np.ndarray, offset: np.ndarray,
-                   margin: float) -> Nearest:
+                   margin: float, mask: np.ndarray | None = None) -> Nearest:
     """The follower of each driven agent in a corridor shifted by ``offset [P]`` (same arguments)."""
     ok = in_corridor(pairs, half_width, offset, margin) & (pairs.along <= s[pairs.i])
+    if mask is not None:
+        ok &= mask
     gap = np.where(ok, (s[pairs.i] - half_length[pairs.i]) - (pairs.along + pairs.ext_along), np.inf)
     return _pick(pairs, gap, len(s))
 

@@ -154,6 +154,7 @@ class ReactivePredictor:
         reach = p.corridor.ahead_m + float(size2.max(initial=0.0))
         horizon = int(np.floor(p.gap.horizon_s / p.gap.sample_dt_s)) + 1
         tau = np.arange(horizon) * p.gap.sample_dt_s  # [H]
+        horizon_steps = int(np.ceil(p.gap.horizon_s / float(np.median(np.diff(states.times)))))
         cos_cross = np.cos(np.deg2rad(p.gap.crossing_deg))
         crosswalks = request.map.context.crosswalks
         last_z = z[drv.rows, start - 1].copy()
@@ -162,13 +163,17 @@ class ReactivePredictor:
             cur_xy, cur_heading, cur_valid = xy[:, t - 1], heading[:, t - 1], valid[:, t - 1]
             vel = vel_given[:, t - 1].copy()
             vel[drv.rows] = drv.v[:, None] * np.stack([np.cos(cur_heading[drv.rows]), np.sin(cur_heading[drv.rows])], 1)
+            # given agents that appear within the conflict horizon (a pedestrian stepping out later) are
+            # candidates too, where they will appear: gap acceptance sees them coming, car following does not
+            see_xy, see_heading, seen = self._appearing(states, t, horizon_steps, given, cur_xy, cur_heading,
+                                                        cur_valid)
             k0 = grid.window_start(drv.s, p.corridor.behind_m, width)
-            pairs = route_pairs(grid, k0, width, cur_xy[drv.rows], drv.rows, cur_xy, cur_heading, size2, vel,
-                                cur_valid, reach)
+            pairs = route_pairs(grid, k0, width, cur_xy[drv.rows], drv.rows, see_xy, see_heading, size2, vel,
+                                seen, reach)
             offset = drv.profiles.offset(pairs.i, pairs.along)
-            crossing = np.abs(np.cos(cur_heading[pairs.j] - pairs.yaw)) < cos_cross
+            crossing = np.abs(np.cos(see_heading[pairs.j] - pairs.yaw)) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
-            follows = ~(crossing & moving)  # moving crossing agents are left to gap acceptance
+            follows = ~(crossing & moving) & cur_valid[pairs.j]  # moving crossing agents: gap acceptance
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
                                  mask=follows)
             if t == start:  # the log's own following distances (behind unedited agents only)
@@ -191,7 +196,7 @@ class ReactivePredictor:
             accel = np.minimum(np.minimum(a_free, a_lead), a_yield)
             if logger.isEnabledFor(logging.DEBUG):
                 self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
-            self._lane_change(drv, pairs, follows, lead, a_lead)
+            self._lane_change(drv, pairs, follows, cur_valid[pairs.j], lead, a_lead)
             v_new = next_speed(drv.v, accel, dt, np.minimum(lead.gap, y_gap), drv.idm)
             drv.s = drv.s + v_new * dt
             drv.v = v_new
@@ -216,6 +221,21 @@ class ReactivePredictor:
                 logger.debug("t=%d %s gives way to %s (a=%.2f, free %.2f)", t, ids[row], ids[int(yielded_to[k])],
                              a_yield[k], a_free[k])
 
+    @staticmethod
+    def _appearing(states: AgentStates, t: int, horizon_steps: int, given: np.ndarray, cur_xy: np.ndarray,
+                   cur_heading: np.ndarray, cur_valid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``([A, 2] xy, [A] heading, [A] bool)``: the agents' current poses, with given agents that are not valid
+        now but appear within ``horizon_steps`` placed where they appear, and which agents those are plus the
+        currently valid ones."""
+        window = states.valid[:, t - 1:t - 1 + horizon_steps]  # [A, W]
+        first = np.argmax(window, axis=1)
+        appear = given & ~cur_valid & window.any(axis=1)
+        rows = np.flatnonzero(appear)
+        xy, heading = cur_xy.copy(), cur_heading.copy()
+        xy[rows] = states.xy[rows, t - 1 + first[rows]]
+        heading[rows] = states.heading[rows, t - 1 + first[rows]]
+        return xy, heading, cur_valid | appear
+
     def _pose(self, grid: RouteGrid, drv: _Driven) -> tuple[np.ndarray, np.ndarray]:
         """``([N, 2] centre, [N] yaw)`` of the driven agents: route point plus lateral offset."""
         rows = np.arange(len(drv.s))
@@ -234,7 +254,7 @@ class ReactivePredictor:
         idx = np.clip(t - 1 + np.rint(tau / step_dt).astype(np.int64), 0, t_count - 1)  # [H]
         pred_xy = states.xy[:, idx].copy()  # [A, H, 2]
         pred_heading = states.heading[:, idx].copy()  # [A, H]
-        pred_valid = states.valid[:, idx] & cur_valid[:, None]
+        pred_valid = states.valid[:, idx].copy()
         s_future = drv.s[:, None] + v_plan[:, None] * tau[None]  # [N, H]
         base, yaw = grid.pose(s_future)
         off = drv.profiles.offset(np.arange(len(drv.s))[:, None], s_future)
@@ -251,9 +271,11 @@ class ReactivePredictor:
         sample_dt = float(tau[1] - tau[0]) if len(tau) > 1 else step_dt
         return Predictions(pred_xy, pred_heading, pred_valid, driven, priority, is_vehicle, sample_dt)
 
-    def _lane_change(self, drv: _Driven, pairs: Pairs, follows: np.ndarray, lead: Nearest, a_lead: np.ndarray) -> None:
+    def _lane_change(self, drv: _Driven, pairs: Pairs, follows: np.ndarray, present: np.ndarray, lead: Nearest,
+                     a_lead: np.ndarray) -> None:
         """MOBIL: start a move into a neighbour lane for vehicles closing on an obstacle standing in their lane
-        (``follows [P]``: the pairs that count as leaders, ``lead`` / ``a_lead``: the current leader and IDM term)."""
+        (``follows [P]``: the pairs that count as leaders, ``present [P]``: the other agent is there now,
+        ``lead`` / ``a_lead``: the current leader and its IDM term)."""
         p = self.params
         lc, margin = p.lane_change, p.corridor.lateral_margin_m
         blocked = (~drv.is_pedestrian & drv.profiles.settled(drv.s) & (lead.other >= 0)
@@ -273,7 +295,7 @@ class ReactivePredictor:
             off = target[pairs.i]
             new_lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, off, margin, mask=follows)
             a_new = interaction_accel(drv.v, new_lead.speed, new_lead.gap, drv.idm)
-            foll = nearest_behind(pairs, drv.s, drv.half_length, drv.half_width, off, margin)
+            foll = nearest_behind(pairs, drv.s, drv.half_length, drv.half_width, off, margin, mask=present)
             v_f = np.maximum(foll.speed, 0.0)
             a_f = np.where(foll.other >= 0, interaction_accel(v_f, drv.v, np.maximum(foll.gap, 1e-3), drv.idm), free)
             safe = (a_f >= -lc.safe_decel_mps2) & (foll.gap > 0.0)

@@ -150,6 +150,19 @@ def test_pedestrian_waits_for_a_vehicle_about_to_pass_its_crosswalk() -> None:
     assert y[-1] > 3.0  # crossed after the car had passed
 
 
+def test_car_gives_way_to_an_inserted_pedestrian_that_steps_out_later() -> None:
+    """The pedestrian exists only from t = 3.3 s, 5 m ahead of the car (an edit: "a pedestrian steps out"): too
+    late to stop within the kinematic limits then, so the car must see it coming from its given future."""
+    walker = track(np.full(T, 40.0), -2.0 + 1.8 * np.clip(TIMES - 3.3, 0.0, None))
+    walker["heading"][:] = np.pi / 2
+    st = states([("car", "vehicle", track(10.0 * TIMES, 0.0), CAR), ("p", "pedestrian", walker, PERSON)],
+                valid={"p": TIMES >= 3.3})
+    assert collides(st, 0)
+    out = rollout(st, ["p"], road(with_crosswalk=True))
+    assert not collides(out.states, 0) and feasible(out.states, 0)
+    assert out.states.xy[0, -1, 0] > 45.0  # and drove on once the pedestrian had crossed
+
+
 # ------------------------------------------------------------------------------------------ (e) stopped obstacle
 @pytest.mark.parametrize("left_lane_busy", [False, True])
 def test_follower_detours_around_or_stops_behind_a_stopped_truck(left_lane_busy: bool) -> None:
