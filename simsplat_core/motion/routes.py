@@ -37,7 +37,7 @@ SHORT_HISTORY = "history too short"
 STATIC_OBJECT = "static object"
 STATIONARY = "stationary in the log"
 REVERSES = "reverses in the log"
-NO_LANE = "no lane near the vehicle and no logged future"
+NO_LANE = "no lane near the vehicle (and no logged route to follow)"
 REASONS: tuple[str, ...] = (APPEARS_LATER, NOT_OBSERVED, SHORT_HISTORY, STATIC_OBJECT, STATIONARY, REVERSES,
                             NO_LANE)
 
