@@ -5,6 +5,7 @@ Run ``simsplat --help`` or ``simsplat COMMAND --help``.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import os
@@ -330,14 +331,26 @@ def edit(
                                                "'manual').")] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout (for scripts): status, "
                                           "edit directory, commands, grounded object ids, validation.")] = False,
+    no_refine: Annotated[bool, typer.Option("--no-refine", help="Do not refine the traffic: every agent the edit "
+                                            "did not change replays its log (deterministic editing).")] = False,
+    predictor: Annotated[str, typer.Option(help="Motion predictor of refinement: reactive (default), "
+                                           "constant-velocity, log.")] = "reactive",
 ) -> None:
-    """Edit a stored scene from language (or a command file): ground, apply, validate, render every frame and
-    camera, and store the edit under STORE/edits/<run_id>/<seq>/<edit_id>/. Exit code 1: refused; 2: bad
-    command file."""
+    """Edit a stored scene from language (or a command file): ground, apply, let the traffic react (multi-agent
+    refinement), validate, render every frame and camera, and store the edit under
+    STORE/edits/<run_id>/<seq>/<edit_id>/ (bev.png and bev.mp4 show log and refined paths). Exit code 1:
+    refused; 2: bad command file."""
     from flows.bars import new_bar, want_bar
+    from simsplat_core.editing.options import DEFAULT_OPTIONS
+    from simsplat_core.motion.registry import make_predictor
     from storage import ArtifactStore, list_logs
     from tasks.edit import edit_as_dict, load_edit_context, run_edit
 
+    try:
+        motion_predictor = make_predictor(predictor)
+    except KeyError as exc:
+        raise typer.BadParameter(str(exc.args[0]), param_hint="--predictor") from exc
+    options = dataclasses.replace(DEFAULT_OPTIONS, refinement="none" if no_refine else "full")
     if prompt is None and commands is None:
         raise typer.BadParameter("give a PROMPT or --commands FILE.json", param_hint="PROMPT")
     artifacts = ArtifactStore(store)
@@ -352,7 +365,7 @@ def edit(
         except OSError as exc:
             raise typer.BadParameter(f"cannot read {commands}: {exc}", param_hint="--commands") from exc
     try:
-        loaded = load_edit_context(artifacts, seq)
+        loaded = load_edit_context(artifacts, seq, predictor=motion_predictor)
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc)) from exc
     bar = new_bar() if want_bar() and not as_json else None
@@ -366,7 +379,7 @@ def edit(
         bar.start()
     try:
         result = run_edit(store, seq, prompt or "", commands_json=commands_json, commands_source=str(commands),
-                          run_id=run_id, loaded=loaded, progress=progress)
+                          run_id=run_id, loaded=loaded, progress=progress, options=options)
     finally:
         if bar is not None:
             bar.stop()
@@ -399,9 +412,16 @@ def _print_edit(result, graph) -> None:
         if anchors:
             console.print(f"  grounded anchor: {', '.join(anchors)}", markup=False, soft_wrap=True)
         console.print(f"  changed: {change}", markup=False, soft_wrap=True)
+    reaction = data.get("refinement")
+    if reaction:
+        reacted = ", ".join(reaction["refined"]) or "nobody"
+        console.print(f"  traffic ({reaction['mode']}, {reaction['predictor']}): reacted: {reacted}", markup=False,
+                      soft_wrap=True)
+        for oid, why in reaction["replayed"].items():
+            console.print(f"  replays its log: {oid}: {why}", markup=False, soft_wrap=True)
     validation = data["validation"]
     verdict = "[green]ok[/green]" if validation["ok"] else "[bold yellow]problems[/bold yellow]"
-    console.print(f"validation of {validation['checked']} edited agent(s): {verdict}")
+    console.print(f"validation of {validation['checked']} edited / reacting agent(s): {verdict}")
     for line in validation["failures"]:
         console.print(f"  - {line}", markup=False, soft_wrap=True)
     total = result.bytes.get("total", 0)

@@ -45,7 +45,7 @@ from simsplat_core.editing.commands import EditProgram, program_from_json, progr
 from simsplat_core.editing.result import AddedNode, EditDelta
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene.pose_track import Extrapolation, PoseTrack
-from simsplat_core.viz.images import encode_png
+from simsplat_core.viz.images import encode_mp4, encode_png
 from storage.errors import CorruptArtifactError
 from storage.exr import render_channels, write_exr
 from storage.markers import mark_done, read_marker
@@ -354,6 +354,13 @@ class EditWriter:
         if not name.endswith(".png") or "/" in name:
             raise ValueError(f"EditWriter.png: {name!r} must be a file name ending in .png")
         self.store.write_bytes(join_relpath(self.relpath, name), encode_png(rgb))
+        self._count("pictures", name)
+
+    def video(self, name: str, frames: list[np.ndarray], fps: float) -> None:
+        """``[H, W, 3]`` uint8 RGB frames as an MP4 named ``name``."""
+        if not name.endswith(".mp4") or "/" in name:
+            raise ValueError(f"EditWriter.video: {name!r} must be a file name ending in .mp4")
+        self.store.write_bytes(join_relpath(self.relpath, name), encode_mp4(frames, fps))
         self._count("pictures", name)
 
     def validation(self, report: dict[str, Any]) -> None:

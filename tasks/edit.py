@@ -34,10 +34,12 @@ from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import default_text_encoder
+from simsplat_core.motion.predictor import MotionPredictor
 from simsplat_core.scene import SceneGraph
 from simsplat_core.types import SceneLog
 from simsplat_core.viz.before_after import FramePair, before_after_picture, pick_views, sample_steps
 from simsplat_core.viz.bev import edit_bev
+from simsplat_core.viz.bev_animation import bev_animation_frames, bev_fps
 from simsplat_core.viz.images import to_uint8
 from storage import ArtifactStore, content_key, read_scene, read_scene_log
 from storage.assets import read_asset_bank
@@ -57,7 +59,7 @@ from storage.runs import new_run_id
 logger = logging.getLogger(__name__)
 
 #: Version of the edit stage; part of every edit id.
-EDIT_VERSION = "edit-v1"
+EDIT_VERSION = "edit-v2"
 #: Frames shown in ``before_after.png``.
 BEFORE_AFTER_FRAMES = 4
 #: Run id of edits made without ``--run-id``.
@@ -110,10 +112,12 @@ class EditRun:
 
 
 def load_edit_context(store: ArtifactStore, seq_id: str, *, engine: QueryEngine | None = None,
-                      bank: AssetBank | None = None, bank_hash: str | None = None) -> LoadedEdit:
+                      bank: AssetBank | None = None, bank_hash: str | None = None,
+                      predictor: MotionPredictor | None = None) -> LoadedEdit:
     """The :class:`EditContext` of the newest language scene of ``seq_id`` (its stored scene graph, the log
     without images) and the newest asset bank of the store (``None`` when it has none: inserts and
-    replacements are then refused, naming ``simsplat assets build``).
+    replacements are then refused, naming ``simsplat assets build``). ``predictor`` drives refinement
+    (default: the reactive traffic model).
 
     Raises:
         FileNotFoundError: no complete log / language scene of ``seq_id`` (naming what to run).
@@ -132,7 +136,7 @@ def load_edit_context(store: ArtifactStore, seq_id: str, *, engine: QueryEngine 
         except FileNotFoundError as exc:
             logger.warning("%s; inserts and replacements will be refused", exc)
     engine = engine or QueryEngine(default_text_encoder())
-    ctx = EditContext.create(log, graph, loaded.scene, engine, bank)
+    ctx = EditContext.create(log, graph, loaded.scene, engine, bank, predictor)
     return LoadedEdit(ctx, scene_hash, loaded.language_hash, bank.bank_hash if bank is not None else "",
                       time.perf_counter() - started)
 
@@ -162,8 +166,9 @@ def _no_asset(asset_id: str) -> Asset:
 def edit_key(loaded: LoadedEdit, prompt: str, program: EditProgram | None, options: EditorOptions,
              raw_commands: str = "") -> str:
     """Content key of an edit (module docstring)."""
+    predictor = loaded.ctx.motion_predictor().name if options.refinement != "none" else ""
     return content_key("edit", EDIT_VERSION, loaded.ctx.log.seq_id, loaded.scene_hash, loaded.language_hash,
-                       loaded.bank_hash, prompt, command_json(program), raw_commands, options)
+                       loaded.bank_hash, prompt, command_json(program), raw_commands, options, predictor)
 
 
 def _failure(store: ArtifactStore, loaded: LoadedEdit, run_id: str, edit_id: str, prompt: str,
@@ -365,6 +370,7 @@ def write_edit(store: ArtifactStore, record: EditRecord, key: str, loaded: Loade
             r0 = time.perf_counter()
         title = record.prompt or "; ".join(edited.summary_lines())
         writer.png("bev.png", edit_bev(log.map_features, before, after, title=title))
+        writer.video("bev.mp4", bev_animation_frames(log.map_features, before, after, title=title), bev_fps(after))
         r0 = time.perf_counter()
         picture = _before_after(log, edited, ctx.language, shown, title, active)
         render_s += time.perf_counter() - r0
@@ -387,7 +393,7 @@ def edit_as_dict(run: EditRun, graph: SceneGraph | None = None) -> dict[str, Any
         "status": run.status, "seq_id": run.seq_id, "run_id": run.run_id, "edit_id": run.edit_id,
         "edit_dir": run.edit_uri or None, "prompt": run.prompt,
         "commands": [c.model_dump(mode="json") for c in run.program.commands] if run.program is not None else [],
-        "grounded": [], "changes": [], "new_object_ids": [], "validation": None,
+        "grounded": [], "changes": [], "new_object_ids": [], "validation": None, "refinement": None,
         "reason": run.reason or None, "message": run.message or None,
         "seconds": {k: round(v, 3) for k, v in run.seconds.items()}, "bytes": run.bytes, "skipped": run.skipped,
     }
@@ -402,6 +408,10 @@ def edit_as_dict(run: EditRun, graph: SceneGraph | None = None) -> dict[str, Any
             out["changes"].append(o.summary)
             out["new_object_ids"] += list(o.new_object_ids)
         out["validation"] = run.edited.validation.as_dict()
+        reaction = run.edited.refinement
+        out["refinement"] = None if reaction is None else {
+            "mode": reaction.mode, "predictor": reaction.predictor, "start_step": reaction.start_step,
+            "refined": list(reaction.refined_ids), "replayed": dict(sorted(reaction.replayed.items()))}
     return out
 
 

@@ -25,12 +25,18 @@ function rebuilds a stored edit), so nothing of the stored scene changes and
 unchanged nodes are shared. Finally every edited and inserted agent is validated against every other
 agent (``scenario.metrics.validate_agents``). A command whose grounding fails, whose placement or motion
 is infeasible, or that changes nothing is refused (``EditRefused``, with the command's index).
+
+After the commands, the traffic reacts (``motion.refine``, ``EditorOptions.refinement``; default ``"full"``):
+every other agent is rolled out by the motion predictor (default ``motion.reactive.ReactivePredictor``) around
+the edited agents' fixed trajectories, reacting agents get ``source == "refined"`` and new pose tracks in
+the delta, and they are validated with the edited ones. ``"none"`` keeps the log for everyone else.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -44,10 +50,14 @@ from simsplat_core.editing.grounding import Grounder
 from simsplat_core.editing.look_check import match_exposure
 from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_LIKE, EditorOptions
 from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.reaction import react
 from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.static_location import with_static_locations
+from simsplat_core.motion.motion_map import motion_map_of
+from simsplat_core.motion.predictor import MotionMap, MotionPredictor
+from simsplat_core.motion.registry import default_predictor
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
@@ -74,6 +84,8 @@ class EditContext:
         lanes: the log's lane graph.
         map_ctx: the log's map for point queries.
         states: every agent of the log (ego included) on the log's frames, with their node ids.
+        motion_map: the map the motion predictor drives on (refinement).
+        predictor: the motion predictor of refinement (``None``: the default reactive traffic model).
     """
 
     log: SceneLog
@@ -84,10 +96,12 @@ class EditContext:
     lanes: LaneGraph
     map_ctx: MapContext
     states: AgentStates
+    motion_map: MotionMap
+    predictor: MotionPredictor | None = None
 
     @classmethod
     def create(cls, log: SceneLog, graph: SceneGraph, language: LanguageScene, engine: QueryEngine,
-               bank: AssetBank | None) -> EditContext:
+               bank: AssetBank | None, predictor: MotionPredictor | None = None) -> EditContext:
         """The context of ``graph`` (reconstructed from ``log``): lane graph, map context and agent states
         derived from the log.
 
@@ -97,9 +111,14 @@ class EditContext:
         language.check_graph(graph)
         node_of_object = {n.object_id: n.node_id for n in graph.object_nodes}
         states = AgentStates.from_log(log, node_of_object)
+        motion_map = motion_map_of(log)
         return cls(log=log, graph=graph, language=with_static_locations(language, states), engine=engine, bank=bank,
-                   lanes=LaneGraph.from_features(log.map_features), map_ctx=MapContext.from_features(log.map_features),
-                   states=states)
+                   lanes=motion_map.lanes, map_ctx=motion_map.context, states=states, motion_map=motion_map,
+                   predictor=predictor)
+
+    def motion_predictor(self) -> MotionPredictor:
+        """The predictor refinement uses (the context's, else the default reactive traffic model)."""
+        return self.predictor if self.predictor is not None else default_predictor()
 
 
 def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = DEFAULT_OPTIONS) -> EditedScene:
@@ -113,6 +132,9 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
     best: tuple[int, Draft, SceneGraph, EditDelta, list[CommandOutcome]] | None = None
     for attempt in range(LOOK_RETRIES + 1):
         draft, outcomes, delta = _run_commands(ctx, program, options, excluded)
+        if not options.check_looks:
+            best = (0, draft, _build_graph(ctx, draft, delta), delta, outcomes)
+            break
         graph, delta, outcomes, misfits, fitted = _looked(ctx, draft, outcomes, delta)
         if best is None or fitted > best[0]:
             best = (fitted, draft, graph, delta, outcomes)
@@ -126,12 +148,13 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
         excluded |= misfits
     assert best is not None  # the loop runs at least once
     _, draft, graph, delta, outcomes = best
-    rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted")]
+    rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted", "refined")]
     validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
     logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
                 "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
     return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,
-                       states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation)
+                       states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation,
+                       refinement=draft.refinement)
 
 
 #: Times a program is re-applied with other assets when an inserted object does not read as the asked colour.
@@ -147,10 +170,11 @@ def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions
     for index, command in enumerate(program.commands):
         options.check(command, index)
         outcomes.append(apply_command(draft, command, index))
-    delta = draft.delta()
-    if delta.is_empty:
+    if draft.delta().is_empty:
         raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
-    return draft, outcomes, delta
+    if options.refinement != "none":
+        react(draft, options.refinement)
+    return draft, outcomes, draft.delta()
 
 
 def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delta: EditDelta
@@ -158,13 +182,10 @@ def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delt
     """The edited graph after the look check (``editing.look_check``): exposure-matched delta and graph, outcomes
     noting the gains, the stored asset ids of added objects that do not read as asked (after their gain), and
     how many do."""
-    def asset_of(asset_id: str) -> Asset:
-        if asset_id not in draft.assets and ctx.bank is not None:
-            draft.assets[asset_id] = ctx.bank.get(asset_id)
-        return draft.assets[asset_id]
+    asset_of = _asset_source(ctx, draft)
 
     def build(changed: EditDelta) -> SceneGraph:
-        return apply_delta(ctx.graph, changed, node_factory(asset_of, ctx.graph.frame_indices))
+        return _build_graph(ctx, draft, changed)
 
     stored_asset = {a.node_id: a.asset_id.split(VARIANT_SEP, 1)[0] for a in delta.added}
     matched, graph, notes = match_exposure(ctx.log, build(delta), delta, _asked_colors(outcomes, delta),
@@ -173,6 +194,21 @@ def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delt
     outcomes = [_with_look_notes(o, [n.describe() for n in notes if n.gain != 1.0 and n.node_id in nodes])
                 for o, nodes in zip(outcomes, _added_nodes(outcomes, matched))]
     return graph, matched, outcomes, misfits, sum(n.fitted for n in notes)
+
+
+def _asset_source(ctx: EditContext, draft: Draft) -> Callable[[str], Asset]:
+    """Assets by id (variants included): those the draft retrieved, others from the bank."""
+    def asset_of(asset_id: str) -> Asset:
+        if asset_id not in draft.assets and ctx.bank is not None:
+            draft.assets[asset_id] = ctx.bank.get(asset_id)
+        return draft.assets[asset_id]
+
+    return asset_of
+
+
+def _build_graph(ctx: EditContext, draft: Draft, delta: EditDelta) -> SceneGraph:
+    """The stored graph with ``delta`` applied."""
+    return apply_delta(ctx.graph, delta, node_factory(_asset_source(ctx, draft), ctx.graph.frame_indices))
 
 
 def _added_nodes(outcomes: list[CommandOutcome], delta: EditDelta) -> list[set[int]]:

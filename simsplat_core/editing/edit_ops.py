@@ -43,6 +43,7 @@ from simsplat_core.scene.transforms import poses_from_boxes
 
 if TYPE_CHECKING:
     from simsplat_core.editing.apply import EditContext
+    from simsplat_core.motion.refine import Refinement
 
 logger = logging.getLogger(__name__)
 
@@ -99,6 +100,7 @@ class Draft:
     gone: set[int] = field(default_factory=set)
     replaced: dict[int, int] = field(default_factory=dict)
     excluded_assets: frozenset[str] = frozenset()
+    refinement: Refinement | None = None
 
     @classmethod
     def start(cls, ctx: EditContext, grounder: Grounder, options: EditorOptions,

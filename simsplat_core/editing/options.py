@@ -5,7 +5,12 @@ with options, not separate code.
   (category and colour only: the engine with motion and location switched off, ChatSim-like) or ``"ids"``
   (targets and anchors by node / object id only, OmniRe-like);
 * ``ops``: the allowed ops; ``relations``: the allowed placement relations;
-* ``allow_pedestrian_insert``.
+* ``allow_pedestrian_insert``;
+* ``refinement``: how the traffic reacts to the edit (``motion.refine``): ``"full"`` (every other agent is
+  driven by the motion predictor), ``"single-agent"`` (only the edited agents avoid conflicts) or ``"none"``
+  (everyone else replays the log: deterministic editing, ``simsplat edit --no-refine``);
+* ``check_looks``: render inserted objects asked in an achromatic colour and match their exposure
+  (``editing.look_check``); off where only trajectories matter (the motion benchmark).
 
 :data:`CHATSIM_LIKE` and :data:`OMNIRE_LIKE` are the two restricted editors of the evaluation.
 """
@@ -17,6 +22,7 @@ from typing import Literal, get_args
 
 from simsplat_core.editing.commands import EditCommand, Op, Relation
 from simsplat_core.editing.result import EditRefused
+from simsplat_core.motion.refine import REFINE_MODES
 
 GroundingMode = Literal["language", "attributes", "ids"]
 ALL_OPS: frozenset[str] = frozenset(get_args(Op))
@@ -32,11 +38,15 @@ class EditorOptions:
     relations: frozenset[str] = field(default=ALL_RELATIONS)
     allow_pedestrian_insert: bool = True
     name: str = "ours"
+    refinement: str = "full"
+    check_looks: bool = True
 
     def __post_init__(self) -> None:
         if self.grounding not in get_args(GroundingMode):
             raise ValueError(f"EditorOptions.grounding must be one of {list(get_args(GroundingMode))}, "
                              f"got {self.grounding!r}")
+        if self.refinement not in REFINE_MODES:
+            raise ValueError(f"EditorOptions.refinement must be one of {list(REFINE_MODES)}, got {self.refinement!r}")
         object.__setattr__(self, "ops", frozenset(self.ops))
         object.__setattr__(self, "relations", frozenset(self.relations))
         for name, given, known in (("ops", self.ops, ALL_OPS), ("relations", self.relations, ALL_RELATIONS)):

@@ -19,6 +19,7 @@ from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.pose_track import PoseTrack
 
 if TYPE_CHECKING:
+    from simsplat_core.motion.refine import Refinement
     from simsplat_core.scenario.metrics import ValidationReport
 
 #: ``EditRefused.reason`` codes (stable: the ``edits`` table's ``failure_reason`` starts with one).
@@ -116,7 +117,8 @@ class EditedScene:
         original_states / states: agents before / after (``states.sources`` marks edited and inserted rows).
         delta: the change on the stored scene.
         outcomes: one per command, in order.
-        validation: collisions, off-road and kinematics of the edited agents (``scenario.metrics``).
+        validation: collisions, off-road and kinematics of the edited and refined agents (``scenario.metrics``).
+        refinement: how the other agents reacted (``None``: not refined, everyone else replays the log).
     """
 
     prompt: str
@@ -127,6 +129,7 @@ class EditedScene:
     delta: EditDelta
     outcomes: tuple[CommandOutcome, ...]
     validation: ValidationReport
+    refinement: Refinement | None = None
 
     @property
     def commands(self) -> tuple[EditCommand, ...]:

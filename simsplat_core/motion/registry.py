@@ -1,57 +1,46 @@
-"""Predictors by name: ``"log"``, ``"constant-velocity"`` and ``"reactive"`` (``motion.reactive``, when present).
+"""Predictors by name: ``"log"``, ``"constant-velocity"`` (``motion.baselines``) and ``"reactive"``
+(``motion.reactive``, the default of refinement). A learned predictor registers itself with :func:`register`.
 
     predictor = make_predictor("constant-velocity")
 """
 
 from __future__ import annotations
 
-import importlib
-import importlib.util
 from collections.abc import Callable
 
 from simsplat_core.motion.baselines import ConstantVelocityPredictor, LogReplayPredictor
 from simsplat_core.motion.predictor import MotionPredictor
+from simsplat_core.motion.reactive import ReactivePredictor
 
-#: Names :func:`make_predictor` knows, in table order.
-PREDICTOR_NAMES: tuple[str, ...] = ("log", "constant-velocity", "reactive")
-_BUILTIN: dict[str, Callable[[], MotionPredictor]] = {
+#: Name of the default predictor of refinement.
+DEFAULT_PREDICTOR = "reactive"
+_FACTORIES: dict[str, Callable[[], MotionPredictor]] = {
     "log": LogReplayPredictor,
     "constant-velocity": ConstantVelocityPredictor,
+    "reactive": ReactivePredictor,
 }
 
 
-def _reactive() -> MotionPredictor | None:
-    try:
-        module = importlib.import_module("simsplat_core.motion.reactive")
-    except ModuleNotFoundError as exc:
-        if exc.name != "simsplat_core.motion.reactive":
-            raise  # the module exists but one of its imports is missing: a real error
-        return None
-    return module.ReactivePredictor()
+def register(name: str, factory: Callable[[], MotionPredictor]) -> None:
+    """Make :func:`make_predictor` build ``factory()`` for ``name`` (e.g. a learned SMART-like model)."""
+    _FACTORIES[name] = factory
 
 
 def available_predictors() -> tuple[str, ...]:
-    """The names that can be built here (``"reactive"`` only where ``motion.reactive`` is installed)."""
-    has_reactive = importlib.util.find_spec("simsplat_core.motion.reactive") is not None
-    return tuple(n for n in PREDICTOR_NAMES if n in _BUILTIN or (n == "reactive" and has_reactive))
+    """The names :func:`make_predictor` knows, in table order."""
+    return tuple(_FACTORIES)
 
 
 def make_predictor(name: str) -> MotionPredictor:
-    """The predictor called ``name``.
-
-    Raises:
-        KeyError: an unknown name, or ``"reactive"`` where ``simsplat_core.motion.reactive`` is missing (the
-            message says so and lists what is available).
-    """
-    if name in _BUILTIN:
-        return _BUILTIN[name]()
-    if name == "reactive":
-        predictor = _reactive()
-        if predictor is None:
-            raise KeyError(f"predictor 'reactive' is not available: simsplat_core.motion.reactive is not "
-                           f"installed; available: {list(available_predictors())}")
-        return predictor
-    raise KeyError(f"unknown predictor {name!r}; known: {list(PREDICTOR_NAMES)}")
+    """The predictor called ``name``. Raises ``KeyError`` naming the known ones."""
+    if name not in _FACTORIES:
+        raise KeyError(f"unknown predictor {name!r}; known: {list(_FACTORIES)}")
+    return _FACTORIES[name]()
 
 
-__all__ = ["PREDICTOR_NAMES", "available_predictors", "make_predictor"]
+def default_predictor() -> MotionPredictor:
+    """The predictor refinement uses unless told otherwise: the reactive traffic model."""
+    return make_predictor(DEFAULT_PREDICTOR)
+
+
+__all__ = ["DEFAULT_PREDICTOR", "available_predictors", "default_predictor", "make_predictor", "register"]

@@ -5,8 +5,11 @@
 World frame (the log's first ego pose), x up, y to the left, equal scale; the view is fitted to the ego's
 path and the paths of every changed agent (with a margin). Agents whose ``source`` is ``"edited"`` are
 drawn orange (old path dashed grey, new path solid, the box filled at the drawn step and outlined where it
-ends), ``"inserted"`` cyan, removed agents (in ``before`` but not in ``after``) red with a cross; unchanged
+ends), ``"inserted"`` cyan, ``"refined"`` (agents that reacted to the edit, ``motion.refine``) green with
+their log path dashed grey, removed agents (in ``before`` but not in ``after``) red with a cross; unchanged
 agents in their category colour, the ego yellow. Dots on the new paths mark every second. Pure numpy + OpenCV.
+
+``bev_extent`` gives the fitted view so several pictures (the frames of ``viz.bev_animation``) share it.
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ EGO_COLOR = (255, 255, 0)
 EDITED_COLOR = (255, 150, 0)
 INSERTED_COLOR = (0, 230, 255)
 REMOVED_COLOR = (255, 40, 40)
+REFINED_COLOR = (90, 230, 110)
 OLD_PATH_COLOR = (190, 190, 190)
 BACKGROUND = 20
 
@@ -103,15 +107,36 @@ def default_step(before: AgentStates, after: AgentStates) -> int:
     return int(np.argmax(valid)) if valid.any() else 0
 
 
+CHANGED_SOURCES: tuple[str, ...] = ("edited", "inserted", "refined")
+_SOURCE_COLOR = {"edited": EDITED_COLOR, "inserted": INSERTED_COLOR, "refined": REFINED_COLOR}
+
+
+def _changed_rows(before: AgentStates, after: AgentStates) -> tuple[list[int], list[int], list[int]]:
+    """Rows of ``after`` that the edit changed, of ``before`` for their old paths, and of removed agents."""
+    removed = [before.index(o) for o in before.object_ids if o not in after.object_ids]
+    changed = [r for r, s in enumerate(after.sources) if s in CHANGED_SOURCES]
+    old_rows = [before.index(after.object_ids[r]) for r in changed if after.object_ids[r] in before.object_ids]
+    return changed, old_rows, removed
+
+
+def bev_extent(before: AgentStates, after: AgentStates, margin_m: float = 12.0, min_extent_m: float = 40.0
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """``([2], [2])`` world corners of the view :func:`edit_bev` fits to the ego and the changed agents."""
+    changed, old_rows, removed = _changed_rows(before, after)
+    focus = [(after, r) for r in changed] + [(before, r) for r in removed + old_rows]
+    return _extent(before, after, focus, margin_m, min_extent_m)
+
+
 def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: AgentStates, after: AgentStates, *,
              step: int | None = None, title: str = "", size: int = 640, margin_m: float = 12.0,
-             min_extent_m: float = 40.0) -> np.ndarray:
+             min_extent_m: float = 40.0, extent: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """The bird's-eye view of an edit (module docstring).
 
     Args:
         before, after: the agents before and after the edit (same steps).
         step: the step whose boxes are drawn (default: :func:`default_step`).
         title: drawn at the top left (e.g. the prompt).
+        extent: world ``(lo [2], hi [2])`` to show (default: :func:`bev_extent`).
 
     Returns:
         ``[size, size, 3]`` uint8 RGB.
@@ -121,11 +146,8 @@ def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: Ag
     step = default_step(before, after) if step is None else int(step)
     if not 0 <= step < after.num_steps:
         raise ValueError(f"edit_bev: step {step} outside [0, {after.num_steps})")
-    removed = [before.index(o) for o in before.object_ids if o not in after.object_ids]
-    changed = [r for r, s in enumerate(after.sources) if s in ("edited", "inserted")]
-    old_rows = [before.index(after.object_ids[r]) for r in changed if after.object_ids[r] in before.object_ids]
-    focus = [(after, r) for r in changed] + [(before, r) for r in removed + old_rows]
-    lo, hi = _extent(before, after, focus, margin_m, min_extent_m)
+    changed, old_rows, removed = _changed_rows(before, after)
+    lo, hi = bev_extent(before, after, margin_m, min_extent_m) if extent is None else extent
     view = _View(lo, hi, size)
     canvas = np.full((size, size, 3), BACKGROUND, np.uint8)
     draw_map(canvas, map_features, view)
@@ -168,7 +190,7 @@ def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: Ag
     # new paths: solid, a dot per second, the box at the step
     seconds = np.round(after.times - after.times[0], 6)
     for r in changed:
-        color = INSERTED_COLOR if after.sources[r] == "inserted" else EDITED_COLOR
+        color = _SOURCE_COLOR[after.sources[r]]
         pts = path(after, r)
         if len(pts) > 1:
             cv2.polylines(canvas, [pts], False, color, 2, cv2.LINE_AA)
@@ -188,7 +210,8 @@ def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: Ag
                     0.36, color, 1, cv2.LINE_AA)
     entries = [("ego", EGO_COLOR, "line"), ("log agent", CATEGORY_COLORS["vehicle"], "box"),
                ("old path", OLD_PATH_COLOR, "dash"), ("edited", EDITED_COLOR, "line"),
-               ("inserted", INSERTED_COLOR, "line"), ("removed", REMOVED_COLOR, "cross")]
+               ("inserted", INSERTED_COLOR, "line"), ("reacted", REFINED_COLOR, "line"),
+               ("removed", REMOVED_COLOR, "cross")]
     _legend(canvas, entries)
     metres = (hi - lo)[0]
     header = f"t={after.times[step]:.1f}s (frame {int(after.frame_idx[step])}), {metres:.0f} m across"

@@ -2,13 +2,16 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.types import MapFeature
 from simsplat_core.viz.before_after import OUTLINE, FramePair, before_after_picture, pick_views, sample_steps
-from simsplat_core.viz.bev import EDITED_COLOR, INSERTED_COLOR, REMOVED_COLOR, edit_bev
+from simsplat_core.viz.bev import EDITED_COLOR, INSERTED_COLOR, REFINED_COLOR, REMOVED_COLOR, edit_bev
+from simsplat_core.viz.bev_animation import bev_animation_frames, bev_fps
+from simsplat_core.viz.images import encode_mp4
 
 T = 20
 
@@ -35,6 +38,35 @@ def test_bev_colours_edited_inserted_and_removed_agents():
     unchanged = edit_bev([road], before, before, size=400)  # nothing changed: the change colours in the legend only
     for color in (EDITED_COLOR, INSERTED_COLOR, REMOVED_COLOR):
         assert _has(img, color) > _has(unchanged, color) + 20, color
+
+
+def test_bev_draws_agents_that_reacted_in_their_own_colour():
+    before = _agents(("log", "log", "log"), ("ego", "car", "follower"), [0.0, 6.0, 6.0])
+    after = _agents(("log", "edited", "refined"), ("ego", "car", "follower"), [0.0, 6.0, 3.0])
+    reacted = edit_bev([], before, after, size=400)
+    unrefined = edit_bev([], before, _agents(("log", "edited", "log"), ("ego", "car", "follower"), [0.0, 6.0, 3.0]),
+                         size=400)
+    assert _has(reacted, REFINED_COLOR) > _has(unrefined, REFINED_COLOR) + 20
+
+
+def test_bev_animation_plays_log_and_refined_side_by_side_as_mp4(tmp_path):
+    before = _agents(("log", "log"), ("ego", "car"), [0.0, 6.0])
+    after = _agents(("log", "refined"), ("ego", "car"), [0.0, 3.0])
+    frames = bev_animation_frames([], before, after, title="brake", size=160, every=2)
+    assert len(frames) == T // 2 and frames[0].shape == (160, 320, 3)
+    right = frames[3][:, 160:]
+    left = frames[3][:, :160]
+    assert _has(right, REFINED_COLOR) > 0 and _has(left, REFINED_COLOR) <= _has(edit_bev([], before, before, size=160,
+                                                                                           step=6), REFINED_COLOR)
+    assert bev_fps(after) == pytest.approx(10.0)
+    data = encode_mp4(frames, bev_fps(after))
+    assert data[4:8] == b"ftyp"  # an MP4 container
+    path = tmp_path / "bev.mp4"
+    path.write_bytes(data)
+    capture = cv2.VideoCapture(str(path))
+    assert int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) == len(frames)
+    with pytest.raises(ValueError, match="frame 1"):
+        encode_mp4([frames[0], frames[1][:, :100]])
 
 
 def test_bev_rejects_states_of_other_lengths():

@@ -3,11 +3,14 @@ rebuilding the edited graph, the restricted editors."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import torch
 
 from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
+from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, SpeedSpec, TargetRef
@@ -16,9 +19,12 @@ from simsplat_core.editing.edit_ops import node_factory
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.scenario.geometry import signed_polygon_distance
+from simsplat_core.scenario.metrics import collision_steps
 from simsplat_core.scene import GaussianSet
 from simsplat_core.scene.nodes import OFFSETS
 
+#: The editor without refinement: everyone but the edited agents replays the log.
+NO_REFINE = dataclasses.replace(DEFAULT_OPTIONS, refinement="none")
 #: The moving vehicle the tests modify, and the van they remove / replace (seed 0 of the world).
 VAN = "veh_02"
 
@@ -132,9 +138,11 @@ def test_replace_across_categories_is_refused(ctx):
 
 def test_modify_stop_retracks_the_node(ctx):
     target = _moving_vehicle(ctx)
-    edited = apply_edit(ctx, _program({"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}}))
+    edited = apply_edit(ctx, _program({"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}}),
+                        NO_REFINE)
     node_id = _node(ctx, target)
     assert list(edited.delta.retracked) == [node_id] and not edited.delta.added
+    assert edited.refinement is None and "refined" not in edited.states.sources
     row = edited.states.index(target)
     assert edited.states.sources[row] == "edited"
     speed = edited.states.speed[row][edited.states.valid[row]]
@@ -143,6 +151,35 @@ def test_modify_stop_retracks_the_node(ctx):
     pose, _ = track.sample(float(edited.states.frame_idx[-1]))
     assert np.allclose(pose[:2, 3].numpy(), edited.states.xy[row, -1], atol=1e-3)
     assert [v.object_id for v in edited.validation.agents] == [target]
+
+
+def test_traffic_reacts_to_a_stop_and_reacting_nodes_are_retracked(ctx):
+    """Refinement (default): agents behind the stopping car react, get new tracks in the delta and are validated;
+    none of them overlaps the stopped car; the delta still rebuilds the edited graph."""
+    target = _moving_vehicle(ctx)
+    program = _program({"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}})
+    edited = apply_edit(ctx, program)
+    replayed = apply_edit(ctx, program, NO_REFINE)
+    assert edited.refinement is not None and edited.refinement.mode == "full"
+    reacted = edited.refinement.refined_ids
+    assert reacted, "nobody reacted to a car stopping in traffic"
+    for oid in reacted:
+        row = edited.states.index(oid)
+        assert edited.states.sources[row] == "refined"
+        node_id = int(edited.states.node_ids[row])
+        if node_id >= 0:
+            assert node_id in edited.delta.retracked
+    checked = {v.object_id for v in edited.validation.agents}
+    assert {target, *reacted} <= checked
+    stopped = edited.states.index(target)
+    hits = collision_steps(edited.states, [stopped])
+    hits_replayed = collision_steps(replayed.states, [replayed.states.index(target)])
+    assert hits.vehicle.sum() <= hits_replayed.vehicle.sum()
+    ego = edited.states.index("ego")
+    np.testing.assert_array_equal(edited.states.xy[ego], ctx.states.xy[ctx.states.index("ego")])  # cameras fixed
+    assert ctx.bank is not None
+    rebuilt = apply_delta(ctx.graph, edited.delta, node_factory(ctx.bank.get, ctx.graph.frame_indices))
+    assert rebuilt.revision == edited.graph.revision
 
 
 def test_modify_that_changes_nothing_is_refused(ctx):
@@ -161,7 +198,8 @@ def test_replace_then_modify_acts_on_the_new_node(ctx):
     target = _moving_vehicle(ctx)
     edited = apply_edit(ctx, _program({"op": "replace", "target": {"object_id": target},
                                        "asset": {"description": "a yellow sedan"}},
-                                      {"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}}))
+                                      {"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}}),
+                        NO_REFINE)
     (added,) = edited.delta.added
     assert not edited.delta.retracked and edited.delta.removed_node_ids == (_node(ctx, target),)
     row = edited.states.index(target)

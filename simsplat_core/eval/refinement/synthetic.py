@@ -1,0 +1,170 @@
+"""The motion benchmark on the synthetic scenes (the paper's Table 4 analogue): failures after an edit, per
+refinement mode.
+
+    cases = motion_cases(truths, editing_prompts)                  # modify / insert prompts + interactions
+    outcomes = evaluate_motion(contexts, cases, predictor)         # one per (case, mode)
+    rows = synthetic_rows(outcomes, log_rows)                      # one table row per mode
+
+Each case is applied by the editor itself (parse, ground, place, plan; no rendering) with refinement
+``"none"`` (others replay the log), ``"single-agent"`` (only the edited agents avoid conflicts) and
+``"full"`` (every other agent reacts). Failures are measured on every agent of the edited scenario (a
+scenario fails when any agent fails, not only the edited one), with the Waymax definitions of
+``scenario.rollout_metrics.scenario_failures``; pairs that already overlapped in the log at that step are the
+log's, not the edit's. Progress and the share of agents stopped for good are measured against the log, over
+the agents the edit did not change, so that "everyone stands still" cannot pass as safe. A case the editor
+refuses has no scenario and is counted apart (``refused``) in every mode.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from simsplat_core.editing.apply import EditContext, Editor
+from simsplat_core.editing.options import DEFAULT_OPTIONS
+from simsplat_core.editing.result import EditRefused
+from simsplat_core.eval.editing.prompts import EditPrompt
+from simsplat_core.eval.refinement.interactions import InteractionPrompt
+from simsplat_core.motion.refine import EDIT_SOURCES, REFINE_MODES
+from simsplat_core.scenario.rollout_metrics import ScenarioFailures, progress_and_stops, rates, scenario_failures
+
+logger = logging.getLogger(__name__)
+
+#: Categories of the editing benchmark whose prompts the motion benchmark applies.
+EDITING_CATEGORIES: tuple[str, ...] = ("add_vehicle", "add_static", "add_pedestrian", "modify_vehicle",
+                                       "modify_pedestrian")
+#: ``progress(done, total, label)`` after each (case, mode).
+Progress = Callable[[int, int, str], None]
+
+
+@dataclass(frozen=True)
+class MotionCase:
+    """One edit of the benchmark: ``source`` ``"editing"`` (an editing-benchmark prompt, ``kind`` its category)
+    or ``"interaction"`` (``kind`` one of ``interactions.INTERACTION_KINDS``)."""
+
+    case_id: str
+    seq_id: str
+    source: str
+    kind: str
+    text: str
+
+
+@dataclass(frozen=True)
+class MotionOutcome:
+    """One case under one refinement mode.
+
+    Attributes:
+        refused: the editor's refusal message (``""`` when carried out; then the other fields are set).
+        failures: failures of every agent of the edited scenario.
+        progress: mean progress along the log's routes of the agents that move in the log.
+        stopped_share: share of those agents stopped for good.
+        refined: ids of agents that reacted; replayed: agents the predictor left to their log, with reasons.
+        seconds: time of the edit (refinement included).
+    """
+
+    case: MotionCase
+    mode: str
+    refused: str = ""
+    failures: ScenarioFailures | None = None
+    progress: float = float("nan")
+    stopped_share: float = float("nan")
+    refined: tuple[str, ...] = ()
+    replayed: tuple[str, ...] = ()
+    seconds: float = 0.0
+
+
+def motion_cases(editing_prompts: Sequence[EditPrompt], interactions: Sequence[InteractionPrompt]
+                 ) -> list[MotionCase]:
+    """The modify / insert prompts of the editing benchmark (:data:`EDITING_CATEGORIES`) and the interaction
+    prompts, as cases."""
+    out = [MotionCase(p.prompt_id, p.seq_id, "editing", p.category, p.text) for p in editing_prompts
+           if p.category in EDITING_CATEGORIES]
+    out += [MotionCase(p.prompt_id, p.seq_id, "interaction", p.kind, p.text) for p in interactions]
+    return out
+
+
+def evaluate_case(ctx: EditContext, case: MotionCase, mode: str) -> MotionOutcome:
+    """Apply ``case`` in ``ctx`` with refinement ``mode`` and measure the edited scenario."""
+    options = dataclasses.replace(DEFAULT_OPTIONS, refinement=mode, check_looks=False)
+    t = time.perf_counter()
+    try:
+        edited = Editor(ctx, options).edit(case.text)
+    except EditRefused as exc:
+        return MotionOutcome(case, mode, refused=f"{exc.reason}: {exc}", seconds=time.perf_counter() - t)
+    seconds = time.perf_counter() - t
+    states, log = edited.states, edited.original_states
+    failures = scenario_failures(states, ctx.map_ctx, baseline=log)
+    reaction = edited.refinement
+    start = reaction.start_step if reaction is not None else 1
+    # the traffic's progress: agents the edit changed do what they were told (a stop edit stops for good)
+    kept = [r for r, (o, s) in enumerate(zip(states.object_ids, states.sources))
+            if o in log.object_ids and s not in EDIT_SOURCES]
+    progress = progress_and_stops(states.take(kept), log, start)
+    return MotionOutcome(case, mode, failures=failures, progress=progress.progress,
+                         stopped_share=progress.stopped_share,
+                         refined=reaction.refined_ids if reaction is not None else (),
+                         replayed=tuple(sorted(reaction.replayed)) if reaction is not None else (), seconds=seconds)
+
+
+def evaluate_motion(contexts: Mapping[str, EditContext], cases: Sequence[MotionCase],
+                    modes: Sequence[str] = REFINE_MODES, progress: Progress | None = None) -> list[MotionOutcome]:
+    """Every case in every mode (``contexts`` by sequence id)."""
+    unknown = sorted(set(modes) - set(REFINE_MODES))
+    if unknown:
+        raise ValueError(f"unknown refinement modes {unknown}; known: {list(REFINE_MODES)}")
+    out = []
+    total = len(cases) * len(modes)
+    for case in cases:
+        if case.seq_id not in contexts:
+            raise KeyError(f"case {case.case_id}: no scene {case.seq_id!r} (scenes: {sorted(contexts)})")
+        for mode in modes:
+            out.append(evaluate_case(contexts[case.seq_id], case, mode))
+            if progress is not None:
+                progress(len(out), total, case.case_id)
+    return out
+
+
+def log_outcomes(contexts: Mapping[str, EditContext]) -> list[ScenarioFailures]:
+    """The unedited logs' own failures (the ``log`` row), one per scene."""
+    return [scenario_failures(ctx.states, ctx.map_ctx) for ctx in contexts.values()]
+
+
+def _mean(values: list[float]) -> float | None:
+    finite = [v for v in values if np.isfinite(v)]
+    return float(np.mean(finite)) if finite else None
+
+
+def synthetic_rows(outcomes: Sequence[MotionOutcome], log_failures: Sequence[ScenarioFailures],
+                   dataset: str = "synthetic", predictor: str = "") -> list[dict[str, object]]:
+    """Table rows (``motion.parquet`` columns): ``log`` then one per mode, over the cases every mode carried
+    out (a case refused in some mode is left out of all, so the modes are compared on the same scenarios)."""
+    rows: list[dict[str, object]] = []
+    if log_failures:
+        rows.append({"dataset": dataset, "method": "log", "scenarios": len(log_failures), **rates(log_failures),
+                     "progress": 1.0, "stopped_share": None, "ade_3s": None, "ade_8s": None, "refused": 0,
+                     "predictor": ""})
+    modes = list(dict.fromkeys(o.mode for o in outcomes))
+    by_case: dict[str, dict[str, MotionOutcome]] = {}
+    for o in outcomes:
+        by_case.setdefault(o.case.case_id, {})[o.mode] = o
+    done = [c for c, per in by_case.items() if all(not per[m].refused for m in modes if m in per)]
+    refused = len(by_case) - len(done)
+    for mode in modes:
+        kept = [by_case[c][mode] for c in done if mode in by_case[c]]
+        if not kept:
+            continue
+        failures = [o.failures for o in kept if o.failures is not None]
+        rows.append({"dataset": dataset, "method": mode, "scenarios": len(kept), **rates(failures),
+                     "progress": _mean([o.progress for o in kept]),
+                     "stopped_share": _mean([o.stopped_share for o in kept]), "ade_3s": None, "ade_8s": None,
+                     "refused": refused, "predictor": predictor if mode != "none" else ""})
+    return rows
+
+
+__all__ = ["EDITING_CATEGORIES", "MotionCase", "MotionOutcome", "evaluate_case", "evaluate_motion",
+           "log_outcomes", "motion_cases", "synthetic_rows"]

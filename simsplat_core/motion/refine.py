@@ -1,0 +1,138 @@
+"""Refinement of an edited scenario: the traffic around an edit reacts to it.
+
+    refined = refine(edited_states, motion_map, ReactivePredictor(), mode="full")
+    refined.states        # AgentStates; reacting agents carry source "refined"
+    refined.replayed      # agents the predictor could not drive, with the reason
+
+Three modes, the rows of the issue's Table 4 analogue:
+
+* ``"none"``: nothing is refined; every agent but the edited ones replays its log (deterministic editing);
+* ``"single-agent"``: only the edited and inserted agents are driven by the predictor (their edited
+  trajectory is their intent: route and desired speed), so they avoid conflicts; everyone else replays;
+* ``"full"``: the edited and inserted agents keep the trajectory the edit gave them, and every other free
+  agent is driven by the predictor so it reacts (follows, yields, waits, detours).
+
+The ego is always fixed: its cameras render the scene, and a render is only as good as the views the scene
+was reconstructed from. Static objects are fixed too. Prediction starts at ``start_step``: by default the
+first step where an edited or inserted agent differs from the log (at least 1), since an edit present from
+the first frame must be reacted to from the first frame.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+from dataclasses import dataclass
+from typing import Literal, get_args
+
+import numpy as np
+
+from simsplat_core.motion.predictor import MotionMap, MotionPredictor, RolloutRequest
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
+from simsplat_core.scenario.trajectory import agent_kind
+
+logger = logging.getLogger(__name__)
+
+RefineMode = Literal["none", "single-agent", "full"]
+#: Refinement modes, in the evaluation table's order.
+REFINE_MODES: tuple[str, ...] = get_args(RefineMode)
+#: Sources of the agents an edit changed.
+EDIT_SOURCES: frozenset[str] = frozenset({"edited", "inserted"})
+#: An edited agent differs from its log where their box centres are further apart than this, metres.
+DIVERGENCE_M = 0.05
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """A refined scenario.
+
+    Attributes:
+        states: every agent over the same steps; agents the predictor moved carry ``source == "refined"``
+            (edited and inserted agents keep their source).
+        mode: the refinement mode.
+        start_step: first predicted step (history before it).
+        replayed: ``object_id -> reason`` for agents the predictor should have driven but replayed.
+        predictor: name of the predictor (``""`` for mode ``"none"``).
+    """
+
+    states: AgentStates
+    mode: str
+    start_step: int
+    replayed: dict[str, str]
+    predictor: str
+
+    @property
+    def refined_ids(self) -> tuple[str, ...]:
+        """Ids of the agents whose path the predictor changed."""
+        return tuple(o for o, s in zip(self.states.object_ids, self.states.sources) if s == "refined")
+
+
+def edit_start_step(states: AgentStates, original: AgentStates | None = None) -> int:
+    """First step at which an edited / inserted agent exists and differs from its log (at least 1).
+
+    Args:
+        states: the edited scenario; original: the log (``None``: every edited agent counts as differing
+            wherever it is valid).
+    """
+    first = states.num_steps - 1
+    for r, (oid, source) in enumerate(zip(states.object_ids, states.sources)):
+        if source not in EDIT_SOURCES:
+            continue
+        differs = states.valid[r].copy()
+        if original is not None and oid in original.object_ids:
+            k = original.index(oid)
+            gap = np.linalg.norm(states.xy[r] - original.xy[k], axis=-1)
+            differs &= ~original.valid[k] | (gap > DIVERGENCE_M)
+        if differs.any():
+            first = min(first, int(np.argmax(differs)))
+    return int(np.clip(first, 1, max(states.num_steps - 1, 1)))
+
+
+def fixed_rows(states: AgentStates, mode: str) -> np.ndarray:
+    """``[F]`` rows the predictor must not move in ``mode`` (see the module docstring)."""
+    if mode not in REFINE_MODES:
+        raise ValueError(f"refinement mode must be one of {list(REFINE_MODES)}, got {mode!r}")
+    fixed = []
+    for r, (oid, category, source) in enumerate(zip(states.object_ids, states.categories, states.sources)):
+        movable = oid != EGO_ID and agent_kind(category) is not None
+        edited = source in EDIT_SOURCES
+        free = movable and (edited if mode == "single-agent" else (not edited and mode == "full"))
+        if not free:
+            fixed.append(r)
+    return np.asarray(fixed, dtype=np.int64)
+
+
+def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredictor | None, mode: str = "full",
+           *, original: AgentStates | None = None, start_step: int | None = None) -> Refinement:
+    """The scenario ``states`` with its free agents re-driven by ``predictor`` (module docstring).
+
+    Args:
+        states: the edited scenario (edited / inserted agents marked by their ``source``).
+        motion_map: the map to drive on.
+        predictor: the motion predictor (unused, may be ``None``, for mode ``"none"``).
+        mode: one of :data:`REFINE_MODES`.
+        original: the unedited scenario (to find where the edit starts; see :func:`edit_start_step`).
+        start_step: first predicted step (default: :func:`edit_start_step`).
+
+    Raises:
+        ValueError: unknown mode, or no predictor for a mode that needs one.
+    """
+    rows = fixed_rows(states, mode)
+    start = edit_start_step(states, original) if start_step is None else int(start_step)
+    if mode == "none" or len(rows) == states.num_agents:
+        return Refinement(states, mode, start, {}, "")
+    if predictor is None:
+        raise ValueError(f"refinement mode {mode!r} needs a motion predictor")
+    rollout = predictor.rollout(RolloutRequest(states, start, rows, motion_map))
+    out = rollout.states
+    if mode == "single-agent":  # the edited agents keep their source: the predictor only adjusted them
+        sources = tuple(s if s != "refined" or states.sources[r] not in EDIT_SOURCES else states.sources[r]
+                        for r, s in enumerate(out.sources))
+        out = dataclasses.replace(out, sources=sources)
+    if rollout.replayed:
+        logger.info("refinement (%s): %d agent(s) replay their log: %s", mode, len(rollout.replayed),
+                    "; ".join(f"{k}: {v}" for k, v in sorted(rollout.replayed.items())))
+    refined = Refinement(out, mode, start, dict(rollout.replayed), rollout.predictor)
+    logger.info("refinement (%s, %s) from step %d: %d agent(s) reacted", mode, rollout.predictor, start,
+                len(refined.refined_ids))
+    return refined

@@ -1,0 +1,95 @@
+"""Refinement modes: which rows a predictor may move, where prediction starts, sources of the result."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from simsplat_core.motion.predictor import MotionMap, Rollout, RolloutRequest
+from simsplat_core.motion.refine import edit_start_step, fixed_rows, refine
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.lane_graph import LaneGraph
+from simsplat_core.scenario.map_context import MapContext
+
+T = 20
+
+
+def _states(sources: list[str], categories: list[str] | None = None) -> AgentStates:
+    a = len(sources)
+    categories = categories or ["vehicle"] * a
+    xy = np.zeros((a, T, 2))
+    xy[:, :, 0] = np.arange(T)[None] * 1.0 + 10.0 * np.arange(a)[:, None]
+    xy[:, :, 1] = 3.5 * np.arange(a)[:, None]
+    return AgentStates(object_ids=("ego", *(f"a{k}" for k in range(1, a))), categories=tuple(categories),
+                       sources=tuple(sources), node_ids=np.arange(a, dtype=np.int64) - 1,
+                       frame_idx=np.arange(T), times=np.arange(T) * 0.1, xy=xy, z=np.zeros((a, T)),
+                       heading=np.zeros((a, T)), speed=np.full((a, T), 10.0), size=np.tile([4.5, 2.0, 1.5], (a, 1)),
+                       valid=np.ones((a, T), bool))
+
+
+class _Nudge:
+    """Test double: moves every free agent 1 m to the left from ``start_step`` on and marks it refined."""
+
+    name = "nudge"
+
+    def __init__(self) -> None:
+        self.requests: list[RolloutRequest] = []
+
+    def rollout(self, request: RolloutRequest) -> Rollout:
+        self.requests.append(request)
+        s = request.states
+        xy, sources = s.xy.copy(), list(s.sources)
+        for r in request.free_rows:
+            xy[r, request.start_step:, 1] += 1.0
+            sources[r] = "refined"
+        return Rollout(dataclasses.replace(s, xy=xy, sources=tuple(sources)), {}, self.name)
+
+
+def _map() -> MotionMap:
+    return MotionMap(LaneGraph.from_features([]), MapContext.from_features([]))
+
+
+def test_fixed_rows_per_mode() -> None:
+    states = _states(["log", "edited", "log", "inserted", "log"], ["vehicle", "vehicle", "pedestrian", "vehicle",
+                                                                     "static"])
+    assert fixed_rows(states, "none").tolist() == [0, 1, 2, 3, 4]
+    assert fixed_rows(states, "full").tolist() == [0, 1, 3, 4]  # ego, the edit, static objects
+    assert fixed_rows(states, "single-agent").tolist() == [0, 2, 4]  # only the edited agents are free
+    with pytest.raises(ValueError, match="refinement mode"):
+        fixed_rows(states, "partial")
+
+
+def test_start_step_is_where_the_edit_departs_from_the_log() -> None:
+    log = _states(["log", "log", "log"])
+    edited = dataclasses.replace(log, sources=("log", "edited", "log"), xy=log.xy.copy())
+    edited.xy[1, 7:, 0] += 2.0
+    assert edit_start_step(edited, log) == 7
+    inserted = log.with_agent("new", "vehicle", "inserted", xy=np.zeros((T, 2)), heading=np.zeros(T),
+                              speed=np.zeros(T), valid=np.ones(T, bool), size=(4.5, 2.0, 1.5))
+    assert edit_start_step(inserted, log) == 1  # present from the first frame: react from the first step
+
+
+def test_full_refinement_moves_only_free_agents_and_marks_them() -> None:
+    log = _states(["log", "log", "log", "log"])
+    edited = dataclasses.replace(log, sources=("log", "edited", "log", "log"), xy=log.xy.copy())
+    edited.xy[1, 5:, 0] += 1.0
+    nudge = _Nudge()
+    out = refine(edited, _map(), nudge, "full", original=log)
+    assert out.start_step == 5 and nudge.requests[0].start_step == 5
+    assert out.refined_ids == ("a2", "a3")
+    np.testing.assert_array_equal(out.states.xy[:2], edited.xy[:2])  # ego and the edited agent untouched
+    assert out.states.sources[1] == "edited"
+
+
+def test_single_agent_keeps_the_edited_source_and_none_changes_nothing() -> None:
+    log = _states(["log", "log", "log"])
+    edited = dataclasses.replace(log, sources=("log", "edited", "log"))
+    single = refine(edited, _map(), _Nudge(), "single-agent", original=log)
+    assert single.states.sources == ("log", "edited", "log")
+    assert single.states.xy[1, -1, 1] == pytest.approx(edited.xy[1, -1, 1] + 1.0)
+    none = refine(edited, _map(), None, "none", original=log)
+    assert none.states is edited and none.refined_ids == ()
+    with pytest.raises(ValueError, match="needs a motion predictor"):
+        refine(edited, _map(), None, "full", original=log)
