@@ -12,6 +12,10 @@ Three modes, the rows of the issue's Table 4 analogue:
 * ``"full"``: the edited and inserted agents keep the trajectory the edit gave them, and every other free
   agent is driven by the predictor so it reacts (follows, yields, waits, detours).
 
+In ``"full"`` mode only the agents the edit affects change: the predictor also rolls the unedited scenario out,
+and an agent whose rollout with the edit stays within :data:`AFFECTED_M` of its rollout without it keeps its
+log exactly (the predictor's own error against the log is not passed off as a reaction to the edit).
+
 The ego is always fixed: its cameras render the scene, and a render is only as good as the views the scene
 was reconstructed from. Static objects are fixed too. Prediction starts at ``start_step``: by default the
 first step where an edited or inserted agent differs from the log (at least 1), since an edit present from
@@ -40,6 +44,8 @@ REFINE_MODES: tuple[str, ...] = get_args(RefineMode)
 EDIT_SOURCES: frozenset[str] = frozenset({"edited", "inserted"})
 #: An edited agent differs from its log where their box centres are further apart than this, metres.
 DIVERGENCE_M = 0.05
+#: An agent reacts to the edit when its rollout with the edit leaves its rollout without it by more than this, m.
+AFFECTED_M = 0.3
 
 
 @dataclass(frozen=True)
@@ -102,6 +108,31 @@ def fixed_rows(states: AgentStates, mode: str) -> np.ndarray:
     return np.asarray(fixed, dtype=np.int64)
 
 
+def _only_affected(out: AgentStates, states: AgentStates, original: AgentStates, predictor: MotionPredictor,
+                   motion_map: MotionMap, start: int, fixed: np.ndarray) -> AgentStates:
+    """``out`` with every free agent the edit does not affect restored to its log (module docstring).
+
+    The unedited rollout keeps fixed what the edited one keeps fixed (by id), and the agents the edit removed.
+    """
+    fixed_ids = {states.object_ids[int(r)] for r in fixed}
+    base_fixed = [k for k, oid in enumerate(original.object_ids) if oid in fixed_ids or oid not in states.object_ids]
+    base = predictor.rollout(RolloutRequest(original, start, np.asarray(base_fixed, dtype=np.int64),
+                                            motion_map)).states
+    xy, heading, speed = out.xy.copy(), out.heading.copy(), out.speed.copy()
+    valid, z, sources = out.valid.copy(), out.z.copy(), list(out.sources)
+    for r, oid in enumerate(out.object_ids):
+        if oid in fixed_ids or oid not in original.object_ids:
+            continue
+        k = original.index(oid)
+        both = out.valid[r, start:] & base.valid[k, start:]
+        gap = np.linalg.norm(out.xy[r, start:] - base.xy[k, start:], axis=-1)[both]
+        same_presence = np.array_equal(out.valid[r, start:], base.valid[k, start:])
+        if same_presence and float(gap.max(initial=0.0)) <= AFFECTED_M:
+            xy[r], heading[r], speed[r] = states.xy[r], states.heading[r], states.speed[r]
+            valid[r], z[r], sources[r] = states.valid[r], states.z[r], states.sources[r]
+    return dataclasses.replace(out, xy=xy, heading=heading, speed=speed, valid=valid, z=z, sources=tuple(sources))
+
+
 def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredictor | None, mode: str = "full",
            *, original: AgentStates | None = None, start_step: int | None = None) -> Refinement:
     """The scenario ``states`` with its free agents re-driven by ``predictor`` (module docstring).
@@ -125,6 +156,8 @@ def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredicto
         raise ValueError(f"refinement mode {mode!r} needs a motion predictor")
     rollout = predictor.rollout(RolloutRequest(states, start, rows, motion_map))
     out = rollout.states
+    if mode == "full" and original is not None:
+        out = _only_affected(out, states, original, predictor, motion_map, start, rows)
     if mode == "single-agent":  # the edited agents keep their source: the predictor only adjusted them
         sources = tuple(s if s != "refined" or states.sources[r] not in EDIT_SOURCES else states.sources[r]
                         for r, s in enumerate(out.sources))

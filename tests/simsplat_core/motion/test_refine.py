@@ -30,17 +30,22 @@ def _states(sources: list[str], categories: list[str] | None = None) -> AgentSta
 
 
 class _Nudge:
-    """Test double: moves every free agent 1 m to the left from ``start_step`` on and marks it refined."""
+    """Test double: moves every free agent 1 m to the left from ``start_step`` on and marks it refined; with
+    ``only_edited`` only when the scenario holds an edited agent (a predictor whose free agents react to the edit),
+    otherwise always (a predictor whose error against the log has nothing to do with the edit)."""
 
     name = "nudge"
 
-    def __init__(self) -> None:
+    def __init__(self, only_edited: bool = True) -> None:
         self.requests: list[RolloutRequest] = []
+        self.only_edited = only_edited
 
     def rollout(self, request: RolloutRequest) -> Rollout:
         self.requests.append(request)
         s = request.states
         xy, sources = s.xy.copy(), list(s.sources)
+        if self.only_edited and not {"edited", "inserted"} & set(s.sources):
+            return Rollout(s, {}, self.name)
         for r in request.free_rows:
             xy[r, request.start_step:, 1] += 1.0
             sources[r] = "refined"
@@ -81,6 +86,17 @@ def test_full_refinement_moves_only_free_agents_and_marks_them() -> None:
     assert out.refined_ids == ("a2", "a3")
     np.testing.assert_array_equal(out.states.xy[:2], edited.xy[:2])  # ego and the edited agent untouched
     assert out.states.sources[1] == "edited"
+
+
+def test_full_refinement_keeps_the_log_of_agents_the_edit_does_not_affect() -> None:
+    log = _states(["log", "log", "log"])
+    edited = dataclasses.replace(log, sources=("log", "edited", "log"), xy=log.xy.copy())
+    edited.xy[1, 5:, 0] += 1.0
+    nudge = _Nudge(only_edited=False)  # moves free agents with or without the edit: not a reaction
+    out = refine(edited, _map(), nudge, "full", original=log)
+    assert len(nudge.requests) == 2  # the edited scenario and the unedited one
+    assert out.refined_ids == () and out.states.sources == edited.sources
+    np.testing.assert_array_equal(out.states.xy, edited.xy)
 
 
 def test_single_agent_keeps_the_edited_source_and_none_changes_nothing() -> None:
