@@ -225,6 +225,52 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
+#: An inserted vehicle asked to drive at a speed holds it when its plan never falls more than this below it
+#: (m/s, or this share of it when more) ...
+SPEED_HELD_TOL_MPS = 0.5
+SPEED_HELD_SHARE = 0.08
+#: ... looking this far ahead of its route position for the vehicle that holds it back, m.
+BLOCKER_AHEAD_M = 60.0
+BLOCKER_LATERAL_M = 2.0
+
+
+def asked_cruise_speed(behaviour: Behaviour | None, category: str) -> float | None:
+    """The speed (m/s) an inserted vehicle is asked to drive at ("travelling at 20 kph"), ``None`` when it is not
+    asked one to hold (no speed, a parked 0, or a stop / delay / follow that changes it on purpose)."""
+    if behaviour is None or behaviour.speed is None or behaviour.speed.mode != "absolute" or category != VEHICLE:
+        return None
+    if behaviour.stop is not None or behaviour.delay_s is not None or behaviour.follow is not None or behaviour.reverse:
+        return None
+    target = behaviour.speed.target_mps(0.0)
+    return target if target > 0.0 else None
+
+
+def speed_shortfall(motion: Motion, target: float, start_step: int) -> tuple[float, int]:
+    """``(largest amount the motion falls below target from start_step on, m/s; the step where it first falls
+    short by more than the tolerance, -1 when never)``."""
+    tol = max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target)
+    v = np.abs(motion.speed[start_step:])
+    short = target - v
+    over = np.flatnonzero(short > tol)
+    return float(short.max(initial=0.0)), (start_step + int(over[0]) if over.size else -1)
+
+
+def blocker_ahead(states: AgentStates, motion: Motion, step: int, exclude: tuple[str, ...] = ()) -> int | None:
+    """Row of the nearest vehicle ahead of ``motion`` on its heading line at ``step`` (within
+    :data:`BLOCKER_AHEAD_M` ahead and :data:`BLOCKER_LATERAL_M` aside, heading the same way); ``None``."""
+    xy, heading = motion.xy[step], float(motion.heading[step])
+    forward = np.array([np.cos(heading), np.sin(heading)])
+    rel = states.xy[:, step] - xy[None]
+    ahead, lateral = rel @ forward, np.abs(rel @ np.array([-forward[1], forward[0]]))
+    same_way = np.abs(wrap_angle(states.heading[:, step] - heading)) <= np.pi / 2
+    kinds = np.array([agent_kind(c) is not None for c in states.categories])
+    ok = (states.valid[:, step] & kinds & same_way & (ahead > 0.5) & (ahead <= BLOCKER_AHEAD_M)
+          & (lateral <= BLOCKER_LATERAL_M) & ~np.isin(np.asarray(states.object_ids), exclude))
+    if not ok.any():
+        return None
+    return int(np.flatnonzero(ok)[int(np.argmin(np.where(ok, ahead, np.inf)[ok]))])
+
+
 def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Placement | None, index: int,
                   label: str) -> Motion:
     """Agent ``row`` 's new motion from its current trajectory by ``behaviour`` (moved to ``placement`` first when

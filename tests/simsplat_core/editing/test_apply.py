@@ -314,11 +314,16 @@ def test_a_car_inserted_behind_a_parked_car_parks_in_line_with_it(ctx):
     assert rel @ forward < -(st.size[a, 0] + st.size[row, 0]) / 2  # behind it, clear of it
     assert abs(rel @ left) < 1e-6 and np.cos(st.heading[row, 0] - heading) > 0.999  # in line, facing its way
     assert "parked" in edited.outcomes[0].summary
-    # asked to move, it does
-    moving = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
-                                       "placement": {"relation": "behind", "anchor": {"object_id": anchor}},
-                                       "behaviour": {"speed": {"mode": "absolute", "value": 5.0}}}))
-    assert np.abs(moving.states.speed[moving.states.index("inserted_00")]).max() > 1.0
+    # asked to move, it does -- or, when the parked car right in front of it leaves it no room to hold the speed,
+    # the insert is refused naming that car (not carried out braking to a halt at once)
+    try:
+        moving = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
+                                           "placement": {"relation": "behind", "anchor": {"object_id": anchor}},
+                                           "behaviour": {"speed": {"mode": "absolute", "value": 5.0}}}))
+    except EditRefused as refused:
+        assert refused.reason == "infeasible_motion" and anchor in str(refused) and "slows it" in str(refused)
+    else:
+        assert np.abs(moving.states.speed[moving.states.index("inserted_00")]).min() > 4.0
 
 
 def test_a_pedestrian_inserted_to_cross_starts_at_the_road_edge(ctx):
@@ -357,3 +362,31 @@ def test_accelerate_ends_faster_or_is_refused_naming_the_traffic(ctx):
         assert end >= start + 0.5 * ACCELERATE_DELTA_MPS, (oid, start, end)  # clearly faster than it started
         outcomes["faster"] += 1
     assert outcomes["faster"] > 0, outcomes
+
+
+@pytest.mark.parametrize("speed", [6.0, 9.0, 12.0])
+def test_a_car_inserted_at_a_speed_holds_it_or_is_refused_naming_the_car_ahead(ctx, speed):
+    """An inserted car asked to drive at a speed holds it from the start (within the tolerance), placed within the
+    distance slack of the asked distance where it can, or is refused naming what slows it: never carried out
+    while the traffic ahead holds it back."""
+    from simsplat_core.editing.motion_glue import SPEED_HELD_SHARE, SPEED_HELD_TOL_MPS
+    from simsplat_core.editing.placement import distance_slack
+
+    tol = max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * speed)
+    outcomes = {"held": 0, "moved": 0, "refused": 0}
+    for distance in (8.0, 12.0, 16.0, 25.0):
+        try:
+            edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a yellow sedan"},
+                                               "placement": {"relation": "in_lane", "distance_m": distance},
+                                               "behaviour": {"speed": {"mode": "absolute", "value": speed}}}))
+        except EditRefused as refused:
+            assert refused.reason == "infeasible_motion" and "slows it to" in str(refused), str(refused)
+            outcomes["refused"] += 1
+            continue
+        row = edited.states.index("inserted_00")
+        assert float(np.abs(edited.states.speed[row]).min()) >= speed - tol - 1e-6, (distance, speed)
+        ahead = float(np.dot(edited.states.xy[row, 0] - ctx.states.xy[ctx.states.index("ego"), 0],
+                             [np.cos(ctx.states.heading[0, 0]), np.sin(ctx.states.heading[0, 0])]))
+        assert abs(ahead - distance) <= distance_slack(distance) + 0.5, (ahead, distance)
+        outcomes["moved" if "instead of" in edited.outcomes[0].summary else "held"] += 1
+    assert outcomes["held"] + outcomes["moved"] > 0, outcomes

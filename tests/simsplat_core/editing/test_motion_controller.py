@@ -419,3 +419,19 @@ def test_av2_turns_and_stops_on_the_real_map(shared_data: Path) -> None:
                 stopped += 1
     # measured: 5 left turns, 9 stops before a crosswalk, 18 refused (no left turn / crosswalk within reach) of 32
     assert turned >= 2 and stopped >= 2 and refused >= 2
+
+
+@pytest.mark.parametrize(("gap_m", "holds"), [(25.0, True), (40.0, True), (6.0, False)])
+def test_a_plan_at_its_wanted_speed_holds_it_behind_a_leader_leaving_it_room(gap_m: float, holds: bool) -> None:
+    """The gap keeping is the Improved IDM: at the wanted speed with more than the wanted gap (1.5 s headway) to a
+    leader driving as fast, the plan holds its speed (the plain IDM braked below it even with 40 m of room);
+    closer than the headway it still drops back."""
+    from simsplat_core.editing.speed_profile import LeaderTrack, plan_speed
+
+    times = np.arange(40) * 0.1
+    v = 8.0
+    lead_s = gap_m + 6.5 + v * times  # net gap gap_m at the start (gap_m below covers both half lengths + 2 m)
+    leader = LeaderTrack(s=lead_s[None], v=np.full((1, 40), v), present=np.ones((1, 40), bool),
+                         gap_m=np.array([6.5]))
+    plan = plan_speed(times, t0=0.0, s0=0.0, v0=v, v_ref=lambda t: v, limits=VEHICLE_LIMITS, leader=leader)
+    assert (float(np.abs(plan.v).min()) >= v - 0.05) is holds, plan.v.round(2)
