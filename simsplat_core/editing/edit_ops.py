@@ -38,7 +38,14 @@ from simsplat_core.editing.motion_glue import (
     speed_shortfall,
 )
 from simsplat_core.editing.options import EditorOptions
-from simsplat_core.editing.placement import NUDGE_STEP_M, AnchorPose, PlacedPose, distance_slack, place_row
+from simsplat_core.editing.placement import (
+    NUDGE_M,
+    NUDGE_STEP_M,
+    AnchorPose,
+    PlacedPose,
+    distance_slack,
+    place_clear_row,
+)
 from simsplat_core.editing.result import AddedNode, CommandOutcome, EditDelta, EditRefused
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.trajectory import agent_kind
@@ -256,7 +263,14 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
     if target is not None:
         first = _spot_holding_speed(draft, command, placement, asset, anchor, step, index, first, target)
     new_ids, lines = [], []
-    for placed in place_row(first, count=command.asset.count, spacing_m=gap, size=asset.size, lanes=draft.ctx.lanes):
+    reach = NUDGE_M if placement.distance_m is None else distance_slack(placement.distance_m)
+    try:
+        row = place_clear_row(first, count=command.asset.count, spacing_m=gap, size=asset.size,
+                              lanes=draft.ctx.lanes, map_ctx=draft.ctx.map_ctx, occupied=draft.states,
+                              frame=int(draft.states.frame_idx[step]), reach=reach, category=asset.category)
+    except EditRefused as exc:
+        raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
+    for placed in row:
         motion = plan_inserted(draft, command.behaviour, asset, placed, step, index)
         if target is not None:
             _check_speed_held(draft, command, asset, motion, target, step, index, "")
