@@ -401,6 +401,10 @@ def _maybe_start_braking(s: float, v: float, a: float, t: float, stop: StopTarge
         if brake_time(speed, acc, comfort, jerk) < left - SUBSTEP_S:
             return None
         decel = _solve_decel(lambda d: brake_time(speed, acc, d, jerk), max(left, 0.0), 0.05, lim.hard_decel_mps2)
+        if brake_time(speed, acc, decel, jerk) > left + 0.05:  # comfort jerk too slow: the hard jerk
+            jerk = lim.hard_jerk_mps3
+            decel = _solve_decel(lambda d: brake_time(speed, acc, d, jerk), max(left, 0.0), 0.05,
+                                 lim.hard_decel_mps2)
         return [(d, sign * j) for d, j in brake_segments(speed, acc, decel, jerk)]
     return None
 

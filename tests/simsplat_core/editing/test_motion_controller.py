@@ -435,3 +435,20 @@ def test_a_plan_at_its_wanted_speed_holds_it_behind_a_leader_leaving_it_room(gap
                          gap_m=np.array([6.5]))
     plan = plan_speed(times, t0=0.0, s0=0.0, v0=v, v_ref=lambda t: v, limits=VEHICLE_LIMITS, leader=leader)
     assert (float(np.abs(plan.v).min()) >= v - 0.05) is holds, plan.v.round(2)
+
+
+@pytest.mark.parametrize(("speed", "by_s"), [(9.8, 2.5), (12.0, 2.5), (8.0, 1.8)])
+def test_a_stop_by_a_time_too_soon_for_comfort_brakes_harder_and_stands_by_then(world, speed: float,
+                                                                              by_s: float) -> None:
+    """Comfortable braking (3 m/s^2, jerk 5) from ~10 m/s takes ~3.5 s; a stop asked by 2.5 s brakes harder
+    (within the hard limits) and stands by then (it stood only from ~3.6 s before)."""
+    plan = _car(world, Behaviour(stop=StopSpec(at_time_s=by_s)), speed=speed, before_stop_m=70.0, n=60)
+    still = np.flatnonzero(np.abs(plan.speed) < 0.05)
+    assert still.size and plan.times[still[0]] <= by_s + 0.15, plan.speed.round(2)
+    _within_limits(plan, decel=VEHICLE_LIMITS.hard_decel_mps2, jerk=VEHICLE_LIMITS.hard_jerk_mps3)
+
+
+def test_a_stop_by_a_time_even_hard_braking_cannot_make_is_refused(world) -> None:
+    with pytest.raises(EditRefused, match=r"cannot be at rest by 0.5 s: braking as hard as allowed") as err:
+        _car(world, Behaviour(stop=StopSpec(at_time_s=0.5)), speed=14.0, before_stop_m=70.0, n=60)
+    assert err.value.reason == "infeasible_motion"

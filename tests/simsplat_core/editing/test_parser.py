@@ -190,6 +190,11 @@ STOP: list[tuple[str, list[dict[str, Any]]]] = [
     ("stop the van", [{"op": MOD, "target.description": "the van", "behaviour.stop": "set"}]),
     ("make the car stop at 2 s", [{"op": MOD, "behaviour.stop.at_time_s": 2.0}]),
     ("make the bus stop after 1.5 seconds", [{"op": MOD, "behaviour.stop.at_time_s": 1.5}]),
+    # "be standing still / stationary / at a standstill by T" is a stop by that time (the time was dropped)
+    ("The red saloon car should be standing still after 2.5 secs.",
+     [{"op": MOD, TD: "red saloon car", "behaviour.stop.at_time_s": 2.5}]),
+    ("the van should be stationary by 3 seconds", [{"op": MOD, "behaviour.stop.at_time_s": 3.0}]),
+    ("the silver car should be at a standstill by 2 s", [{"op": MOD, "behaviour.stop.at_time_s": 2.0}]),
     ("the truck should stop before the crosswalk", [{"op": MOD, TD: "truck", "behaviour.stop.before": "crosswalk"}]),
     ("stop the van before the intersection",
      [{"op": MOD, "target.description": "the van", "behaviour.stop.before": "intersection"}]),
