@@ -36,7 +36,8 @@ from simsplat_core.editing.motion_requests import (
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import wrap_angle
-from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
+from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scenario.vocabulary import PARKED, VEHICLE
 from simsplat_core.scene.pose_track import PoseTrack
@@ -287,7 +288,85 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
                  object_id=states.object_ids[row])
     if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
-    return Motion.planned(plan, describe_behaviour(behaviour))
+    motion = Motion.planned(plan, describe_behaviour(behaviour))
+    if behaviour.delay_s is not None:
+        _check_delay_kept(draft, row, motion, log, behaviour.delay_s, start.step, index, label)
+    return motion
+
+
+#: A delayed start is carried out when the agent then covers at least this share of what its log covers in
+#: the time left after the delay.
+DELAY_PROGRESS_SHARE = 0.5
+#: An agent whose log moves less than this (m, first to last position) does not move in the log.
+LOG_MOVES_M = 1.0
+
+
+def _path_length(xy: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum()) if len(xy) > 1 else 0.0
+
+
+def first_overlap(states: AgentStates, motion: Motion, size: np.ndarray,
+                  exclude: tuple[str, ...]) -> tuple[int, int] | None:
+    """``(agent row, step)`` of the first agent of ``states`` (but ``exclude``) whose box overlaps ``motion`` 's
+    (box ``size``) at a step where both exist, ``None`` when none does."""
+    others = [r for r in range(states.num_agents) if states.object_ids[r] not in exclude]
+    for k in np.flatnonzero(motion.valid):
+        rows = np.array([r for r in others if states.valid[r, k]], dtype=np.int64)
+        if not rows.size:
+            continue
+        hit = footprints_overlap(np.broadcast_to(motion.xy[k], (len(rows), 2)), np.full(len(rows), motion.heading[k]),
+                                 np.asarray(size, np.float64)[:2], states.xy[rows, k], states.heading[rows, k],
+                                 states.size[rows, :2])
+        if hit.any():
+            return int(rows[hit][0]), int(k)
+    return None
+
+
+def _check_delay_kept(draft: Draft, row: int, motion: Motion, log: LogTrajectory, delay: float, start_step: int,
+                      index: int, label: str) -> None:
+    """Refuse a delayed start that is meaningless or cannot be carried out: the agent does not move in its log
+    (nothing to start later), or, held back by the other agents (which replay their log and do not make room),
+    it covers under :data:`DELAY_PROGRESS_SHARE` of what its log covers in the time left after the delay --
+    naming the agent in its way."""
+    states = draft.states
+    valid = np.flatnonzero(log.valid)
+    moved = float(np.linalg.norm(log.xy[valid[-1]] - log.xy[valid[0]])) if valid.size else 0.0
+    if moved < LOG_MOVES_M:
+        raise EditRefused(f"{label} does not move in the log (it stays within {moved:.1f} m): a delayed start needs "
+                          "an agent that sets off; give it a speed to drive off instead", reason="infeasible_motion",
+                          command_index=index)
+    times = states.times
+    until = float(times[-1]) - delay
+    keep = valid[(valid >= start_step) & (times[valid] <= until + 1e-9)]
+    expected = _path_length(log.xy[keep])
+    steps = np.flatnonzero(motion.valid)
+    steps = steps[steps >= start_step]
+    got = _path_length(motion.xy[steps])
+    if expected <= LOG_MOVES_M or got >= DELAY_PROGRESS_SHARE * expected:
+        return
+    hit = first_overlap(states, motion, states.size[row], (states.object_ids[row],))
+    if hit is not None:
+        other, k = hit
+        why = f"{_name(draft, other)} (replaying its log) runs into it at {times[k]:.1f} s"
+    else:
+        ahead = blocker_ahead(states, motion, int(steps[-1]), (states.object_ids[row],))
+        why = (f"{_name(draft, ahead)} ahead of it holds it back" if ahead is not None
+               else "the traffic around it holds it back")
+    raise EditRefused(f"{label} cannot set off {delay:g} s later: {why}; it would move {got:.1f} m where its log "
+                      f"covers {expected:.1f} m in the time left (the other agents replay their log and do not make "
+                      "room)", reason="infeasible_motion", command_index=index)
+
+
+def _name(draft: Draft, row: int) -> str:
+    """How messages name agent ``row`` of the draft ("veh_01 (node 11): a white sedan", "the ego vehicle")."""
+    states = draft.states
+    oid = states.object_ids[row]
+    if oid == EGO_ID:
+        return "the ego vehicle"
+    try:
+        return draft.describe(int(states.node_ids[row]))
+    except KeyError:
+        return f"{states.categories[row]} {oid!r}"
 
 
 #: A faster speed counts as reached when the plan ends at this share of the asked speed or more.

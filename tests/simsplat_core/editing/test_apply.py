@@ -390,3 +390,39 @@ def test_a_car_inserted_at_a_speed_holds_it_or_is_refused_naming_the_car_ahead(c
         assert abs(ahead - distance) <= distance_slack(distance) + 0.5, (ahead, distance)
         outcomes["moved" if "instead of" in edited.outcomes[0].summary else "held"] += 1
     assert outcomes["held"] + outcomes["moved"] > 0, outcomes
+
+
+def test_a_delayed_start_sets_off_later_or_is_refused_saying_why(ctx):
+    """A delay of a vehicle that stands in its log is refused as meaningless; every moving one either sets off
+    after the delay and covers at least half of what its log covers in the time left, or is refused naming the
+    agent in its way (never carried out standing where it was the whole time)."""
+    from simsplat_core.editing.motion_glue import DELAY_PROGRESS_SHARE
+
+    st = ctx.states
+    outcomes = {"kept": 0, "refused": 0, "standing": 0}
+    for r, (oid, category) in enumerate(zip(st.object_ids, st.categories, strict=True)):
+        if category != "vehicle" or oid == "ego" or st.valid[r].sum() < 30:
+            continue
+        valid = np.flatnonzero(st.valid[r])
+        log_moved = float(np.linalg.norm(st.xy[r, valid[-1]] - st.xy[r, valid[0]]))
+        try:
+            edited = apply_edit(ctx, EditProgram(commands=[EditCommand(
+                op="modify", target=TargetRef(object_id=oid), behaviour=Behaviour(delay_s=1.5))]))
+        except EditRefused as refused:
+            assert refused.reason == "infeasible_motion", str(refused)
+            if log_moved < 1.0:
+                assert "does not move in the log" in str(refused)
+                outcomes["standing"] += 1
+            else:
+                assert "cannot set off 1.5 s later" in str(refused) and "replaying its log" in str(refused) \
+                    or "holds it back" in str(refused), str(refused)
+                outcomes["refused"] += 1
+            continue
+        assert log_moved >= 1.0, oid  # a parked car is never "delayed"
+        j = edited.states.index(oid)
+        keep = valid[st.times[valid] <= st.times[-1] - 1.5]
+        expected = float(np.linalg.norm(np.diff(st.xy[r, keep], axis=0), axis=1).sum())
+        got = float(np.linalg.norm(np.diff(edited.states.xy[j, valid], axis=0), axis=1).sum())
+        assert got >= DELAY_PROGRESS_SHARE * expected, (oid, got, expected)
+        outcomes["kept"] += 1
+    assert outcomes["kept"] > 0 and outcomes["standing"] > 0, outcomes
