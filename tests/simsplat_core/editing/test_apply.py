@@ -426,3 +426,36 @@ def test_a_delayed_start_sets_off_later_or_is_refused_saying_why(ctx):
         assert got >= DELAY_PROGRESS_SHARE * expected, (oid, got, expected)
         outcomes["kept"] += 1
     assert outcomes["kept"] > 0 and outcomes["standing"] > 0, outcomes
+
+
+def test_an_asked_faster_speed_is_met_at_the_end_or_refused_naming_the_traffic(ctx):
+    """"50 % faster": a carried-out edit ends (mean over the last 0.5 s, not just its last step) within the
+    tolerance of the asked speed, unless even a free road could not get there in the time left; otherwise it
+    is refused naming the traffic ahead (before, ending at 0.8 of it while still accelerating passed)."""
+    from simsplat_core.editing.motion_glue import SPEED_HELD_SHARE, SPEED_HELD_TOL_MPS, end_speed
+
+    st = ctx.states
+    outcomes = {"met": 0, "refused": 0, "limited": 0}
+    for r, (oid, category) in enumerate(zip(st.object_ids, st.categories, strict=True)):
+        if category != "vehicle" or oid == "ego" or st.valid[r].sum() < 30:
+            continue
+        start = abs(float(st.speed[r][np.flatnonzero(st.valid[r])[0]]))
+        if start < 2.0:
+            continue
+        target = 1.5 * start
+        try:
+            edited = apply_edit(ctx, EditProgram(commands=[EditCommand(
+                op="modify", target=TargetRef(object_id=oid),
+                behaviour=Behaviour(speed=SpeedSpec(mode="factor", value=1.5)))]))
+        except EditRefused as refused:
+            assert refused.reason == "infeasible_motion" and "traffic ahead" in str(refused), str(refused)
+            outcomes["refused"] += 1
+            continue
+        j = edited.states.index(oid)
+        end = end_speed(edited.states.speed[j], edited.states.times)
+        met = end >= target - max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target)
+        # not met: only a physical limit (a curve ahead, the time left) that a free road has too -- then it still
+        # ends no slower than its log does
+        assert met or end >= end_speed(st.speed[r], st.times) - 0.1, (oid, start, end)
+        outcomes["met" if met else "limited"] += 1
+    assert outcomes["met"] > 0, outcomes
