@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -290,12 +291,16 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     motion = Motion.planned(plan, describe_behaviour(behaviour))
     if behaviour.delay_s is not None:
-        _check_delay_kept(draft, row, motion, log, behaviour.delay_s, start.step, index, label)
+        def free_plan() -> Motion:
+            return Motion.planned(_plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
+                                        object_id=states.object_ids[row], with_traffic=False), "")
+
+        _check_delay_kept(draft, row, motion, free_plan, log, behaviour.delay_s, start.step, index, label)
     return motion
 
 
-#: A delayed start is carried out when the agent then covers at least this share of what its log covers in
-#: the time left after the delay.
+#: A delayed start is carried out when the agent then covers at least this share of what the same delayed
+#: start covers on a free road (no other agents).
 DELAY_PROGRESS_SHARE = 0.5
 #: An agent whose log moves less than this (m, first to last position) does not move in the log.
 LOG_MOVES_M = 1.0
@@ -322,12 +327,12 @@ def first_overlap(states: AgentStates, motion: Motion, size: np.ndarray,
     return None
 
 
-def _check_delay_kept(draft: Draft, row: int, motion: Motion, log: LogTrajectory, delay: float, start_step: int,
-                      index: int, label: str) -> None:
+def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callable[[], Motion], log: LogTrajectory,
+                      delay: float, start_step: int, index: int, label: str) -> None:
     """Refuse a delayed start that is meaningless or cannot be carried out: the agent does not move in its log
     (nothing to start later), or, held back by the other agents (which replay their log and do not make room),
-    it covers under :data:`DELAY_PROGRESS_SHARE` of what its log covers in the time left after the delay --
-    naming the agent in its way."""
+    it covers under :data:`DELAY_PROGRESS_SHARE` of what the same delayed start covers on a free road
+    (``free_plan()``) -- naming the agent in its way."""
     states = draft.states
     valid = np.flatnonzero(log.valid)
     moved = float(np.linalg.norm(log.xy[valid[-1]] - log.xy[valid[0]])) if valid.size else 0.0
@@ -336,12 +341,12 @@ def _check_delay_kept(draft: Draft, row: int, motion: Motion, log: LogTrajectory
                           "an agent that sets off; give it a speed to drive off instead", reason="infeasible_motion",
                           command_index=index)
     times = states.times
-    until = float(times[-1]) - delay
-    keep = valid[(valid >= start_step) & (times[valid] <= until + 1e-9)]
-    expected = _path_length(log.xy[keep])
     steps = np.flatnonzero(motion.valid)
     steps = steps[steps >= start_step]
     got = _path_length(motion.xy[steps])
+    free = free_plan()
+    free_steps = np.flatnonzero(free.valid)
+    expected = _path_length(free.xy[free_steps[free_steps >= start_step]])
     if expected <= LOG_MOVES_M or got >= DELAY_PROGRESS_SHARE * expected:
         return
     hit = first_overlap(states, motion, states.size[row], (states.object_ids[row],))
@@ -352,9 +357,9 @@ def _check_delay_kept(draft: Draft, row: int, motion: Motion, log: LogTrajectory
         ahead = blocker_ahead(states, motion, int(steps[-1]), (states.object_ids[row],))
         why = (f"{_name(draft, ahead)} ahead of it holds it back" if ahead is not None
                else "the traffic around it holds it back")
-    raise EditRefused(f"{label} cannot set off {delay:g} s later: {why}; it would move {got:.1f} m where its log "
-                      f"covers {expected:.1f} m in the time left (the other agents replay their log and do not make "
-                      "room)", reason="infeasible_motion", command_index=index)
+    raise EditRefused(f"{label} cannot set off {delay:g} s later: {why}; it would move {got:.1f} m where a free road "
+                      f"lets it cover {expected:.1f} m (the other agents replay their log and do not make room)",
+                      reason="infeasible_motion", command_index=index)
 
 
 def _name(draft: Draft, row: int) -> str:
@@ -397,13 +402,17 @@ def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behav
     # "speed up" (whose target is a convention) needs a clear gain: SPEED_REACHED_SHARE of it
     need = (target - max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target) if behaviour.speed is not None
             else SPEED_REACHED_SHARE * target)
-    reached = end_speed(plan.speed, plan.times)
+    def ends_at(p: PlannedTrajectory) -> float:  # a plain speed-up: its last step, as it always was
+        return end_speed(p.speed, p.times) if behaviour.speed is not None else abs(float(p.speed[-1]))
+
+    reached = ends_at(plan)
     if reached >= need:
         return
     free = _plan(draft, VEHICLE, behaviour, start, size, log, index, label, backfill=False, object_id=object_id,
                  with_traffic=False)
-    free_end = end_speed(free.speed, free.times)
-    if free_end >= need or free_end - reached > max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target):
+    free_end = ends_at(free)
+    taken = behaviour.speed is not None and free_end - reached > max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target)
+    if free_end >= need or taken:
         top = float(np.max(np.abs(plan.speed[start.step:]), initial=0.0))
         behind = np.flatnonzero(np.abs(free.speed) - np.abs(plan.speed) > SPEED_HELD_TOL_MPS)
         row = (blocker_ahead(draft.states, Motion.planned(plan, ""), int(behind[0]), (object_id,))
