@@ -26,16 +26,28 @@ from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import AssetSpec, Behaviour, EditCommand, Placement
 from simsplat_core.editing.grounding import Grounder
 from simsplat_core.editing.motion_glue import (
+    Motion,
     anchor_pose,
+    asked_cruise_speed,
+    blocker_ahead,
     changed_motion,
+    describe_behaviour,
     plan_inserted,
     plan_modified,
     resolve,
+    speed_shortfall,
 )
 from simsplat_core.editing.options import EditorOptions
-from simsplat_core.editing.placement import place_row
+from simsplat_core.editing.placement import (
+    NUDGE_M,
+    NUDGE_STEP_M,
+    AnchorPose,
+    PlacedPose,
+    distance_slack,
+    place_clear_row,
+)
 from simsplat_core.editing.result import AddedNode, CommandOutcome, EditDelta, EditRefused
-from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scene.nodes import ObjectNode
 from simsplat_core.scene.pose_track import PoseTrack
@@ -249,9 +261,21 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
         anchor = anchor_pose(draft, found.object_ids[0], draft.describe(anchor_ids[0]), step, index)
     gap = command.asset.spacing_m if command.asset.spacing_m is not None else ROW_GAP_M[asset.category]
     first = resolve(draft, placement, asset, anchor, step, index, command.behaviour)
+    target = asked_cruise_speed(command.behaviour, asset.category)
+    if target is not None:
+        first = _spot_holding_speed(draft, command, placement, asset, anchor, step, index, first, target)
     new_ids, lines = [], []
-    for placed in place_row(first, count=command.asset.count, spacing_m=gap, size=asset.size, lanes=draft.ctx.lanes):
+    reach = NUDGE_M if placement.distance_m is None else distance_slack(placement.distance_m)
+    try:
+        row = place_clear_row(first, count=command.asset.count, spacing_m=gap, size=asset.size,
+                              lanes=draft.ctx.lanes, map_ctx=draft.ctx.map_ctx, occupied=draft.states,
+                              frame=int(draft.states.frame_idx[step]), reach=reach, category=asset.category)
+    except EditRefused as exc:
+        raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
+    for placed in row:
         motion = plan_inserted(draft, command.behaviour, asset, placed, step, index)
+        if target is not None:
+            _check_speed_held(draft, command, asset, motion, target, step, index, "")
         object_id = draft.new_object_id()
         node_id = draft.take_node_id()
         z = np.full(draft.states.num_steps, placed.z)
@@ -268,6 +292,74 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
     summary = f"inserted {asset.caption} (asset {asset.asset_id}) {where} as {'; '.join(lines)}"
     return CommandOutcome(command, anchor_node_ids=anchor_ids, new_object_ids=tuple(new_ids),
                           changed_object_ids=tuple(new_ids), summary=summary)
+
+
+def _spot_holding_speed(draft: Draft, command: EditCommand, placement: Placement, asset: Asset,
+                        anchor: AnchorPose | None, step: int, index: int, first: PlacedPose,
+                        target: float) -> PlacedPose:
+    """``first`` when an inserted vehicle asked to drive at ``target`` m/s can hold that speed there behind the
+    traffic ahead (which replays its log); else the spot nearest the asked distance (within
+    ``placement.distance_slack``, not nudged) where it can; else ``EditRefused`` naming the vehicle ahead."""
+    motion = plan_inserted(draft, command.behaviour, asset, first, step, index)
+    if speed_shortfall(motion, target, step)[1] < 0:
+        return first
+    asked = placement.distance_m
+    slack = distance_slack(asked) if asked is not None else 0.0
+    if asked is not None:
+        offsets = np.arange(NUDGE_STEP_M, slack + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
+        for delta in sorted([*offsets.tolist(), *(-offsets).tolist()], key=lambda d: (abs(d), d)):
+            distance = asked + delta
+            if distance <= 0.0:
+                continue
+            try:
+                placed = resolve(draft, placement.model_copy(update={"distance_m": distance}), asset, anchor, step,
+                                 index, command.behaviour)
+                if placed.note:  # nudged to clear something: no longer at ``distance``
+                    continue
+                moved = plan_inserted(draft, command.behaviour, asset, placed, step, index)
+            except EditRefused:
+                continue
+            if speed_shortfall(moved, target, step)[1] < 0:
+                note = (f"placed {distance:g} m instead of {asked:g} m, where it can hold {target:.1f} m/s behind "
+                        "the traffic ahead")
+                return dataclasses.replace(placed, note=f"{placed.note}; {note}" if placed.note else note)
+    within = f" (nor anywhere within {slack:g} m of the asked {asked:g} m)" if asked is not None else ""
+    refusal = _speed_refusal(draft, command, asset, motion, target, step, index, within)
+    return first if refusal is None else _raise(refusal)
+
+
+def _raise(err: EditRefused) -> PlacedPose:
+    raise err
+
+
+def _check_speed_held(draft: Draft, command: EditCommand, asset: Asset, motion: Motion, target: float, step: int,
+                      index: int, within: str) -> None:
+    refusal = _speed_refusal(draft, command, asset, motion, target, step, index, within)
+    if refusal is not None:
+        raise refusal
+
+
+def _speed_refusal(draft: Draft, command: EditCommand, asset: Asset, motion: Motion, target: float, step: int,
+                   index: int, within: str) -> EditRefused | None:
+    """The refusal of an inserted vehicle asked to drive at ``target`` m/s whose plan cannot hold it, naming the
+    vehicle ahead that holds it back (the other agents replay their log and do not make room); ``None``: held."""
+    short, at = speed_shortfall(motion, target, step)
+    if at < 0:
+        return None
+    row = blocker_ahead(draft.states, motion, at)
+    if row is None:
+        who = "the traffic ahead"
+    elif draft.states.object_ids[row] == EGO_ID:
+        who = "the ego vehicle ahead"
+    else:
+        try:
+            who = draft.describe(int(draft.states.node_ids[row])) + " ahead of it"
+        except KeyError:
+            who = f"{draft.states.categories[row]} {draft.states.object_ids[row]!r} ahead of it"
+    return EditRefused(f"cannot insert {asset.caption} driving at {target:.1f} m/s "
+                       f"({describe_behaviour(command.behaviour)}){within}: {who} slows it to {target - short:.1f} "
+                       f"m/s (from {draft.states.times[at]:.1f} s on; the other agents replay their log and do not "
+                       "make room)", reason="infeasible_motion", command_index=index)
 
 
 def modify(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:

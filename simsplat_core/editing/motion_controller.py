@@ -67,6 +67,8 @@ logger = logging.getLogger(__name__)
 ON_ROUTE_M = 2.5
 #: Traffic about to enter the route within this time blocks it where it will enter (crossing traffic), s.
 ANTICIPATE_S = 2.0
+#: A stop asked by a time may come to rest this much later (s); later is refused.
+STOP_BY_TOL_S = 0.15
 #: The agent's own log counts as on its edited route within this lateral distance, m.
 LOG_ON_ROUTE_M = 0.5
 #: Length of the ramp that eases a log path onto a lane path (turns), m.
@@ -540,6 +542,11 @@ def _plan(req: _Common, s0: float, v0: float, v_ref: Callable[[float], float], s
                  "it cannot come to rest")
         raise EditRefused(f"{req.label} cannot make the stop before the log ends ({end:.1f} s): {where}",
                           reason="infeasible_motion")
+    if (must_stop and stop is not None and stop.at_time is not None and plan.stopped_at is not None
+            and plan.stopped_at > stop.at_time + STOP_BY_TOL_S):
+        raise EditRefused(f"{req.label} cannot be at rest by {stop.at_time:g} s: braking as hard as allowed "
+                          f"({req.limits.hard_decel_mps2:g} m/s^2) from {abs(v0):.1f} m/s it stands only from "
+                          f"{plan.stopped_at:.1f} s", reason="infeasible_motion")
     return plan
 
 

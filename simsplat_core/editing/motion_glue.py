@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -36,7 +37,8 @@ from simsplat_core.editing.motion_requests import (
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import wrap_angle
-from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
+from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scenario.vocabulary import PARKED, VEHICLE
 from simsplat_core.scene.pose_track import PoseTrack
@@ -225,6 +227,52 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     return Motion.planned(plan, describe_behaviour(behaviour))
 
 
+#: An inserted vehicle asked to drive at a speed holds it when its plan never falls more than this below it
+#: (m/s, or this share of it when more) ...
+SPEED_HELD_TOL_MPS = 0.5
+SPEED_HELD_SHARE = 0.08
+#: ... looking this far ahead of its route position for the vehicle that holds it back, m.
+BLOCKER_AHEAD_M = 60.0
+BLOCKER_LATERAL_M = 2.0
+
+
+def asked_cruise_speed(behaviour: Behaviour | None, category: str) -> float | None:
+    """The speed (m/s) an inserted vehicle is asked to drive at ("travelling at 20 kph"), ``None`` when it is not
+    asked one to hold (no speed, a parked 0, or a stop / delay / follow that changes it on purpose)."""
+    if behaviour is None or behaviour.speed is None or behaviour.speed.mode != "absolute" or category != VEHICLE:
+        return None
+    if behaviour.stop is not None or behaviour.delay_s is not None or behaviour.follow is not None or behaviour.reverse:
+        return None
+    target = behaviour.speed.target_mps(0.0)
+    return target if target > 0.0 else None
+
+
+def speed_shortfall(motion: Motion, target: float, start_step: int) -> tuple[float, int]:
+    """``(largest amount the motion falls below target from start_step on, m/s; the step where it first falls
+    short by more than the tolerance, -1 when never)``."""
+    tol = max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target)
+    v = np.abs(motion.speed[start_step:])
+    short = target - v
+    over = np.flatnonzero(short > tol)
+    return float(short.max(initial=0.0)), (start_step + int(over[0]) if over.size else -1)
+
+
+def blocker_ahead(states: AgentStates, motion: Motion, step: int, exclude: tuple[str, ...] = ()) -> int | None:
+    """Row of the nearest vehicle ahead of ``motion`` on its heading line at ``step`` (within
+    :data:`BLOCKER_AHEAD_M` ahead and :data:`BLOCKER_LATERAL_M` aside, heading the same way); ``None``."""
+    xy, heading = motion.xy[step], float(motion.heading[step])
+    forward = np.array([np.cos(heading), np.sin(heading)])
+    rel = states.xy[:, step] - xy[None]
+    ahead, lateral = rel @ forward, np.abs(rel @ np.array([-forward[1], forward[0]]))
+    same_way = np.abs(wrap_angle(states.heading[:, step] - heading)) <= np.pi / 2
+    kinds = np.array([agent_kind(c) is not None for c in states.categories])
+    ok = (states.valid[:, step] & kinds & same_way & (ahead > 0.5) & (ahead <= BLOCKER_AHEAD_M)
+          & (lateral <= BLOCKER_LATERAL_M) & ~np.isin(np.asarray(states.object_ids), exclude))
+    if not ok.any():
+        return None
+    return int(np.flatnonzero(ok)[int(np.argmin(np.where(ok, ahead, np.inf)[ok]))])
+
+
 def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Placement | None, index: int,
                   label: str) -> Motion:
     """Agent ``row`` 's new motion from its current trajectory by ``behaviour`` (moved to ``placement`` first when
@@ -241,32 +289,138 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
                  object_id=states.object_ids[row])
     if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
-    return Motion.planned(plan, describe_behaviour(behaviour))
+    motion = Motion.planned(plan, describe_behaviour(behaviour))
+    if behaviour.delay_s is not None:
+        def free_plan() -> Motion:
+            return Motion.planned(_plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
+                                        object_id=states.object_ids[row], with_traffic=False), "")
+
+        _check_delay_kept(draft, row, motion, free_plan, log, behaviour.delay_s, start.step, index, label)
+    return motion
+
+
+#: A delayed start is carried out when the agent then covers at least this share of what the same delayed
+#: start covers on a free road (no other agents).
+DELAY_PROGRESS_SHARE = 0.5
+#: An agent whose log moves less than this (m, first to last position) does not move in the log.
+LOG_MOVES_M = 1.0
+
+
+def _path_length(xy: np.ndarray) -> float:
+    return float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum()) if len(xy) > 1 else 0.0
+
+
+def first_overlap(states: AgentStates, motion: Motion, size: np.ndarray,
+                  exclude: tuple[str, ...]) -> tuple[int, int] | None:
+    """``(agent row, step)`` of the first agent of ``states`` (but ``exclude``) whose box overlaps ``motion`` 's
+    (box ``size``) at a step where both exist, ``None`` when none does."""
+    others = [r for r in range(states.num_agents) if states.object_ids[r] not in exclude]
+    for k in np.flatnonzero(motion.valid):
+        rows = np.array([r for r in others if states.valid[r, k]], dtype=np.int64)
+        if not rows.size:
+            continue
+        hit = footprints_overlap(np.broadcast_to(motion.xy[k], (len(rows), 2)), np.full(len(rows), motion.heading[k]),
+                                 np.asarray(size, np.float64)[:2], states.xy[rows, k], states.heading[rows, k],
+                                 states.size[rows, :2])
+        if hit.any():
+            return int(rows[hit][0]), int(k)
+    return None
+
+
+def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callable[[], Motion], log: LogTrajectory,
+                      delay: float, start_step: int, index: int, label: str) -> None:
+    """Refuse a delayed start that is meaningless or cannot be carried out: the agent does not move in its log
+    (nothing to start later), or, held back by the other agents (which replay their log and do not make room),
+    it covers under :data:`DELAY_PROGRESS_SHARE` of what the same delayed start covers on a free road
+    (``free_plan()``) -- naming the agent in its way."""
+    states = draft.states
+    valid = np.flatnonzero(log.valid)
+    moved = float(np.linalg.norm(log.xy[valid[-1]] - log.xy[valid[0]])) if valid.size else 0.0
+    if moved < LOG_MOVES_M:
+        raise EditRefused(f"{label} does not move in the log (it stays within {moved:.1f} m): a delayed start needs "
+                          "an agent that sets off; give it a speed to drive off instead", reason="infeasible_motion",
+                          command_index=index)
+    times = states.times
+    steps = np.flatnonzero(motion.valid)
+    steps = steps[steps >= start_step]
+    got = _path_length(motion.xy[steps])
+    free = free_plan()
+    free_steps = np.flatnonzero(free.valid)
+    expected = _path_length(free.xy[free_steps[free_steps >= start_step]])
+    if expected <= LOG_MOVES_M or got >= DELAY_PROGRESS_SHARE * expected:
+        return
+    hit = first_overlap(states, motion, states.size[row], (states.object_ids[row],))
+    if hit is not None:
+        other, k = hit
+        why = f"{_name(draft, other)} (replaying its log) runs into it at {times[k]:.1f} s"
+    else:
+        ahead = blocker_ahead(states, motion, int(steps[-1]), (states.object_ids[row],))
+        why = (f"{_name(draft, ahead)} ahead of it holds it back" if ahead is not None
+               else "the traffic around it holds it back")
+    raise EditRefused(f"{label} cannot set off {delay:g} s later: {why}; it would move {got:.1f} m where a free road "
+                      f"lets it cover {expected:.1f} m (the other agents replay their log and do not make room)",
+                      reason="infeasible_motion", command_index=index)
+
+
+def _name(draft: Draft, row: int) -> str:
+    """How messages name agent ``row`` of the draft ("veh_01 (node 11): a white sedan", "the ego vehicle")."""
+    states = draft.states
+    oid = states.object_ids[row]
+    if oid == EGO_ID:
+        return "the ego vehicle"
+    try:
+        return draft.describe(int(states.node_ids[row]))
+    except KeyError:
+        return f"{states.categories[row]} {oid!r}"
 
 
 #: A faster speed counts as reached when the plan ends at this share of the asked speed or more.
 SPEED_REACHED_SHARE = 0.8
+#: The speed a plan "ends at" is its mean over this last stretch of time, s (a plan still accelerating through
+#: the asked speed at its last step does not drive at it).
+END_WINDOW_S = 0.5
+
+
+def end_speed(speed: np.ndarray, times: np.ndarray) -> float:
+    """Mean absolute speed over the last :data:`END_WINDOW_S` of ``times``."""
+    last = times >= times[-1] - END_WINDOW_S - 1e-9
+    return float(np.mean(np.abs(speed[last])))
 
 
 def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behaviour, start: StartState,
                          size: tuple[float, float, float], log: LogTrajectory | None, index: int, label: str,
                          object_id: str) -> None:
     """Refuse a speed-up (a faster speed, ``accelerate``) that the traffic ahead takes away, never a silent
-    no-op or a slow-down: when the plan keeping its gap ends under :data:`SPEED_REACHED_SHARE` of the asked
-    speed (``motion_requests.vehicle_target_speed``) but the same plan on a free road ends there."""
+    no-op or a slow-down: when the plan keeping its gap ends (:func:`end_speed`) short of the asked speed
+    (``motion_requests.vehicle_target_speed``; within the tolerance of an inserted car's for an asked speed,
+    :data:`SPEED_REACHED_SHARE` of it for a plain "speed up") but the same plan on a free road ends there, or
+    clearly faster (a physical limit such as a curve is no refusal; traffic taking the speed is)."""
     target = vehicle_target_speed(behaviour, start.speed)
     if target is None or behaviour.reverse or target <= abs(start.speed) + 0.5:
         return
-    reached = abs(float(plan.speed[-1]))
-    if reached >= SPEED_REACHED_SHARE * target:
+    # an asked speed ("at 40 km/h", "50 % faster") is met within the tolerance of an inserted car's; a plain
+    # "speed up" (whose target is a convention) needs a clear gain: SPEED_REACHED_SHARE of it
+    need = (target - max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target) if behaviour.speed is not None
+            else SPEED_REACHED_SHARE * target)
+    def ends_at(p: PlannedTrajectory) -> float:  # a plain speed-up: its last step, as it always was
+        return end_speed(p.speed, p.times) if behaviour.speed is not None else abs(float(p.speed[-1]))
+
+    reached = ends_at(plan)
+    if reached >= need:
         return
     free = _plan(draft, VEHICLE, behaviour, start, size, log, index, label, backfill=False, object_id=object_id,
                  with_traffic=False)
-    if abs(float(free.speed[-1])) >= SPEED_REACHED_SHARE * target:
+    free_end = ends_at(free)
+    taken = behaviour.speed is not None and free_end - reached > max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * target)
+    if free_end >= need or taken:
         top = float(np.max(np.abs(plan.speed[start.step:]), initial=0.0))
+        behind = np.flatnonzero(np.abs(free.speed) - np.abs(plan.speed) > SPEED_HELD_TOL_MPS)
+        row = (blocker_ahead(draft.states, Motion.planned(plan, ""), int(behind[0]), (object_id,))
+               if behind.size else None)
+        who = f" ({_name(draft, row)})" if row is not None else ""
         raise EditRefused(f"{label} cannot reach {target:.1f} m/s ({describe_behaviour(behaviour)}): keeping its gap "
-                          f"to the traffic ahead it gets to {top:.1f} m/s at most and ends at {reached:.1f} m/s (the "
-                          "other agents replay their log and do not make room)",
+                          f"to the traffic ahead{who} it gets to {top:.1f} m/s at most and ends at {reached:.1f} m/s "
+                          "(the other agents replay their log and do not make room)",
                           reason="infeasible_motion", command_index=index)
 
 

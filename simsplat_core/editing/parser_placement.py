@@ -57,7 +57,8 @@ _LANES: tuple[tuple[str, str], ...] = (
      r"|in the lane (?:of|for|with) (?:the )?(?:oncoming|opposing) traffic", "opposite"),
     (r"in (?:the |our |my |its )?(?:ego|own|same|current)(?: vehicle| car)?(?:'s)? lane(?: as)?"
      r"|in (?:our|my|its) lane|in the lane of the ego(?: vehicle| car)?"
-     r"|in the (?:same )?lane (?:that )?(?:we are|i am) in|in (?:the |this )?lane(?= |$)", "same"),
+     r"|in the (?:same )?lane (?:that )?(?:we are|i am) in|in (?:the |this )?lane(?= |$)"
+     r"|(?<![a-z] )(?:the )?(?:same|our|my) lane(?! as)", "same"),  # ", same lane" / "10 m ahead, our lane"
 )
 _AREAS: tuple[tuple[str, str], ...] = (
     (r"(?:on|onto|at|in|over|in the middle of) (?:the |a )?(?:crosswalk|zebra crossing|zebra"

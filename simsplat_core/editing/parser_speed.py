@@ -109,6 +109,7 @@ def stop_rules(w: PredicateWork) -> None:
         r"(?: down| up| itself)? to a (?:complete |full |dead |gentle |smooth |sudden |quick )?(?:stop|halt|standstill)"
         r"|(?:stop (?:moving|walking|running|driving)|stop|stops|stopping|halt|halts|pull over|pulls over|pull up"
         r"|pulls up|park|parks|freeze|freezes|stand still|stay still|stays still|stay put|keep still|remain still"
+        r"|(?:be |is |are )?standing still|be (?:stationary|stopped|at (?:a )?(?:standstill|rest))"
         r"|remain stationary|stay stationary|cease moving|yield|yields|give way|gives way|wait|waits"
         r"|(?:not|no longer) (?:moving|walking|driving|going anywhere|in motion))(?! sign| line)",
         lambda m: w.stop(), repeat=True) or "stop" in w.out.fields

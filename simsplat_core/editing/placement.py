@@ -587,6 +587,82 @@ def place_row(first: PlacedPose, *, count: int, spacing_m: float, size: Sequence
     return out
 
 
+def _area_kind_ok(map_ctx: MapContext, xy: np.ndarray, heading: float, area: str) -> bool:
+    """Whether a row member at ``xy`` stands on the same kind of map area as the row's first (``area``)."""
+    if area not in ("lane", "road", "sidewalk", "crosswalk") or not map_ctx.has_drivable:
+        return True
+    facts = map_ctx.facts(np.asarray(xy, np.float64)[None], np.array([heading]))
+    if area == "sidewalk":
+        return bool(facts.on_sidewalk[0])
+    if area == "crosswalk":
+        return bool(facts.in_crosswalk[0])
+    return bool(facts.on_drivable[0] and not facts.on_sidewalk[0])
+
+
+def row_blockers(row: Sequence[PlacedPose], size: Sequence[float], occupied: AgentStates | None,
+                 frame: int) -> list[tuple[int, int]]:
+    """``[(member, agent row)]``: the members of a placed row whose box (grown by :data:`CLEARANCE_M`) overlaps an
+    agent of ``occupied`` valid at ``frame``."""
+    if occupied is None or not occupied.num_agents:
+        return []
+    steps = np.flatnonzero(occupied.frame_idx == frame)
+    if not steps.size:
+        raise ValueError(f"frame {frame} is not one of the scenario's steps")
+    k = int(steps[0])
+    rows = np.flatnonzero(occupied.valid[:, k])
+    out = []
+    for m, pose in enumerate(row):
+        hit = footprints_overlap(np.broadcast_to(pose.xy, (len(rows), 2)), np.full(len(rows), pose.heading),
+                                 np.asarray(size, np.float64)[:2], occupied.xy[rows, k], occupied.heading[rows, k],
+                                 occupied.size[rows, :2], margin=CLEARANCE_M)
+        out += [(m, int(r)) for r in rows[hit]]
+    return out
+
+
+def place_clear_row(first: PlacedPose, *, count: int, spacing_m: float, size: Sequence[float],
+                    lanes: LaneGraph | None, map_ctx: MapContext, occupied: AgentStates | None, frame: int,
+                    reach: float = NUDGE_M, category: str = STATIC) -> list[PlacedPose]:
+    """:func:`place_row` with every member clear of the agents at ``frame`` (the first was checked by
+    ``resolve_placement``; the others were not): the row as placed, else the whole row shifted along its lane /
+    heading by the smallest amount (up to ``reach``, in :data:`NUDGE_STEP_M` steps) that frees every member and
+    keeps each on the first's kind of area; else ``EditRefused`` naming the agent in the way of which member."""
+    row = place_row(first, count=count, spacing_m=spacing_m, size=size, lanes=lanes)
+    blocked = row_blockers(row, size, occupied, frame)
+    if count <= 1 or not blocked:
+        return row
+    assert occupied is not None
+    member, agent = blocked[0]
+    oid = occupied.object_ids[agent]
+    what = "the ego vehicle" if oid == EGO_ID else f"{occupied.categories[agent]} {oid!r}"
+    steps = np.arange(NUDGE_STEP_M, reach + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
+    if first.lane is not None and lanes is not None:
+        lp = lanes.follow(first.xy, first.heading, "straight", max_length_m=reach + 20.0)
+
+        def shifted(d: float) -> PlacedPose:
+            s_new = lp.start_s + d
+            return PlacedPose(lp.path.position(s_new), float(lp.path.heading(s_new)), first.lane, first.z,
+                              first.area, first.note, first.parked)
+    else:
+        forward = np.array([np.cos(first.heading), np.sin(first.heading)])
+
+        def shifted(d: float) -> PlacedPose:
+            return PlacedPose(first.xy + d * forward, first.heading, None, first.z, first.area, first.note,
+                              first.parked)
+    for d in sorted([*steps.tolist(), *(-steps).tolist()], key=lambda x: (abs(x), -x)):
+        moved = place_row(shifted(d), count=count, spacing_m=spacing_m, size=size, lanes=lanes)
+        if row_blockers(moved, size, occupied, frame):
+            continue
+        if not all(_area_kind_ok(map_ctx, p.xy, p.heading, first.area) for p in moved):
+            continue
+        note = f"row shifted {abs(d):.1f} m {'ahead' if d > 0 else 'back'} to clear {what}"
+        head = moved[0]
+        moved[0] = PlacedPose(head.xy, head.heading, head.lane, head.z, head.area,
+                              f"{first.note}; {note}" if first.note else note, head.parked)
+        return moved
+    raise _refuse(f"cannot place a row of {count} {_NOUNS[kind_of(category)][2:]}s there: member {member + 1} "
+                  f"overlaps {what} at frame {frame} (no shift of the row within {reach:.0f} m clears every member)")
+
+
 def footprint(pose: PlacedPose, size: Sequence[float]) -> np.ndarray:
     """``[4, 2]`` corners of the placed box (for pictures and checks)."""
     return box_footprints(pose.xy, np.asarray(pose.heading), np.asarray(size, dtype=np.float64)[:2])

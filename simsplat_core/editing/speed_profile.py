@@ -269,13 +269,24 @@ def _track(dv: float, jerk: float) -> float:
 
 
 def _idm(v: float, v_des: float, gap: float, v_lead: float, lead: LeaderTrack, lim: LongitudinalLimits) -> float:
-    """Intelligent Driver Model acceleration for net ``gap`` (m) to a leader at ``v_lead``."""
+    """Acceleration for net ``gap`` (m) to a leader at ``v_lead`` by the Improved Intelligent Driver Model
+    (Treiber & Kesting, *Traffic Flow Dynamics*, sec. 11.3.7): like the IDM, but an agent at its wanted speed
+    with more than the wanted gap ahead holds that speed. (The plain IDM brakes below ``v_des`` behind any
+    leader within a few headways, so a car asked to drive at a speed never held it behind traffic that leaves
+    it room.)"""
     if gap <= 0.05:
         return -lim.hard_decel_mps2
-    star = max(0.0, v * lead.headway_s + v * (v - v_lead) / (2.0 * math.sqrt(lim.max_accel_mps2 *
-                                                                              lim.comfort_decel_mps2)))
-    free = 1.0 - (max(v, 0.0) / max(v_des, 0.1)) ** 4
-    return lim.max_accel_mps2 * (free - (star / gap) ** 2)
+    a_max, b = lim.max_accel_mps2, lim.comfort_decel_mps2
+    star = max(0.0, v * lead.headway_s + v * (v - v_lead) / (2.0 * math.sqrt(a_max * b)))
+    z = star / gap
+    v_pos, v0 = max(v, 0.0), max(v_des, 0.1)
+    if v_pos <= v0:
+        free = a_max * (1.0 - (v_pos / v0) ** 4)
+        if z >= 1.0:
+            return a_max * (1.0 - z * z)
+        return 0.0 if free <= 1e-9 else free * (1.0 - z ** (2.0 * a_max / free))
+    free = -b * (1.0 - (v0 / v_pos) ** (a_max * 4 / b))
+    return free + a_max * (1.0 - z * z) if z >= 1.0 else free
 
 
 def plan_speed(times: np.ndarray, *, t0: float, s0: float, v0: float, a0: float = 0.0,
@@ -390,6 +401,10 @@ def _maybe_start_braking(s: float, v: float, a: float, t: float, stop: StopTarge
         if brake_time(speed, acc, comfort, jerk) < left - SUBSTEP_S:
             return None
         decel = _solve_decel(lambda d: brake_time(speed, acc, d, jerk), max(left, 0.0), 0.05, lim.hard_decel_mps2)
+        if brake_time(speed, acc, decel, jerk) > left + 0.05:  # comfort jerk too slow: the hard jerk
+            jerk = lim.hard_jerk_mps3
+            decel = _solve_decel(lambda d: brake_time(speed, acc, d, jerk), max(left, 0.0), 0.05,
+                                 lim.hard_decel_mps2)
         return [(d, sign * j) for d, j in brake_segments(speed, acc, decel, jerk)]
     return None
 

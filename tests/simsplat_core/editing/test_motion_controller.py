@@ -419,3 +419,36 @@ def test_av2_turns_and_stops_on_the_real_map(shared_data: Path) -> None:
                 stopped += 1
     # measured: 5 left turns, 9 stops before a crosswalk, 18 refused (no left turn / crosswalk within reach) of 32
     assert turned >= 2 and stopped >= 2 and refused >= 2
+
+
+@pytest.mark.parametrize(("gap_m", "holds"), [(25.0, True), (40.0, True), (6.0, False)])
+def test_a_plan_at_its_wanted_speed_holds_it_behind_a_leader_leaving_it_room(gap_m: float, holds: bool) -> None:
+    """The gap keeping is the Improved IDM: at the wanted speed with more than the wanted gap (1.5 s headway) to a
+    leader driving as fast, the plan holds its speed (the plain IDM braked below it even with 40 m of room);
+    closer than the headway it still drops back."""
+    from simsplat_core.editing.speed_profile import LeaderTrack, plan_speed
+
+    times = np.arange(40) * 0.1
+    v = 8.0
+    lead_s = gap_m + 6.5 + v * times  # net gap gap_m at the start (gap_m below covers both half lengths + 2 m)
+    leader = LeaderTrack(s=lead_s[None], v=np.full((1, 40), v), present=np.ones((1, 40), bool),
+                         gap_m=np.array([6.5]))
+    plan = plan_speed(times, t0=0.0, s0=0.0, v0=v, v_ref=lambda t: v, limits=VEHICLE_LIMITS, leader=leader)
+    assert (float(np.abs(plan.v).min()) >= v - 0.05) is holds, plan.v.round(2)
+
+
+@pytest.mark.parametrize(("speed", "by_s"), [(9.8, 2.5), (12.0, 2.5), (8.0, 1.8)])
+def test_a_stop_by_a_time_too_soon_for_comfort_brakes_harder_and_stands_by_then(world, speed: float,
+                                                                              by_s: float) -> None:
+    """Comfortable braking (3 m/s^2, jerk 5) from ~10 m/s takes ~3.5 s; a stop asked by 2.5 s brakes harder
+    (within the hard limits) and stands by then (it stood only from ~3.6 s before)."""
+    plan = _car(world, Behaviour(stop=StopSpec(at_time_s=by_s)), speed=speed, before_stop_m=70.0, n=60)
+    still = np.flatnonzero(np.abs(plan.speed) < 0.05)
+    assert still.size and plan.times[still[0]] <= by_s + 0.15, plan.speed.round(2)
+    _within_limits(plan, decel=VEHICLE_LIMITS.hard_decel_mps2, jerk=VEHICLE_LIMITS.hard_jerk_mps3)
+
+
+def test_a_stop_by_a_time_even_hard_braking_cannot_make_is_refused(world) -> None:
+    with pytest.raises(EditRefused, match=r"cannot be at rest by 0.5 s: braking as hard as allowed") as err:
+        _car(world, Behaviour(stop=StopSpec(at_time_s=0.5)), speed=14.0, before_stop_m=70.0, n=60)
+    assert err.value.reason == "infeasible_motion"

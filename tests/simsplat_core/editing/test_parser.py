@@ -107,6 +107,10 @@ INSERT: list[tuple[str, list[dict[str, Any]]]] = [
      [{"op": INS, AN: 5, "asset.spacing_m": 2.0, PR: "in_front_of", "placement.anchor": None}]),
     ("add a motorcycle next to the cyclist", [{"op": INS, AS: "motorcycle", PR: "next_to", PA: "cyclist"}]),
     ("I want a yellow taxi in our lane 25 m ahead", [{"op": INS, AK: "yellow", PR: "in_lane", PL: "same", PD: 25.0}]),
+    # a trailing ", same lane" makes it a lane placement (centre to centre along the lane), not a gap ahead
+    ("Spawn a black sedan 10 m in front of us, same lane",
+     [{"op": INS, AK: "black", PR: "in_lane", PL: "same", PD: 10.0, "placement.anchor": None}]),
+    ("add a car 10 m ahead of us, our lane", [{"op": INS, PR: "in_lane", PL: "same", PD: 10.0}]),
     ("there should be a barrel on the sidewalk", [{"op": INS, AC: "static", AS: "barrel", PR: "on_sidewalk"}]),
     ("add another car behind the truck", [{"op": INS, AN: 1, PR: "behind", PA: "truck"}]),
     ("add a pickup truck facing the other way in the oncoming lane",
@@ -186,6 +190,11 @@ STOP: list[tuple[str, list[dict[str, Any]]]] = [
     ("stop the van", [{"op": MOD, "target.description": "the van", "behaviour.stop": "set"}]),
     ("make the car stop at 2 s", [{"op": MOD, "behaviour.stop.at_time_s": 2.0}]),
     ("make the bus stop after 1.5 seconds", [{"op": MOD, "behaviour.stop.at_time_s": 1.5}]),
+    # "be standing still / stationary / at a standstill by T" is a stop by that time (the time was dropped)
+    ("The red saloon car should be standing still after 2.5 secs.",
+     [{"op": MOD, TD: "red saloon car", "behaviour.stop.at_time_s": 2.5}]),
+    ("the van should be stationary by 3 seconds", [{"op": MOD, "behaviour.stop.at_time_s": 3.0}]),
+    ("the silver car should be at a standstill by 2 s", [{"op": MOD, "behaviour.stop.at_time_s": 2.0}]),
     ("the truck should stop before the crosswalk", [{"op": MOD, TD: "truck", "behaviour.stop.before": "crosswalk"}]),
     ("stop the van before the intersection",
      [{"op": MOD, "target.description": "the van", "behaviour.stop.before": "intersection"}]),

@@ -358,3 +358,30 @@ def test_av2_lane_placements(shared_data: Path) -> None:
     assert resolve_placement(Placement(relation="on_road", distance_m=10.0), category="static", size=CONE,
                              anchor=None, ego_pose=anchor_pose, lanes=lanes, map_ctx=ctx, frame=0,
                              occupied=None).area == "road"
+
+
+def test_every_member_of_a_row_gets_room_or_the_row_is_refused(world) -> None:
+    """Only the first of a row goes through ``resolve_placement``: the others are checked too. A car standing where
+    the third cone would go shifts the whole row clear (every member), a car at either end of every shift
+    refuses naming it."""
+    from simsplat_core.editing.placement import place_clear_row, place_row, row_blockers
+
+    ego = _ego_only(world)
+    first = _place(world, Placement(relation="in_lane", distance_m=15.0), category="static", size=CONE, occupied=ego)
+    plain = place_row(first, count=4, spacing_m=1.5, size=CONE, lanes=world["lanes"])
+    third = plain[2]
+    blocked = _with_box(ego, "car_9", "vehicle", third.xy, third.heading, CAR)
+    assert {m for m, _ in row_blockers(plain, CONE, blocked, 0)} == {1, 2, 3}  # unchecked before: it overlapped
+    row = place_clear_row(first, count=4, spacing_m=1.5, size=CONE, lanes=world["lanes"], map_ctx=world["ctx"],
+                          occupied=blocked, frame=0, reach=8.0)
+    assert len(row) == 4 and not row_blockers(row, CONE, blocked, 0)
+    assert "row shifted" in row[0].note and "car_9" in row[0].note
+    assert max(abs(float(np.linalg.norm(a.xy - b.xy)) - 1.9) for a, b in zip(row, row[1:])) < 0.05  # still a row
+    with pytest.raises(EditRefused, match="member 2 overlaps vehicle 'car_9'") as err:
+        place_clear_row(first, count=4, spacing_m=1.5, size=CONE, lanes=world["lanes"], map_ctx=world["ctx"],
+                        occupied=blocked, frame=0, reach=1.0)
+    assert err.value.reason == "infeasible_placement"
+    # nothing in the way: the row as placed
+    assert [p.xy.tolist() for p in place_clear_row(first, count=4, spacing_m=1.5, size=CONE, lanes=world["lanes"],
+                                                   map_ctx=world["ctx"], occupied=ego, frame=0)] == \
+        [p.xy.tolist() for p in plain]
