@@ -8,7 +8,9 @@ trajectories:
 * **who**: remove drops exactly the targets; modify changes exactly the targets; replace redraws exactly
   the targets (a new node on the unchanged trajectory, or the target swapped for a new agent driving it);
   insert adds exactly ``count`` agents of the asked category (a static object of a catalogue kind with that
-  kind's box size); nothing else moves, the ego never does.
+  kind's box size); the ego never moves; other agents may only react (multi-agent refinement: slow down,
+  stop, yield or detour, every position within ``REACTION_PATH_M`` of their logged path, present where the
+  log has them), anything more is an edit of the wrong object.
 * **where** (inserts, at the new agent's first step, relative to the ground-truth anchor -- the ego or a
   scene object -- at that step): in a lane (the anchor's lane, its left / right neighbour or the
   oncoming lane, about ``d`` metres ahead along any lane-following path from the anchor, aligned with
@@ -29,6 +31,7 @@ failed condition in its reason.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,6 +62,8 @@ RUN_MPS = 2.2
 NEXT_TO_M = 3.0
 #: A delayed agent keeps to its original path within this (metres).
 PATH_TOL_M = 0.75
+#: An agent that reacts to an edit keeps within this of its logged path (a detour of at most a lane), metres.
+REACTION_PATH_M = 4.0
 #: The direction a path ends in is taken over its last this many metres (``_beyond_path_end``).
 END_DIRECTION_M = 1.0
 #: An inserted static object's box is within this share of its kind's catalogue box, per dimension.
@@ -204,6 +209,28 @@ def _distance_ok(measured_centre: float, measured_gap: float, wanted: float | No
 
 
 # ---------------------------------------------------------------------------------------------- who changed
+def _check_reactions(before: AgentStates, after: AgentStates, others: Sequence[str], v: Verdict) -> None:
+    """Agents the request is not about may only react to it (multi-agent refinement): keep to their logged path
+    (every position within :data:`REACTION_PATH_M` of it: slowing, stopping, yielding or a detour of at most a
+    lane) and be present where the log has them. Anything else is an edit of the wrong object."""
+    strayed = []
+    for oid in others:
+        i, j = before.index(oid), after.index(oid)
+        path = before.xy[i, before.valid[i]]
+        now = after.xy[j, after.valid[j]]
+        if not np.array_equal(before.valid[i], after.valid[j]) or len(path) < 2:
+            strayed.append(oid)
+            continue
+        seg_a, seg_b = path[:-1], path[1:]
+        off = segment_distances(now, seg_a, seg_b).min(axis=1) if len(seg_a) else np.zeros(len(now))
+        moved = float(np.abs(path - now).max(initial=0.0)) > 1e-6
+        if moved and float(off.max(initial=0.0)) > REACTION_PATH_M:
+            strayed.append(oid)
+    if others:
+        v.measured["reacted"] = float(len(others))
+    v.require(not strayed, f"changed {strayed}, which the request is not about, beyond reacting to it")
+
+
 def _check_who(intent: EditIntent, before: AgentStates, after: AgentStates, changes: StateChanges,
                v: Verdict) -> tuple[str, ...]:
     """Conditions on which agents changed; returns the agents whose motion / look the request is about."""
@@ -212,14 +239,15 @@ def _check_who(intent: EditIntent, before: AgentStates, after: AgentStates, chan
     if intent.op == "remove":
         v.require(set(changes.removed) == targets,
                   f"removed {sorted(changes.removed) or 'nothing'}, asked for {sorted(targets)}")
-        v.require(not changes.added and not changes.moved,
-                  f"also added {list(changes.added)} / moved {list(changes.moved)}")
+        v.require(not changes.added, f"also added {list(changes.added)}")
+        _check_reactions(before, after, changes.moved, v)
         return ()
     if intent.op == "modify":
         v.require(not changes.removed and not changes.added,
                   f"removed {list(changes.removed)} / added {list(changes.added)} in a modify")
-        v.require(set(changes.moved) == targets,
+        v.require(targets <= set(changes.moved),
                   f"changed the trajectory of {sorted(changes.moved) or 'nothing'}, asked for {sorted(targets)}")
+        _check_reactions(before, after, [o for o in changes.moved if o not in targets], v)
         return tuple(t for t in intent.targets if t in after.object_ids)
     if intent.op == "replace":
         kept = [t for t in intent.targets if t in changes.redrawn]
@@ -228,9 +256,9 @@ def _check_who(intent: EditIntent, before: AgentStates, after: AgentStates, chan
                   f"targets {sorted(targets - set(kept) - set(swapped))} were neither redrawn nor swapped")
         v.require(len(changes.added) == len(swapped), f"{len(swapped)} targets removed but {len(changes.added)} "
                   "agents added")
-        others = [o for o in changes.moved if o not in targets] + [o for o in changes.removed if o not in targets]
-        v.require(not others and not [o for o in changes.redrawn if o not in targets],
-                  f"also changed {others + [o for o in changes.redrawn if o not in targets]}")
+        others = [o for o in changes.removed if o not in targets] + [o for o in changes.redrawn if o not in targets]
+        v.require(not others, f"also changed {others}")
+        _check_reactions(before, after, [o for o in changes.moved if o not in targets], v)
         for t in kept:
             v.require(not trajectory_changed(before, after, t, tol=0.05), f"replace moved {t}")
         for t, new in zip(swapped, changes.added):
@@ -241,8 +269,8 @@ def _check_who(intent: EditIntent, before: AgentStates, after: AgentStates, chan
         return tuple(kept) + tuple(changes.added)
     count = intent.asset.count if intent.asset is not None else 1
     v.require(len(changes.added) == count, f"added {len(changes.added)} agents, asked for {count}")
-    v.require(not changes.removed and not changes.moved,
-              f"also removed {list(changes.removed)} / moved {list(changes.moved)}")
+    v.require(not changes.removed, f"also removed {list(changes.removed)}")
+    _check_reactions(before, after, changes.moved, v)
     if intent.asset is not None:
         wrong = [o for o in changes.added if after.categories[after.index(o)] != intent.asset.category]
         v.require(not wrong, f"inserted {[after.categories[after.index(o)] for o in wrong]}, asked for a "

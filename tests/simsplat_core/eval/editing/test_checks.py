@@ -100,17 +100,24 @@ def test_speed_reached_on_the_same_path(truth, before) -> None:
     assert not unchanged.passed and "changed the trajectory of nothing" in unchanged.reason
 
 
-def test_other_agents_must_not_move(truth, before) -> None:
+def test_other_agents_may_react_but_not_leave_their_path(truth, before) -> None:
     oid = _cruiser(truth)
     after = _along_path(truth, before, oid, lambda t: 0.5 * truth.agent(oid).traj["speed"][0] * t)
-    other = next(a.object_id for a in truth.world.agents if a.category == "vehicle" and a.object_id != oid)
+    other = next(a.object_id for a in truth.world.agents if a.category == "vehicle" and a.object_id != oid
+                 and float(np.ptp(a.traj["s"])) > 5.0)
     row = after.index(other)
-    moved = after.with_agent(other, "vehicle", "edited", xy=after.xy[row] + 2.0, heading=after.heading[row],
+    moved = after.with_agent(other, "vehicle", "edited", xy=after.xy[row] + 6.0, heading=after.heading[row],
                              speed=after.speed[row], valid=after.valid[row], size=after.size[row],
                              node_id=int(after.node_ids[row]))
+    # a reaction: the other vehicle slows down along its own logged path (it lags 10 steps behind its log)
+    lag = np.concatenate([np.repeat(after.xy[row, :1], 10, axis=0), after.xy[row, :-10]])
+    reacted = after.with_agent(other, "vehicle", "refined", xy=lag, heading=after.heading[row],
+                               speed=after.speed[row], valid=after.valid[row], size=after.size[row],
+                               node_id=int(after.node_ids[row]))
     half = 0.5 * float(truth.agent(oid).traj["speed"][0])
     intent = EditIntent("modify", (oid,), motion=MotionIntent(speed_mps=half))
     assert check_states(truth, intent, _obs(before, after)).passed
+    assert check_states(truth, intent, _obs(before, reacted)).passed
     assert other in check_states(truth, intent, _obs(before, moved)).reason
 
 
