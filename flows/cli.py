@@ -417,8 +417,11 @@ def _print_edit(result, graph) -> None:
         reacted = ", ".join(reaction["refined"]) or "nobody"
         console.print(f"  traffic ({reaction['mode']}, {reaction['predictor']}): reacted: {reacted}", markup=False,
                       soft_wrap=True)
+        by_reason: dict[str, list[str]] = {}
         for oid, why in reaction["replayed"].items():
-            console.print(f"  replays its log: {oid}: {why}", markup=False, soft_wrap=True)
+            by_reason.setdefault(why, []).append(oid)
+        for why, oids in by_reason.items():
+            console.print(f"  replay their log ({why}): {', '.join(oids)}", markup=False, soft_wrap=True)
     validation = data["validation"]
     verdict = "[green]ok[/green]" if validation["ok"] else "[bold yellow]problems[/bold yellow]"
     console.print(f"validation of {validation['checked']} edited / reacting agent(s): {verdict}")

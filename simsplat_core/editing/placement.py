@@ -485,15 +485,20 @@ def _on_side(ctx: _Context, side: str, xy: np.ndarray, heading: float) -> bool:
     return bool(np.dot(rel, a.forward) * (1.0 if side == "in_front_of" else -1.0) > 0.5)
 
 
+def _step_of(states: AgentStates, frame: int) -> int:
+    """The step of ``states`` at log frame ``frame``. Raises ``ValueError`` when it has none."""
+    steps = np.flatnonzero(states.frame_idx == frame)
+    if not steps.size:
+        raise ValueError(f"frame {frame} is not one of the scenario's steps")
+    return int(steps[0])
+
+
 def _blocking(ctx: _Context, xy: np.ndarray, heading: float, occupied: AgentStates | None, frame: int,
               ignore: Sequence[str]) -> list[int]:
     """Rows of ``occupied`` whose box overlaps the placed one at ``frame`` (grown by ``CLEARANCE_M``)."""
     if occupied is None or not occupied.num_agents:
         return []
-    steps = np.flatnonzero(occupied.frame_idx == frame)
-    if not steps.size:
-        raise ValueError(f"frame {frame} is not one of the scenario's steps")
-    k = int(steps[0])
+    k = _step_of(occupied, frame)
     rows = np.array([r for r in range(occupied.num_agents) if occupied.valid[r, k]
                      and occupied.object_ids[r] not in ignore], dtype=np.int64)
     if not rows.size:
@@ -605,10 +610,7 @@ def row_blockers(row: Sequence[PlacedPose], size: Sequence[float], occupied: Age
     agent of ``occupied`` valid at ``frame``."""
     if occupied is None or not occupied.num_agents:
         return []
-    steps = np.flatnonzero(occupied.frame_idx == frame)
-    if not steps.size:
-        raise ValueError(f"frame {frame} is not one of the scenario's steps")
-    k = int(steps[0])
+    k = _step_of(occupied, frame)
     rows = np.flatnonzero(occupied.valid[:, k])
     out = []
     for m, pose in enumerate(row):
