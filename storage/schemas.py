@@ -560,13 +560,14 @@ def editing_table_schema(name: str) -> pa.Schema:
 
 # ----------------------------------------------------------------------------- motion evaluation (run table)
 #: ``schema_version`` of the ``motion`` table.
-MOTION_SCHEMA_VERSION = 1
+MOTION_SCHEMA_VERSION = 2  # 2: predictor and refused columns
 
 
 def motion_table_schema() -> pa.Schema:
-    """Schema of ``tables/motion.parquet`` of ``simsplat eval motion``: one row per (dataset, method); columns
-    from ``simsplat_core.eval.refinement.table.MOTION_COLUMNS`` (dataset, method, scenarios, the failure rates,
-    progress, stopped_share, ade_3s / ade_8s nullable, agent_collision, agent_offroad).
+    """Schema of ``tables/motion.parquet`` of ``simsplat eval motion``: one row per (dataset, method, predictor);
+    columns from ``simsplat_core.eval.refinement.table.MOTION_COLUMNS`` (dataset, method, predictor, scenarios,
+    refused, the failure rates, progress, stopped_share, ade_3s / ade_8s nullable, agent_collision,
+    agent_offroad).
 
     A run table like the editing ones (read it with this schema, ``storage.runs.read_motion_table``), not in
     ``TABLES``: its two ADE columns are nullable (undefined for the log row), which the registry's tables never

@@ -41,7 +41,8 @@ def test_eval_motion_on_the_samples(shared_data: Path, tmp_path: Path) -> None:
                                  "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output.strip().splitlines()[-1])
-    assert [(r["dataset"], r["method"]) for r in data["rows"]] == [
-        ("waymo-motion", "log"), ("waymo-motion", "constant-velocity"), ("av2", "log"), ("av2", "constant-velocity")]
+    assert [(r["dataset"], r["method"], r["predictor"]) for r in data["rows"]] == [
+        ("waymo-motion", "log", ""), ("waymo-motion", "full", "constant-velocity"), ("av2", "log", ""),
+        ("av2", "full", "constant-velocity")]
     table = pq.read_table(out / "tables" / "motion.parquet")
     assert table.num_rows == 4 and (out / "tables" / "motion.md").exists() and (out / "manifest.json").exists()

@@ -1,7 +1,10 @@
 """The ``motion`` table (DESIGN.md): one row per (dataset, method).
 
 Columns (:data:`MOTION_COLUMNS`, the schema ``storage.schemas.motion_table_schema`` is built from them):
-``dataset``, ``method``, ``scenarios``; failure rates over scenarios in ``[0, 1]`` (``collision_vehicle``,
+``dataset`` (``"synthetic"``, a real dataset such as ``"waymo-motion"`` / ``"av2"``, or ``"<dataset>+edits"``
+for scripted edits of real scenarios), ``method`` (``"log"``, ``"none"``, ``"single-agent"``, ``"full"``),
+``predictor`` (the motion predictor's name, ``""`` for the ``log`` and ``none`` rows), ``scenarios``,
+``refused`` (cases the editor refused, left out of every mode's rates; 0 for real rollouts); failure rates over scenarios in ``[0, 1]`` (``collision_vehicle``,
 ``collision_pedestrian``, ``offroad``, ``kinematic``, ``failure``: a scenario fails when any agent fails);
 ``progress`` and ``stopped_share`` (NaN where no agent moved); ``ade_3s`` / ``ade_8s`` (null for the log row
 and where the data ends before the horizon); ``agent_collision`` / ``agent_offroad``, the share of agents
@@ -25,7 +28,9 @@ from simsplat_core.eval.tables import markdown
 MOTION_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
     ("dataset", pa.string(), False),
     ("method", pa.string(), False),
+    ("predictor", pa.string(), False),
     ("scenarios", pa.int64(), False),
+    ("refused", pa.int64(), False),
     ("collision_vehicle", pa.float64(), False),
     ("collision_pedestrian", pa.float64(), False),
     ("offroad", pa.float64(), False),
@@ -62,7 +67,8 @@ def motion_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
             if name not in row:
                 raise KeyError(f"motion row {k} ({row.get('dataset')}, {row.get('method')}) has no column {name!r}")
             value = row[name]
-            if value is None and not nullable and name not in ("dataset", "method", "scenarios"):
+            if value is None and not nullable and name not in ("dataset", "method", "predictor", "scenarios",
+                                                               "refused"):
                 value = math.nan
             if name in RATE_COLUMNS and value is not None and not math.isnan(value) and not 0.0 <= value <= 1.0:
                 raise ValueError(f"motion row {k} ({row['dataset']}, {row['method']}): {name} = {value} "
