@@ -36,11 +36,10 @@ from typing import Any
 
 import numpy as np
 
+from simsplat_core.eval.refinement.scoring import score_agents
 from simsplat_core.motion.motion_map import motion_map_of
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor, Rollout, RolloutRequest
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
-from simsplat_core.scenario.map_context import MapContext
-from simsplat_core.scenario.metrics import collision_steps, offroad_steps
 from simsplat_core.scenario.rollout_metrics import (
     DisplacementErrors,
     Progress,
@@ -208,23 +207,13 @@ class RolloutScore:
     predictor: str = ""
 
 
-def agent_failures(states: AgentStates, context: MapContext, baseline: AgentStates | None = None) -> tuple[int, int]:
-    """``(agents that collide with anyone, agents that leave the road)`` over every agent of ``states``; given
-    ``baseline``, pairs overlapping there at that step are not counted (``metrics.collision_steps``)."""
-    rows = np.arange(states.num_agents)
-    coll = collision_steps(states, rows, baseline, count_log_pairs=True)
-    hit = (coll.vehicle | coll.pedestrian | coll.static).any(axis=1)
-    off = offroad_steps(states, context, rows).any(axis=1)
-    return int(hit.sum()), int(off.sum())
-
-
 def score_rollout(scenario: RealScenario, rollout: Rollout | None) -> RolloutScore:
     """Scores of ``rollout`` against the log, or of the log itself when ``rollout`` is ``None``; failures of both
     without a baseline (module docstring)."""
     log = scenario.states
     states = log if rollout is None else rollout.states
     failures = scenario_failures(states, scenario.map.context)
-    collided, off = agent_failures(states, scenario.map.context)
+    agents = score_agents(states, scenario.map.context)
     # ADE and progress over the agents observed at the last history step (as Waymo motion scores them): an
     # agent that appears later is replayed by every predictor and would only dilute the means.
     seen = np.flatnonzero(log.valid[:, scenario.last_given])
@@ -232,7 +221,7 @@ def score_rollout(scenario: RealScenario, rollout: Rollout | None) -> RolloutSco
                                                               scenario.last_given, HORIZONS_S)
     return RolloutScore(dataset=scenario.dataset, seq_id=scenario.seq_id,
                         method=LOG_METHOD if rollout is None else ROLLOUT_METHOD, failures=failures,
-                        agents=states.num_agents, collided=collided, offroad=off, errors=errors,
+                        agents=agents.agents, collided=agents.collided, offroad=agents.offroad, errors=errors,
                         progress=progress_and_stops(states.take(seen), log.take(seen), scenario.last_given),
                         replayed={} if rollout is None else dict(rollout.replayed),
                         predictor="" if rollout is None else rollout.predictor)
@@ -335,9 +324,9 @@ def real_rows(scenarios: Sequence[RealScenario], predictors: Sequence[MotionPred
         groups.setdefault((s.dataset, s.method, s.predictor), []).append(s)
     rows = [row_of(g) for g in groups.values()]
     per_type: dict[str, dict[str, dict[str, dict[str, float | None]]]] = {}
-    for (dataset, method, predictor), group in groups.items():
+    for (dataset, method, name), group in groups.items():
         if method != LOG_METHOD or any(s.errors is not None for s in group):
-            per_type.setdefault(dataset, {})[predictor or method] = per_type_errors(group)
+            per_type.setdefault(dataset, {})[name or method] = per_type_errors(group)
     return RealEvaluation(rows=rows, per_type=per_type, scores=scores)
 
 
@@ -351,5 +340,5 @@ def replayed_summary(scores: Sequence[RolloutScore]) -> Mapping[str, Any]:
 
 
 __all__ = ["DATASETS", "HORIZONS_S", "LOG_METHOD", "ROLLOUT_METHOD", "START_STEP", "RealEvaluation", "RealScenario",
-           "RolloutScore", "agent_failures", "load_real_log", "on_step_grid", "per_type_errors", "real_rows",
+           "RolloutScore", "load_real_log", "on_step_grid", "per_type_errors", "real_rows",
            "resample_states", "roll_out", "replayed_summary", "row_of", "scenario_of_log", "score_rollout"]

@@ -1,14 +1,18 @@
-"""The ``motion`` table (DESIGN.md): one row per (dataset, method).
+"""The ``motion`` table (DESIGN.md): one row per (dataset, method, predictor); and the per-case outcomes table.
 
 Columns (:data:`MOTION_COLUMNS`, the schema ``storage.schemas.motion_table_schema`` is built from them):
 ``dataset`` (``"synthetic"``, a real dataset such as ``"waymo-motion"`` / ``"av2"``, or ``"<dataset>+edits"``
 for scripted edits of real scenarios), ``method`` (``"log"``, ``"none"``, ``"single-agent"``, ``"full"``),
 ``predictor`` (the motion predictor's name, ``""`` for the ``log`` and ``none`` rows), ``scenarios``,
-``refused`` (cases the editor refused, left out of every mode's rates; 0 for real rollouts); failure rates over scenarios in ``[0, 1]`` (``collision_vehicle``,
-``collision_pedestrian``, ``offroad``, ``kinematic``, ``failure``: a scenario fails when any agent fails);
-``progress`` and ``stopped_share`` (NaN where no agent moved); ``ade_3s`` / ``ade_8s`` (null for the log row
-and where the data ends before the horizon); ``agent_collision`` / ``agent_offroad``, the share of agents
-that collide / leave the road (informative where there are few scenarios).
+``refused`` (cases the editor refused, left out of every mode's rates; 0 for real rollouts); failure rates
+over scenarios in ``[0, 1]`` (``collision_vehicle``, ``collision_pedestrian``, ``offroad``, ``kinematic``,
+``failure``: a scenario fails when any agent fails); ``progress`` and ``stopped_share`` (NaN where no agent
+moved); ``ade_3s`` / ``ade_8s`` (null for the log row, for edits and where the data ends before the horizon);
+``agent_collision`` / ``agent_offroad``, the share of agents that collide / leave the road (informative where
+there are few scenarios).
+
+The outcomes table (:data:`OUTCOME_COLUMNS`, ``motion_outcomes.parquet``) has one row per (edit case, mode),
+with the failing agents and what happened to each, so failures can be inspected.
 
     rows = motion_rows(real_rows(...).rows, synthetic_rows(...))   # synthetic rows: the edit-based part
     table = motion_table(rows); text = motion_markdown(table)
@@ -84,4 +88,53 @@ def motion_markdown(table: pa.Table, digits: int = 3) -> str:
     return markdown(table, digits, tuple(n for n, _, _ in MOTION_COLUMNS))
 
 
-__all__ = ["MOTION_COLUMNS", "RATE_COLUMNS", "motion_markdown", "motion_rows", "motion_table"]
+#: ``(name, type, nullable)`` of the outcomes table's columns (one row per edit case and refinement mode).
+OUTCOME_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
+    ("case_id", pa.string(), False),
+    ("dataset", pa.string(), False),
+    ("seq_id", pa.string(), False),
+    ("source", pa.string(), False),  # "editing", "interaction" or "real-edit"
+    ("kind", pa.string(), False),  # the editing category, the interaction kind or the real edit's name
+    ("text", pa.string(), False),
+    ("mode", pa.string(), False),
+    ("predictor", pa.string(), False),
+    ("refused", pa.string(), False),  # the refusal ("" when carried out)
+    ("collision_vehicle", pa.bool_(), False),
+    ("collision_pedestrian", pa.bool_(), False),
+    ("collision_static", pa.bool_(), False),
+    ("offroad", pa.bool_(), False),
+    ("kinematic", pa.bool_(), False),
+    ("failure", pa.bool_(), False),
+    ("failed_agents", pa.string(), False),  # comma separated ids
+    ("failure_details", pa.string(), False),  # one "<id> [<source> <category>]: what" per failed agent, " | "
+    ("refined", pa.int64(), False),  # agents that reacted
+    ("progress", pa.float64(), False),
+    ("stopped_share", pa.float64(), False),
+    ("seconds", pa.float64(), False),
+)
+#: Columns of the outcomes' Markdown (failures only).
+OUTCOME_MARKDOWN: tuple[str, ...] = ("dataset", "seq_id", "kind", "mode", "text", "refused", "failure_details")
+
+
+def outcomes_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
+    """Outcome rows -> a pyarrow table of :data:`OUTCOME_COLUMNS` (``KeyError`` naming a missing column)."""
+    data: dict[str, list] = {}
+    for name, _, _ in OUTCOME_COLUMNS:
+        values = []
+        for k, row in enumerate(rows):
+            if name not in row:
+                raise KeyError(f"outcome row {k} ({row.get('case_id')}) has no column {name!r}")
+            values.append(row[name])
+        data[name] = values
+    schema = pa.schema([pa.field(n, t, nullable=nl) for n, t, nl in OUTCOME_COLUMNS])
+    return pa.Table.from_pydict(data, schema=schema)
+
+
+def outcomes_markdown(table: pa.Table, digits: int = 3) -> str:
+    """The failed or refused outcomes of ``table`` as Markdown (:data:`OUTCOME_MARKDOWN` columns)."""
+    keep = [k for k, (f, r) in enumerate(zip(table["failure"].to_pylist(), table["refused"].to_pylist())) if f or r]
+    return markdown(table.take(keep), digits, OUTCOME_MARKDOWN)
+
+
+__all__ = ["MOTION_COLUMNS", "OUTCOME_COLUMNS", "OUTCOME_MARKDOWN", "RATE_COLUMNS", "motion_markdown", "motion_rows",
+           "motion_table", "outcomes_markdown", "outcomes_table"]
