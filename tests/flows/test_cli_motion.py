@@ -38,7 +38,7 @@ def test_eval_motion_on_the_samples(shared_data: Path, tmp_path: Path) -> None:
     assert len(default_real_logs()) == 2  # the samples beside the repository
     out = tmp_path / "out"
     result = runner.invoke(app, ["eval", "motion", "--out", str(out), "--predictor", "constant-velocity,log",
-                                 "--json"])
+                                 "--no-real-edits", "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output.strip().splitlines()[-1])
     assert [(r["dataset"], r["method"], r["predictor"]) for r in data["rows"]] == [
@@ -46,3 +46,4 @@ def test_eval_motion_on_the_samples(shared_data: Path, tmp_path: Path) -> None:
         ("av2", "full", "constant-velocity")]
     table = pq.read_table(out / "tables" / "motion.parquet")
     assert table.num_rows == 4 and (out / "tables" / "motion.md").exists() and (out / "manifest.json").exists()
+    assert pq.read_table(out / "tables" / "motion_outcomes.parquet").num_rows == 0  # no edits evaluated
