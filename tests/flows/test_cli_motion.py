@@ -47,3 +47,11 @@ def test_eval_motion_on_the_samples(shared_data: Path, tmp_path: Path) -> None:
     table = pq.read_table(out / "tables" / "motion.parquet")
     assert table.num_rows == 4 and (out / "tables" / "motion.md").exists() and (out / "manifest.json").exists()
     assert pq.read_table(out / "tables" / "motion_outcomes.parquet").num_rows == 0  # no edits evaluated
+
+
+def test_seq_needs_a_store_and_an_aligned_scene(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["eval", "motion", "--out", str(tmp_path / "out"), "--seq", "synth-000001"])
+    assert result.exit_code == 2 and "--seq needs --store" in result.output
+    result = runner.invoke(app, ["eval", "motion", "--out", str(tmp_path / "out"), "--store", str(tmp_path / "s"),
+                                 "--seq", "synth-000001"])
+    assert result.exit_code == 2 and "no language scene" in result.output

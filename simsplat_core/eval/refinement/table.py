@@ -133,7 +133,7 @@ def outcomes_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
 def outcomes_markdown(table: pa.Table, digits: int = 3) -> str:
     """The failed or refused outcomes of ``table`` as Markdown (:data:`OUTCOME_MARKDOWN` columns)."""
     keep = [k for k, (f, r) in enumerate(zip(table["failure"].to_pylist(), table["refused"].to_pylist())) if f or r]
-    return markdown(table.take(keep), digits, OUTCOME_MARKDOWN)
+    return markdown(table.take(pa.array(keep, pa.int64())), digits, OUTCOME_MARKDOWN)
 
 
 __all__ = ["MOTION_COLUMNS", "OUTCOME_COLUMNS", "OUTCOME_MARKDOWN", "RATE_COLUMNS", "motion_markdown", "motion_rows",
