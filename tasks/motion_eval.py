@@ -160,7 +160,7 @@ def evaluate_motion_run(out_root: str, real: Sequence[str | Path], predictors: S
     real_bar = StepProgress("eval motion (real logs)", headline="")
     evaluation = real_rows(scenarios, chosen, progress=lambda done, total, label: real_bar(done, total))
     edited = evaluate_real_edits(scenarios, editor_predictor) if real_edits and scenarios else None
-    rows = motion_rows(synthetic.rows, evaluation.rows + (edited.rows if edited is not None else []))
+    rows = motion_rows(synthetic.rows, evaluation.rows, edited.rows if edited is not None else [])
     table = motion_table(rows)
     outcome_rows = [outcome_row(o) for o in synthetic.outcomes]
     if edited is not None:

@@ -14,7 +14,7 @@ there are few scenarios).
 The outcomes table (:data:`OUTCOME_COLUMNS`, ``motion_outcomes.parquet``) has one row per (edit case, mode),
 with the failing agents and what happened to each, so failures can be inspected.
 
-    rows = motion_rows(real_rows(...).rows, synthetic_rows(...))   # synthetic rows: the edit-based part
+    rows = motion_rows(synthetic_rows(...), real_rows(...).rows, evaluate_real_edits(...).rows)
     table = motion_table(rows); text = motion_markdown(table)
 """
 
@@ -52,9 +52,9 @@ RATE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "o
                                  "agent_collision", "agent_offroad")
 
 
-def motion_rows(real: Sequence[Mapping[str, Any]], synthetic: Sequence[Mapping[str, Any]] = ()) -> list[dict]:
-    """The table's rows: the real-data rows, then the synthetic (edit-based) ones."""
-    return [dict(r) for r in real] + [dict(r) for r in synthetic]
+def motion_rows(*groups: Sequence[Mapping[str, Any]]) -> list[dict]:
+    """The table's rows: every group's, in order (``simsplat eval motion``: synthetic, real, real edits)."""
+    return [dict(r) for group in groups for r in group]
 
 
 def motion_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
