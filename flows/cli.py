@@ -558,31 +558,51 @@ def default_real_logs(root: Path | None = None) -> list[Path]:
 
 @eval_app.command("motion")
 def eval_motion(
-    out: Annotated[str, typer.Option(help="Run directory: tables/motion.parquet + tables/motion.md + manifest.json.")],
-    store: Annotated[str | None, typer.Option(help="Artifact store root with synthetic scenes (the edit-based rows; "
-                                              "not evaluated yet).")] = None,
+    out: Annotated[str, typer.Option(help="Run directory: tables/motion.{parquet,md}, "
+                                     "tables/motion_outcomes.{parquet,md} + manifest.json.")],
+    store: Annotated[str | None, typer.Option(help="Artifact store root with aligned synthetic scenes and an asset "
+                                              "bank: the edit-based (synthetic) rows.")] = None,
+    seq: Annotated[list[str] | None, typer.Option(help="Scene of --store (repeatable; default: every aligned "
+                                                  "log).")] = None,
     real: Annotated[list[Path] | None, typer.Option(help="A Waymo Open Motion scenario TFRecord or an Argoverse 2 "
                                                     "log directory (repeatable; default: the samples under "
                                                     "../shared/data when present).")] = None,
-    predictor: Annotated[list[str] | None, typer.Option(help="reactive / constant-velocity / log (repeatable or "
-                                                        "comma separated; default: every available one).")] = None,
+    predictor: Annotated[list[str] | None, typer.Option(help="Predictors rolled out on the real logs: reactive / "
+                                                        "constant-velocity / log (repeatable or comma separated; "
+                                                        "default: every available one).")] = None,
+    edit_predictor: Annotated[str, typer.Option(help="Predictor that refines the edits (synthetic and scripted "
+                                                "real edits).")] = "reactive",
+    no_real_edits: Annotated[bool, typer.Option("--no-real-edits", help="Skip the scripted edits of the real "
+                                                "logs.")] = False,
+    per_category: Annotated[int, typer.Option(min=1, help="Editing-benchmark prompts per category (insert / "
+                                              "modify), over all scenes.")] = 30,
+    per_kind: Annotated[int, typer.Option(min=0, help="Interaction prompts of each kind per scene.")] = 3,
     as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
 ) -> None:
-    """Multi-agent refinement (issue 11): roll the predictors out on real logs (the ego replays its log, every
-    other agent is predicted from 1.1 s of history) and score them against the logged future: collision,
-    off-road, kinematic and overall failure rates (per scenario and per agent), progress, stopped agents, ADE
-    at 3 s and 8 s, next to the log's own rates."""
+    """Multi-agent refinement (issue 11): the ``motion`` table. Synthetic rows: the editing benchmark's insert /
+    modify prompts and interaction prompts applied to the store's scenes with refinement none / single-agent /
+    full; real rows: the predictors rolled out on real logs (the ego replays its log, every other agent is
+    predicted from 1.1 s of history) against the logged future; real edit rows: scripted edits of the real logs
+    (lead vehicle brakes, stopped truck, jaywalker) in every mode. Columns: collision, off-road, kinematic and
+    overall failure rates (per scenario and per agent), progress, stopped agents, ADE at 3 s and 8 s."""
+    from flows.progress import StepBars
     from simsplat_core.data.errors import CorruptLogError
     from simsplat_core.motion.registry import available_predictors
     from tasks.motion_eval import evaluate_motion_run
 
     names = [n.strip() for p in predictor or () for n in p.split(",") if n.strip()] or [
         n for n in available_predictors() if n != "log"]
+    seq_ids = _aligned_sequences(store, seq) if store is not None else []
+    if seq and store is None:
+        raise typer.BadParameter("--seq needs --store", param_hint="--seq")
     paths = list(real) if real else default_real_logs()
-    if not paths:
+    if not paths and not seq_ids:
         raise typer.BadParameter("no real logs given and no samples under ../shared/data", param_hint="--real")
     try:
-        result = evaluate_motion_run.fn(out, paths, names, store_root=store)
+        with StepBars(headline=""):
+            result = evaluate_motion_run.fn(out, paths, names, store_root=store, seq_ids=seq_ids,
+                                            edit_predictor=edit_predictor, real_edits=not no_real_edits,
+                                            per_category=per_category, per_kind=per_kind)
     except CorruptLogError as exc:
         raise typer.BadParameter(f"damaged log: {exc}", param_hint="--real") from exc
     except KeyError as exc:
@@ -600,7 +620,8 @@ def eval_motion(
 def _print_motion(result) -> None:
     from simsplat_core.eval.refinement.table import MOTION_COLUMNS
 
-    table = Table(title=f"Motion on {len(result.real)} real log(s): failure rates, progress, ADE (m)")
+    table = Table(title=f"Motion on {len(result.sequences)} scene(s) and {len(result.real)} real log(s): failure "
+                        "rates, progress, ADE (m)")
     names = [n for n, _, _ in MOTION_COLUMNS]
     for name in names:
         table.add_column(name)
@@ -608,6 +629,9 @@ def _print_motion(result) -> None:
         table.add_row(*("" if row[n] is None else f"{row[n]:.3f}" if isinstance(row[n], float) else str(row[n])
                         for n in names))
     console.print(table)
+    for seq_id, edits in result.real_edits.items():
+        console.print(f"real edits of {seq_id}: " + "; ".join(f"{e} applied" if not why else f"{e}: {why}"
+                                                             for e, why in edits.items()))
     console.print(f"motion: {result.table}")
 
 

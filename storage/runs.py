@@ -18,7 +18,7 @@ from typing import Any
 
 import pyarrow as pa
 
-from storage.schemas import motion_table_schema
+from storage.schemas import motion_outcomes_schema, motion_table_schema
 from storage.store import ArtifactStore, join_relpath
 
 RUNS_DIR = "runs"
@@ -64,13 +64,23 @@ def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, Ru
 
 
 def write_motion_table(store: ArtifactStore, relpath: str, table: pa.Table, markdown: str,
-                       manifest: Mapping[str, Any] | None = None) -> str:
-    """Write the ``motion`` table as ``<relpath>/tables/motion.{parquet,md}`` (validated, atomic) and the
-    manifest; returns the Parquet URI."""
-    uris = write_run_tables(store, relpath, {"motion": RunTable(table, motion_table_schema(), markdown)}, manifest)
+                       manifest: Mapping[str, Any] | None = None,
+                       outcomes: tuple[pa.Table, str] | None = None) -> str:
+    """Write the ``motion`` table as ``<relpath>/tables/motion.{parquet,md}`` (validated, atomic), the
+    per-case ``outcomes`` (table, Markdown) as ``motion_outcomes.{parquet,md}`` when given, and the manifest;
+    returns the ``motion`` Parquet URI."""
+    tables = {"motion": RunTable(table, motion_table_schema(), markdown)}
+    if outcomes is not None:
+        tables["motion_outcomes"] = RunTable(outcomes[0], motion_outcomes_schema(), outcomes[1])
+    uris = write_run_tables(store, relpath, tables, manifest)
     return uris["motion"]
 
 
 def read_motion_table(store: ArtifactStore, relpath: str) -> pa.Table:
     """``<relpath>/tables/motion.parquet``, validated (``SchemaError`` names the file and the column)."""
     return store.read_table(join_relpath(relpath, "tables", "motion.parquet"), motion_table_schema())
+
+
+def read_motion_outcomes(store: ArtifactStore, relpath: str) -> pa.Table:
+    """``<relpath>/tables/motion_outcomes.parquet``, validated."""
+    return store.read_table(join_relpath(relpath, "tables", "motion_outcomes.parquet"), motion_outcomes_schema())

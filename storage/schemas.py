@@ -560,13 +560,14 @@ def editing_table_schema(name: str) -> pa.Schema:
 
 # ----------------------------------------------------------------------------- motion evaluation (run table)
 #: ``schema_version`` of the ``motion`` table.
-MOTION_SCHEMA_VERSION = 1
+MOTION_SCHEMA_VERSION = 2  # 2: predictor and refused columns
 
 
 def motion_table_schema() -> pa.Schema:
-    """Schema of ``tables/motion.parquet`` of ``simsplat eval motion``: one row per (dataset, method); columns
-    from ``simsplat_core.eval.refinement.table.MOTION_COLUMNS`` (dataset, method, scenarios, the failure rates,
-    progress, stopped_share, ade_3s / ade_8s nullable, agent_collision, agent_offroad).
+    """Schema of ``tables/motion.parquet`` of ``simsplat eval motion``: one row per (dataset, method, predictor);
+    columns from ``simsplat_core.eval.refinement.table.MOTION_COLUMNS`` (dataset, method, predictor, scenarios,
+    refused, the failure rates, progress, stopped_share, ade_3s / ade_8s nullable, agent_collision,
+    agent_offroad).
 
     A run table like the editing ones (read it with this schema, ``storage.runs.read_motion_table``), not in
     ``TABLES``: its two ADE columns are nullable (undefined for the log row), which the registry's tables never
@@ -575,3 +576,18 @@ def motion_table_schema() -> pa.Schema:
 
     metadata = {SCHEMA_NAME_KEY: "motion", SCHEMA_VERSION_KEY: str(MOTION_SCHEMA_VERSION)}
     return pa.schema([pa.field(n, t, nullable=nullable) for n, t, nullable in MOTION_COLUMNS], metadata=metadata)
+
+
+#: ``schema_version`` of the ``motion_outcomes`` table.
+MOTION_OUTCOMES_SCHEMA_VERSION = 1
+
+
+def motion_outcomes_schema() -> pa.Schema:
+    """Schema of ``tables/motion_outcomes.parquet`` of ``simsplat eval motion``: one row per (edit case,
+    refinement mode), columns from ``simsplat_core.eval.refinement.table.OUTCOME_COLUMNS`` (case, mode,
+    predictor, refusal, failure flags, failed agents and what happened to each, reacting agents, progress,
+    seconds). A run table, like ``motion``."""
+    from simsplat_core.eval.refinement.table import OUTCOME_COLUMNS  # imported here: storage loads without the core
+
+    metadata = {SCHEMA_NAME_KEY: "motion_outcomes", SCHEMA_VERSION_KEY: str(MOTION_OUTCOMES_SCHEMA_VERSION)}
+    return pa.schema([pa.field(n, t, nullable=nullable) for n, t, nullable in OUTCOME_COLUMNS], metadata=metadata)

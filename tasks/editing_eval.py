@@ -24,24 +24,21 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.eval.editing.evaluate import EvalConfig, EvalScene, editing_methods, evaluate_editing
-from simsplat_core.eval.editing.observation import AssetLook
 from simsplat_core.eval.editing.outcomes import (
     completion_table,
     fidelity_table,
     infeasible_table,
     outcomes_table,
 )
-from simsplat_core.eval.editing.plans import AssetPools
 from simsplat_core.eval.editing.prompts import INFEASIBLE, PromptConfig, build_prompt_set, prompt_counts
-from simsplat_core.eval.editing.truth import SceneTruth
 from simsplat_core.eval.tables import markdown
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.text import default_text_encoder
-from storage import ArtifactStore, read_scene_log
+from storage import ArtifactStore
 from storage.assets import read_asset_bank
 from storage.runs import RunTable, write_run_tables
 from storage.schemas import editing_table_schema
-from tasks.edit import load_edit_context
+from tasks.eval_scenes import asset_pools, load_truth_scene
 from tasks.progress import StepProgress
 
 logger = logging.getLogger(__name__)
@@ -97,11 +94,9 @@ def evaluate_editing_run(store_root: str, seq_ids: Sequence[str], out_root: str,
     bank = read_asset_bank(store)
     scenes = []
     for seq_id in seq_ids:
-        loaded = load_edit_context(store, seq_id, engine=engine, bank=bank)
-        log = read_scene_log(store, seq_id)
-        nodes = {n.object_id: n.node_id for n in loaded.ctx.graph.object_nodes}
-        scenes.append(EvalScene.prepare(SceneTruth.from_log(log, nodes), loaded.ctx))
-    pools = AssetPools.from_bank([AssetLook.of_asset(a) for a in bank.assets])
+        scene = load_truth_scene(store, seq_id, engine=engine, bank=bank)
+        scenes.append(EvalScene.prepare(scene.truth, scene.loaded.ctx))
+    pools = asset_pools(bank)
     prompts = build_prompt_set([s.truth for s in scenes], PromptConfig(per_category, infeasible, seed), pools)
     progress = StepProgress("eval editing", headline="")
     outcomes = evaluate_editing(scenes, prompts, chosen, EvalConfig(render_all=render_all),

@@ -16,8 +16,10 @@ In ``"full"`` mode only the agents the edit affects change: the predictor also r
 and an agent whose rollout with the edit stays within :data:`AFFECTED_M` of its rollout without it keeps its
 log exactly (the predictor's own error against the log is not passed off as a reaction to the edit).
 
-The ego is always fixed: its cameras render the scene, and a render is only as good as the views the scene
-was reconstructed from. Static objects are fixed too. Prediction starts at ``start_step``: by default the
+The ego is fixed by default: its cameras render the scene, and a render is only as good as the views the scene
+was reconstructed from. With ``ego_reacts=True`` the ego is driven like any other free agent of the mode (for
+logs nothing is rendered from, e.g. real motion datasets without camera images). Static objects are always
+fixed. Prediction starts at ``start_step``: by default the
 first step where an edited or inserted agent differs from the log (at least 1), since an edit present from
 the first frame must be reacted to from the first frame.
 """
@@ -94,13 +96,18 @@ def edit_start_step(states: AgentStates, original: AgentStates | None = None) ->
     return int(np.clip(first, 1, max(states.num_steps - 1, 1)))
 
 
-def fixed_rows(states: AgentStates, mode: str) -> np.ndarray:
-    """``[F]`` rows the predictor must not move in ``mode`` (see the module docstring)."""
+def fixed_rows(states: AgentStates, mode: str, *, ego_reacts: bool = False) -> np.ndarray:
+    """``[F]`` rows the predictor must not move in ``mode`` (see the module docstring).
+
+    Args:
+        ego_reacts: the ego is free like the other unedited agents (mode ``"full"`` drives it); default
+            fixed, since a rendered edit needs the log's camera poses.
+    """
     if mode not in REFINE_MODES:
         raise ValueError(f"refinement mode must be one of {list(REFINE_MODES)}, got {mode!r}")
     fixed = []
     for r, (oid, category, source) in enumerate(zip(states.object_ids, states.categories, states.sources)):
-        movable = oid != EGO_ID and agent_kind(category) is not None
+        movable = (ego_reacts or oid != EGO_ID) and agent_kind(category) is not None
         edited = source in EDIT_SOURCES
         free = movable and (edited if mode == "single-agent" else (not edited and mode == "full"))
         if not free:
@@ -134,7 +141,8 @@ def _only_affected(out: AgentStates, states: AgentStates, original: AgentStates,
 
 
 def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredictor | None, mode: str = "full",
-           *, original: AgentStates | None = None, start_step: int | None = None) -> Refinement:
+           *, original: AgentStates | None = None, start_step: int | None = None,
+           ego_reacts: bool = False) -> Refinement:
     """The scenario ``states`` with its free agents re-driven by ``predictor`` (module docstring).
 
     Args:
@@ -144,11 +152,12 @@ def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredicto
         mode: one of :data:`REFINE_MODES`.
         original: the unedited scenario (to find where the edit starts; see :func:`edit_start_step`).
         start_step: first predicted step (default: :func:`edit_start_step`).
+        ego_reacts: let the ego react too (see :func:`fixed_rows`; only for scenarios nothing is rendered from).
 
     Raises:
         ValueError: unknown mode, or no predictor for a mode that needs one.
     """
-    rows = fixed_rows(states, mode)
+    rows = fixed_rows(states, mode, ego_reacts=ego_reacts)
     start = edit_start_step(states, original) if start_step is None else int(start_step)
     if mode == "none" or len(rows) == states.num_agents:
         return Refinement(states, mode, start, {}, "")

@@ -38,10 +38,20 @@ def test_eval_motion_on_the_samples(shared_data: Path, tmp_path: Path) -> None:
     assert len(default_real_logs()) == 2  # the samples beside the repository
     out = tmp_path / "out"
     result = runner.invoke(app, ["eval", "motion", "--out", str(out), "--predictor", "constant-velocity,log",
-                                 "--json"])
+                                 "--no-real-edits", "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output.strip().splitlines()[-1])
-    assert [(r["dataset"], r["method"]) for r in data["rows"]] == [
-        ("waymo-motion", "log"), ("waymo-motion", "constant-velocity"), ("av2", "log"), ("av2", "constant-velocity")]
+    assert [(r["dataset"], r["method"], r["predictor"]) for r in data["rows"]] == [
+        ("waymo-motion", "log", ""), ("waymo-motion", "full", "constant-velocity"), ("av2", "log", ""),
+        ("av2", "full", "constant-velocity")]
     table = pq.read_table(out / "tables" / "motion.parquet")
     assert table.num_rows == 4 and (out / "tables" / "motion.md").exists() and (out / "manifest.json").exists()
+    assert pq.read_table(out / "tables" / "motion_outcomes.parquet").num_rows == 0  # no edits evaluated
+
+
+def test_seq_needs_a_store_and_an_aligned_scene(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["eval", "motion", "--out", str(tmp_path / "out"), "--seq", "synth-000001"])
+    assert result.exit_code == 2 and "--seq needs --store" in result.output
+    result = runner.invoke(app, ["eval", "motion", "--out", str(tmp_path / "out"), "--store", str(tmp_path / "s"),
+                                 "--seq", "synth-000001"])
+    assert result.exit_code == 2 and "no language scene" in result.output

@@ -11,16 +11,18 @@ Scores of one rollout (:func:`score_rollout`), all over the whole horizon (histo
 every method) and over every agent:
 
 * the failures of ``scenario.rollout_metrics.scenario_failures`` (a scenario fails when any agent fails);
-  a rollout is checked with the log as ``baseline`` (pairs that overlap in the log at that step are the
-  labels' overlaps, not the predictor's collisions), the ``"log"`` row without (the labels' own rate);
+  rollouts and the log itself are checked the same way, without a baseline (every overlap counts, the labels'
+  own included), so that "a rollout's rate is at most twice the log's" compares like with like;
 * per agent: the share of agents that collide with anyone (``agent_collision``) / leave the road at some
   step (``agent_offroad``), since one scenario's rates are 0 or 1;
 * ADE / FDE at 3 s and 8 s (``displacement_errors`` from the last history step), per agent type too, and
   progress and stopped share (``progress_and_stops``), both over the agents observed at the last history
   step (agents that appear later are replayed by every predictor).
 
-Rows (:func:`real_rows`) aggregate scenarios of one dataset and method: rates over scenarios, per-agent
-shares, ADE and progress over the agents of all scenarios (pooled).
+Rows (:func:`real_rows`) aggregate scenarios of one dataset, method and predictor: rates over scenarios,
+per-agent shares, ADE and progress over the agents of all scenarios (pooled). A rollout's ``method`` is
+:data:`ROLLOUT_METHOD` (``"full"``: every agent but the ego predicted) with ``predictor`` the predictor's name;
+the log's row has ``method`` :data:`LOG_METHOD` and no predictor.
 """
 
 from __future__ import annotations
@@ -34,10 +36,10 @@ from typing import Any
 
 import numpy as np
 
+from simsplat_core.eval.refinement.scoring import score_agents
 from simsplat_core.motion.motion_map import motion_map_of
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor, Rollout, RolloutRequest
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
-from simsplat_core.scenario.metrics import collision_steps, offroad_steps
 from simsplat_core.scenario.rollout_metrics import (
     DisplacementErrors,
     Progress,
@@ -62,6 +64,8 @@ RATE_TOLERANCE = 0.05
 HORIZONS_S: tuple[float, ...] = (3.0, 8.0)
 #: Name of the log row's method.
 LOG_METHOD = "log"
+#: ``method`` of a rollout's row: every agent but the ego is predicted (refinement mode ``"full"``).
+ROLLOUT_METHOD = "full"
 #: ``dataset`` of a log by its ``SceneLog.source``.
 DATASETS: dict[str, str] = {"waymo-scenario": "waymo-motion", "av2": "av2"}
 
@@ -180,13 +184,14 @@ class RolloutScore:
     """Scores of one rollout (or of the log itself) of one scenario.
 
     Attributes:
-        dataset, seq_id, method: what was scored.
+        dataset, seq_id, method: what was scored (``method`` :data:`LOG_METHOD` or a refinement mode).
         failures: scenario-level failures.
         agents: agents checked (all rows).
         collided / offroad: agents that collide with anyone / leave the road at some step.
         errors: ADE / FDE per agent (``None`` for the log row).
         progress: progress and stops (``None`` for the log row: the log's own are 1 and its stops).
         replayed: agents the predictor replayed, with the reason.
+        predictor: the predictor's name (``""`` for the log row).
     """
 
     dataset: str
@@ -199,33 +204,27 @@ class RolloutScore:
     errors: DisplacementErrors | None
     progress: Progress
     replayed: dict[str, str]
-
-
-def _agent_failures(states: AgentStates, scenario: RealScenario, baseline: AgentStates | None) -> tuple[int, int]:
-    rows = np.arange(states.num_agents)
-    coll = collision_steps(states, rows, baseline, count_log_pairs=True)
-    hit = (coll.vehicle | coll.pedestrian | coll.static).any(axis=1)
-    off = offroad_steps(states, scenario.map.context, rows).any(axis=1)
-    return int(hit.sum()), int(off.sum())
+    predictor: str = ""
 
 
 def score_rollout(scenario: RealScenario, rollout: Rollout | None) -> RolloutScore:
-    """Scores of ``rollout`` against the log, or of the log itself when ``rollout`` is ``None``."""
+    """Scores of ``rollout`` against the log, or of the log itself when ``rollout`` is ``None``; failures of both
+    without a baseline (module docstring)."""
     log = scenario.states
     states = log if rollout is None else rollout.states
-    baseline = None if rollout is None else log
-    failures = scenario_failures(states, scenario.map.context, baseline=baseline)
-    collided, off = _agent_failures(states, scenario, baseline)
+    failures = scenario_failures(states, scenario.map.context)
+    agents = score_agents(states, scenario.map.context)
     # ADE and progress over the agents observed at the last history step (as Waymo motion scores them): an
     # agent that appears later is replayed by every predictor and would only dilute the means.
     seen = np.flatnonzero(log.valid[:, scenario.last_given])
     errors = None if rollout is None else displacement_errors(states.take(seen), log.take(seen),
                                                               scenario.last_given, HORIZONS_S)
     return RolloutScore(dataset=scenario.dataset, seq_id=scenario.seq_id,
-                        method=LOG_METHOD if rollout is None else rollout.predictor, failures=failures,
-                        agents=states.num_agents, collided=collided, offroad=off, errors=errors,
+                        method=LOG_METHOD if rollout is None else ROLLOUT_METHOD, failures=failures,
+                        agents=agents.agents, collided=agents.collided, offroad=agents.offroad, errors=errors,
                         progress=progress_and_stops(states.take(seen), log.take(seen), scenario.last_given),
-                        replayed={} if rollout is None else dict(rollout.replayed))
+                        replayed={} if rollout is None else dict(rollout.replayed),
+                        predictor="" if rollout is None else rollout.predictor)
 
 
 def roll_out(scenario: RealScenario, predictor: MotionPredictor) -> Rollout:
@@ -253,11 +252,12 @@ def _nan(value: float | None) -> float:
 
 
 def row_of(scores: Sequence[RolloutScore]) -> dict[str, Any]:
-    """One table row from the scores of one dataset and method over its scenarios (module docstring)."""
+    """One table row from the scores of one dataset, method and predictor over its scenarios (module docstring)."""
     if not scores:
         raise ValueError("a motion row needs at least one scenario")
     first = scores[0]
-    row: dict[str, Any] = {"dataset": first.dataset, "method": first.method, "scenarios": len(scores)}
+    row: dict[str, Any] = {"dataset": first.dataset, "method": first.method, "predictor": first.predictor,
+                           "scenarios": len(scores), "refused": 0}
     row.update(rates([s.failures for s in scores]))
     row["progress"] = _nan(_pooled([s.progress.ratios for s in scores]))
     row["stopped_share"] = _nan(_pooled([s.progress.stopped.astype(np.float64) for s in scores]))
@@ -290,8 +290,9 @@ class RealEvaluation:
     """What :func:`real_rows` returns.
 
     Attributes:
-        rows: table rows (``dataset``, ``method``, ...), per dataset: the log row first, then each method.
-        per_type: ``{dataset: {method: per_type_errors}}`` (the side output).
+        rows: table rows (``dataset``, ``method``, ``predictor``, ...), per dataset: the log row first, then each
+            predictor's rollout (method :data:`ROLLOUT_METHOD`).
+        per_type: ``{dataset: {predictor: per_type_errors}}`` (the side output).
         scores: every :class:`RolloutScore`.
     """
 
@@ -305,7 +306,7 @@ def real_rows(scenarios: Sequence[RealScenario], predictors: Sequence[MotionPred
     """The log row and one row per predictor for each dataset of ``scenarios`` (module docstring).
 
     A predictor named :data:`LOG_METHOD` (``LogReplayPredictor``) adds no row: replaying the log is the log
-    row (its collisions counted without a baseline, its ADE undefined).
+    row (its ADE undefined).
     """
     scores: list[RolloutScore] = []
     rolled = [p for p in predictors if p.name != LOG_METHOD]  # the log replay's row is the log row
@@ -318,26 +319,26 @@ def real_rows(scenarios: Sequence[RealScenario], predictors: Sequence[MotionPred
             done += 1
             if progress is not None:
                 progress(done, total, f"{scenario.seq_id} {predictor.name}")
-    groups: dict[tuple[str, str], list[RolloutScore]] = {}
+    groups: dict[tuple[str, str, str], list[RolloutScore]] = {}
     for s in scores:
-        groups.setdefault((s.dataset, s.method), []).append(s)
+        groups.setdefault((s.dataset, s.method, s.predictor), []).append(s)
     rows = [row_of(g) for g in groups.values()]
     per_type: dict[str, dict[str, dict[str, dict[str, float | None]]]] = {}
-    for (dataset, method), group in groups.items():
+    for (dataset, method, name), group in groups.items():
         if method != LOG_METHOD or any(s.errors is not None for s in group):
-            per_type.setdefault(dataset, {})[method] = per_type_errors(group)
+            per_type.setdefault(dataset, {})[name or method] = per_type_errors(group)
     return RealEvaluation(rows=rows, per_type=per_type, scores=scores)
 
 
 def replayed_summary(scores: Sequence[RolloutScore]) -> Mapping[str, Any]:
-    """Replayed agents per (dataset, method), for the run's manifest."""
+    """Replayed agents per (dataset, predictor), for the run's manifest."""
     out: dict[str, Any] = {}
     for s in scores:
         if s.replayed:
-            out.setdefault(f"{s.dataset}/{s.method}", {})[s.seq_id] = len(s.replayed)
+            out.setdefault(f"{s.dataset}/{s.predictor or s.method}", {})[s.seq_id] = len(s.replayed)
     return out
 
 
-__all__ = ["DATASETS", "HORIZONS_S", "LOG_METHOD", "START_STEP", "RealEvaluation", "RealScenario", "RolloutScore",
-           "load_real_log", "on_step_grid", "per_type_errors", "real_rows", "resample_states", "roll_out",
-           "replayed_summary", "row_of", "scenario_of_log", "score_rollout"]
+__all__ = ["DATASETS", "HORIZONS_S", "LOG_METHOD", "ROLLOUT_METHOD", "START_STEP", "RealEvaluation", "RealScenario",
+           "RolloutScore", "load_real_log", "on_step_grid", "per_type_errors", "real_rows",
+           "resample_states", "roll_out", "replayed_summary", "row_of", "scenario_of_log", "score_rollout"]

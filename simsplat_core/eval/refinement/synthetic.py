@@ -2,8 +2,8 @@
 refinement mode.
 
     cases = motion_cases(truths, editing_prompts)                  # modify / insert prompts + interactions
-    outcomes = evaluate_motion(contexts, cases, predictor)         # one per (case, mode)
-    rows = synthetic_rows(outcomes, log_rows)                      # one table row per mode
+    outcomes = evaluate_motion(contexts, cases)                    # one per (case, mode); ctx's predictor
+    rows = synthetic_rows(outcomes, log_outcomes(contexts))        # the log row, then one per mode
 
 Each case is applied by the editor itself (parse, ground, place, plan; no rendering) with refinement
 ``"none"`` (others replay the log), ``"single-agent"`` (only the edited agents avoid conflicts) and
@@ -12,7 +12,8 @@ scenario fails when any agent fails, not only the edited one), with the Waymax d
 ``scenario.rollout_metrics.scenario_failures``; pairs that already overlapped in the log at that step are the
 log's, not the edit's. Progress and the share of agents stopped for good are measured against the log, over
 the agents the edit did not change, so that "everyone stands still" cannot pass as safe. A case the editor
-refuses has no scenario and is counted apart (``refused``) in every mode.
+refuses has no scenario and is counted apart (``refused``) in every mode. Each outcome also names every failing
+agent and what happened to it (``scoring.score_agents``), for the outcomes table.
 """
 
 from __future__ import annotations
@@ -30,7 +31,10 @@ from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.eval.editing.prompts import EditPrompt
 from simsplat_core.eval.refinement.interactions import InteractionPrompt
-from simsplat_core.motion.refine import EDIT_SOURCES, REFINE_MODES
+from simsplat_core.eval.refinement.scoring import score_agents
+from simsplat_core.motion.refine import EDIT_SOURCES, REFINE_MODES, Refinement
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.rollout_metrics import ScenarioFailures, progress_and_stops, rates, scenario_failures
 
 logger = logging.getLogger(__name__)
@@ -65,6 +69,9 @@ class MotionOutcome:
         stopped_share: share of those agents stopped for good.
         refined: ids of agents that reacted; replayed: agents the predictor left to their log, with reasons.
         seconds: time of the edit (refinement included).
+        agents / collided / offroad_agents: agents checked, that collide, that leave the road.
+        details: one line per failing agent (``scoring.AgentScores.details``).
+        predictor: the predictor that refined (``""`` for mode ``"none"`` and the log).
     """
 
     case: MotionCase
@@ -76,6 +83,11 @@ class MotionOutcome:
     refined: tuple[str, ...] = ()
     replayed: tuple[str, ...] = ()
     seconds: float = 0.0
+    agents: int = 0
+    collided: int = 0
+    offroad_agents: int = 0
+    details: tuple[str, ...] = ()
+    predictor: str = ""
 
 
 def motion_cases(editing_prompts: Sequence[EditPrompt], interactions: Sequence[InteractionPrompt]
@@ -96,10 +108,16 @@ def evaluate_case(ctx: EditContext, case: MotionCase, mode: str) -> MotionOutcom
         edited = Editor(ctx, options).edit(case.text)
     except EditRefused as exc:
         return MotionOutcome(case, mode, refused=f"{exc.reason}: {exc}", seconds=time.perf_counter() - t)
-    seconds = time.perf_counter() - t
-    states, log = edited.states, edited.original_states
-    failures = scenario_failures(states, ctx.map_ctx, baseline=log)
-    reaction = edited.refinement
+    return measure(case, mode, edited.states, edited.original_states, ctx.map_ctx, edited.refinement,
+                   time.perf_counter() - t)
+
+
+def measure(case: MotionCase, mode: str, states: AgentStates, log: AgentStates, context: MapContext,
+            reaction: Refinement | None, seconds: float) -> MotionOutcome:
+    """The outcome of ``case`` in ``mode``: the edited (and refined) ``states`` against the unedited ``log`` on the
+    same steps (module docstring)."""
+    failures = scenario_failures(states, context, baseline=log)
+    agents = score_agents(states, context, baseline=log)
     start = reaction.start_step if reaction is not None else 1
     # the traffic's progress: agents the edit changed do what they were told (a stop edit stops for good)
     kept = [r for r, (o, s) in enumerate(zip(states.object_ids, states.sources))
@@ -108,7 +126,9 @@ def evaluate_case(ctx: EditContext, case: MotionCase, mode: str) -> MotionOutcom
     return MotionOutcome(case, mode, failures=failures, progress=progress.progress,
                          stopped_share=progress.stopped_share,
                          refined=reaction.refined_ids if reaction is not None else (),
-                         replayed=tuple(sorted(reaction.replayed)) if reaction is not None else (), seconds=seconds)
+                         replayed=tuple(sorted(reaction.replayed)) if reaction is not None else (), seconds=seconds,
+                         agents=agents.agents, collided=agents.collided, offroad_agents=agents.offroad,
+                         details=agents.details, predictor=reaction.predictor if reaction is not None else "")
 
 
 def evaluate_motion(contexts: Mapping[str, EditContext], cases: Sequence[MotionCase],
@@ -129,9 +149,19 @@ def evaluate_motion(contexts: Mapping[str, EditContext], cases: Sequence[MotionC
     return out
 
 
-def log_outcomes(contexts: Mapping[str, EditContext]) -> list[ScenarioFailures]:
-    """The unedited logs' own failures (the ``log`` row), one per scene."""
-    return [scenario_failures(ctx.states, ctx.map_ctx) for ctx in contexts.values()]
+def log_outcome(seq_id: str, states: AgentStates, context: MapContext) -> MotionOutcome:
+    """The unedited log's own failures (every overlap counted), progress 1 and its own stopped share."""
+    agents = score_agents(states, context)
+    stops = progress_and_stops(states, states, 1)
+    return MotionOutcome(MotionCase(f"{seq_id}:log", seq_id, "log", "log", ""), "log",
+                         failures=scenario_failures(states, context), progress=stops.progress,
+                         stopped_share=stops.stopped_share, agents=agents.agents, collided=agents.collided,
+                         offroad_agents=agents.offroad, details=agents.details)
+
+
+def log_outcomes(contexts: Mapping[str, EditContext]) -> list[MotionOutcome]:
+    """The unedited logs' outcomes (the ``log`` row), one per scene (:func:`log_outcome`)."""
+    return [log_outcome(seq_id, ctx.states, ctx.map_ctx) for seq_id, ctx in contexts.items()]
 
 
 def _mean(values: list[float]) -> float | None:
@@ -139,15 +169,28 @@ def _mean(values: list[float]) -> float | None:
     return float(np.mean(finite)) if finite else None
 
 
-def synthetic_rows(outcomes: Sequence[MotionOutcome], log_failures: Sequence[ScenarioFailures],
+def _agent_share(outcomes: Sequence[MotionOutcome], field: str) -> float:
+    agents = sum(o.agents for o in outcomes)
+    return sum(getattr(o, field) for o in outcomes) / agents if agents else float("nan")
+
+
+def _row(dataset: str, method: str, predictor: str, kept: Sequence[MotionOutcome], refused: int) -> dict[str, object]:
+    failures = [o.failures for o in kept if o.failures is not None]
+    return {"dataset": dataset, "method": method, "predictor": predictor, "scenarios": len(kept), "refused": refused,
+            **rates(failures), "progress": _mean([o.progress for o in kept]),
+            "stopped_share": _mean([o.stopped_share for o in kept]), "ade_3s": None, "ade_8s": None,
+            "agent_collision": _agent_share(kept, "collided"), "agent_offroad": _agent_share(kept, "offroad_agents")}
+
+
+def synthetic_rows(outcomes: Sequence[MotionOutcome], logs: Sequence[MotionOutcome] = (),
                    dataset: str = "synthetic", predictor: str = "") -> list[dict[str, object]]:
-    """Table rows (``motion.parquet`` columns): ``log`` then one per mode, over the cases every mode carried
-    out (a case refused in some mode is left out of all, so the modes are compared on the same scenarios)."""
+    """Table rows (``motion.parquet`` columns): ``log`` (from ``logs``, :func:`log_outcomes`) then one per mode,
+    over the cases every mode carried out (a case refused in some mode is left out of all, so the modes are
+    compared on the same scenarios; ``refused`` counts them). ``predictor`` names the refining predictor (default:
+    the outcomes' own); the ``none`` row has none."""
     rows: list[dict[str, object]] = []
-    if log_failures:
-        rows.append({"dataset": dataset, "method": "log", "scenarios": len(log_failures), **rates(log_failures),
-                     "progress": 1.0, "stopped_share": None, "ade_3s": None, "ade_8s": None, "refused": 0,
-                     "predictor": ""})
+    if logs:
+        rows.append(_row(dataset, "log", "", logs, 0))
     modes = list(dict.fromkeys(o.mode for o in outcomes))
     by_case: dict[str, dict[str, MotionOutcome]] = {}
     for o in outcomes:
@@ -158,13 +201,24 @@ def synthetic_rows(outcomes: Sequence[MotionOutcome], log_failures: Sequence[Sce
         kept = [by_case[c][mode] for c in done if mode in by_case[c]]
         if not kept:
             continue
-        failures = [o.failures for o in kept if o.failures is not None]
-        rows.append({"dataset": dataset, "method": mode, "scenarios": len(kept), **rates(failures),
-                     "progress": _mean([o.progress for o in kept]),
-                     "stopped_share": _mean([o.stopped_share for o in kept]), "ade_3s": None, "ade_8s": None,
-                     "refused": refused, "predictor": predictor if mode != "none" else ""})
+        name = "" if mode == "none" else predictor or next((o.predictor for o in kept if o.predictor), "")
+        rows.append(_row(dataset, mode, name, kept, refused))
     return rows
 
 
-__all__ = ["EDITING_CATEGORIES", "MotionCase", "MotionOutcome", "evaluate_case", "evaluate_motion",
-           "log_outcomes", "motion_cases", "synthetic_rows"]
+def outcome_row(outcome: MotionOutcome, dataset: str = "synthetic") -> dict[str, object]:
+    """One row of the outcomes table (``table.OUTCOME_COLUMNS``)."""
+    f = outcome.failures or ScenarioFailures()
+    c = outcome.case
+    return {"case_id": c.case_id, "dataset": dataset, "seq_id": c.seq_id, "source": c.source, "kind": c.kind,
+            "text": c.text, "mode": outcome.mode, "predictor": outcome.predictor, "refused": outcome.refused,
+            "collision_vehicle": f.collision_vehicle, "collision_pedestrian": f.collision_pedestrian,
+            "collision_static": f.collision_static, "offroad": f.offroad, "kinematic": f.kinematic,
+            "failure": outcome.failures is not None and f.failure, "failed_agents": ",".join(f.failed_agents),
+            "failure_details": " | ".join(outcome.details), "refined": len(outcome.refined),
+            "progress": float(outcome.progress), "stopped_share": float(outcome.stopped_share),
+            "seconds": float(outcome.seconds)}
+
+
+__all__ = ["EDITING_CATEGORIES", "MotionCase", "MotionOutcome", "evaluate_case", "evaluate_motion", "log_outcome",
+           "log_outcomes", "measure", "motion_cases", "outcome_row", "synthetic_rows"]

@@ -1,13 +1,20 @@
-"""The ``motion`` table (DESIGN.md): one row per (dataset, method).
+"""The ``motion`` table (DESIGN.md): one row per (dataset, method, predictor); and the per-case outcomes table.
 
 Columns (:data:`MOTION_COLUMNS`, the schema ``storage.schemas.motion_table_schema`` is built from them):
-``dataset``, ``method``, ``scenarios``; failure rates over scenarios in ``[0, 1]`` (``collision_vehicle``,
-``collision_pedestrian``, ``offroad``, ``kinematic``, ``failure``: a scenario fails when any agent fails);
-``progress`` and ``stopped_share`` (NaN where no agent moved); ``ade_3s`` / ``ade_8s`` (null for the log row
-and where the data ends before the horizon); ``agent_collision`` / ``agent_offroad``, the share of agents
-that collide / leave the road (informative where there are few scenarios).
+``dataset`` (``"synthetic"``, a real dataset such as ``"waymo-motion"`` / ``"av2"``, or ``"<dataset>+edits"``
+for scripted edits of real scenarios), ``method`` (``"log"``, ``"none"``, ``"single-agent"``, ``"full"``),
+``predictor`` (the motion predictor's name, ``""`` for the ``log`` and ``none`` rows), ``scenarios``,
+``refused`` (cases the editor refused, left out of every mode's rates; 0 for real rollouts); failure rates
+over scenarios in ``[0, 1]`` (``collision_vehicle``, ``collision_pedestrian``, ``offroad``, ``kinematic``,
+``failure``: a scenario fails when any agent fails); ``progress`` and ``stopped_share`` (NaN where no agent
+moved); ``ade_3s`` / ``ade_8s`` (null for the log row, for edits and where the data ends before the horizon);
+``agent_collision`` / ``agent_offroad``, the share of agents that collide / leave the road (informative where
+there are few scenarios).
 
-    rows = motion_rows(real_rows(...).rows, synthetic_rows(...))   # synthetic rows: the edit-based part
+The outcomes table (:data:`OUTCOME_COLUMNS`, ``motion_outcomes.parquet``) has one row per (edit case, mode),
+with the failing agents and what happened to each, so failures can be inspected.
+
+    rows = motion_rows(synthetic_rows(...), real_rows(...).rows, evaluate_real_edits(...).rows)
     table = motion_table(rows); text = motion_markdown(table)
 """
 
@@ -25,7 +32,9 @@ from simsplat_core.eval.tables import markdown
 MOTION_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
     ("dataset", pa.string(), False),
     ("method", pa.string(), False),
+    ("predictor", pa.string(), False),
     ("scenarios", pa.int64(), False),
+    ("refused", pa.int64(), False),
     ("collision_vehicle", pa.float64(), False),
     ("collision_pedestrian", pa.float64(), False),
     ("offroad", pa.float64(), False),
@@ -43,9 +52,9 @@ RATE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "o
                                  "agent_collision", "agent_offroad")
 
 
-def motion_rows(real: Sequence[Mapping[str, Any]], synthetic: Sequence[Mapping[str, Any]] = ()) -> list[dict]:
-    """The table's rows: the real-data rows, then the synthetic (edit-based) ones."""
-    return [dict(r) for r in real] + [dict(r) for r in synthetic]
+def motion_rows(*groups: Sequence[Mapping[str, Any]]) -> list[dict]:
+    """The table's rows: every group's, in order (``simsplat eval motion``: synthetic, real, real edits)."""
+    return [dict(r) for group in groups for r in group]
 
 
 def motion_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
@@ -62,7 +71,8 @@ def motion_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
             if name not in row:
                 raise KeyError(f"motion row {k} ({row.get('dataset')}, {row.get('method')}) has no column {name!r}")
             value = row[name]
-            if value is None and not nullable and name not in ("dataset", "method", "scenarios"):
+            if value is None and not nullable and name not in ("dataset", "method", "predictor", "scenarios",
+                                                               "refused"):
                 value = math.nan
             if name in RATE_COLUMNS and value is not None and not math.isnan(value) and not 0.0 <= value <= 1.0:
                 raise ValueError(f"motion row {k} ({row['dataset']}, {row['method']}): {name} = {value} "
@@ -78,4 +88,53 @@ def motion_markdown(table: pa.Table, digits: int = 3) -> str:
     return markdown(table, digits, tuple(n for n, _, _ in MOTION_COLUMNS))
 
 
-__all__ = ["MOTION_COLUMNS", "RATE_COLUMNS", "motion_markdown", "motion_rows", "motion_table"]
+#: ``(name, type, nullable)`` of the outcomes table's columns (one row per edit case and refinement mode).
+OUTCOME_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
+    ("case_id", pa.string(), False),
+    ("dataset", pa.string(), False),
+    ("seq_id", pa.string(), False),
+    ("source", pa.string(), False),  # "editing", "interaction" or "real-edit"
+    ("kind", pa.string(), False),  # the editing category, the interaction kind or the real edit's name
+    ("text", pa.string(), False),
+    ("mode", pa.string(), False),
+    ("predictor", pa.string(), False),
+    ("refused", pa.string(), False),  # the refusal ("" when carried out)
+    ("collision_vehicle", pa.bool_(), False),
+    ("collision_pedestrian", pa.bool_(), False),
+    ("collision_static", pa.bool_(), False),
+    ("offroad", pa.bool_(), False),
+    ("kinematic", pa.bool_(), False),
+    ("failure", pa.bool_(), False),
+    ("failed_agents", pa.string(), False),  # comma separated ids
+    ("failure_details", pa.string(), False),  # one "<id> [<source> <category>]: what" per failed agent, " | "
+    ("refined", pa.int64(), False),  # agents that reacted
+    ("progress", pa.float64(), False),
+    ("stopped_share", pa.float64(), False),
+    ("seconds", pa.float64(), False),
+)
+#: Columns of the outcomes' Markdown (failures only).
+OUTCOME_MARKDOWN: tuple[str, ...] = ("dataset", "seq_id", "kind", "mode", "text", "refused", "failure_details")
+
+
+def outcomes_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
+    """Outcome rows -> a pyarrow table of :data:`OUTCOME_COLUMNS` (``KeyError`` naming a missing column)."""
+    data: dict[str, list] = {}
+    for name, _, _ in OUTCOME_COLUMNS:
+        values = []
+        for k, row in enumerate(rows):
+            if name not in row:
+                raise KeyError(f"outcome row {k} ({row.get('case_id')}) has no column {name!r}")
+            values.append(row[name])
+        data[name] = values
+    schema = pa.schema([pa.field(n, t, nullable=nl) for n, t, nl in OUTCOME_COLUMNS])
+    return pa.Table.from_pydict(data, schema=schema)
+
+
+def outcomes_markdown(table: pa.Table, digits: int = 3) -> str:
+    """The failed or refused outcomes of ``table`` as Markdown (:data:`OUTCOME_MARKDOWN` columns)."""
+    keep = [k for k, (f, r) in enumerate(zip(table["failure"].to_pylist(), table["refused"].to_pylist())) if f or r]
+    return markdown(table.take(pa.array(keep, pa.int64())), digits, OUTCOME_MARKDOWN)
+
+
+__all__ = ["MOTION_COLUMNS", "OUTCOME_COLUMNS", "OUTCOME_MARKDOWN", "RATE_COLUMNS", "motion_markdown", "motion_rows",
+           "motion_table", "outcomes_markdown", "outcomes_table"]

@@ -109,3 +109,17 @@ def test_single_agent_keeps_the_edited_source_and_none_changes_nothing() -> None
     assert none.states is edited and none.refined_ids == ()
     with pytest.raises(ValueError, match="needs a motion predictor"):
         refine(edited, _map(), None, "full", original=log)
+
+
+def test_ego_reacts_frees_the_ego_in_full_mode_only() -> None:
+    states = _states(["log", "edited", "log", "log"], ["vehicle", "vehicle", "vehicle", "static"])
+    assert fixed_rows(states, "full", ego_reacts=True).tolist() == [1, 3]  # the edit and static objects
+    assert fixed_rows(states, "single-agent", ego_reacts=True).tolist() == [0, 2, 3]  # the ego is not edited
+    assert fixed_rows(states, "none", ego_reacts=True).tolist() == [0, 1, 2, 3]
+    log = _states(["log", "log", "log", "log"], ["vehicle", "vehicle", "vehicle", "static"])
+    edited = dataclasses.replace(log, sources=states.sources)
+    fixed_ego = refine(edited, _map(), _Nudge(), "full", original=log, start_step=3)
+    assert "ego" not in fixed_ego.refined_ids
+    free_ego = refine(edited, _map(), _Nudge(), "full", original=log, start_step=3, ego_reacts=True)
+    assert free_ego.refined_ids == ("ego", "a2")
+    assert free_ego.states.xy[0, -1, 1] == pytest.approx(log.xy[0, -1, 1] + 1.0)

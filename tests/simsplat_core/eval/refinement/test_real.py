@@ -88,9 +88,11 @@ def test_registry() -> None:
 
 def test_rows_on_a_map_without_lanes() -> None:
     evaluation = R.real_rows([_scenario()], [ConstantVelocityPredictor(), LogReplayPredictor()])
-    rows = {r["method"]: r for r in evaluation.rows}
+    rows = {r["predictor"] or r["method"]: r for r in evaluation.rows}
     assert set(rows) == {"log", "constant-velocity"}  # the log replay is the log row
     log, cv = rows["log"], rows["constant-velocity"]
+    assert (log["method"], log["predictor"], cv["method"], cv["predictor"]) == ("log", "", "full", "constant-velocity")
+    assert log["refused"] == 0 and cv["refused"] == 0
     assert log["ade_3s"] is None and log["ade_8s"] is None
     assert cv["ade_3s"] == pytest.approx(0.0, abs=1e-9) and cv["ade_8s"] == pytest.approx(0.0, abs=1e-9)
     for row in (log, cv):
@@ -99,7 +101,7 @@ def test_rows_on_a_map_without_lanes() -> None:
     assert set(evaluation.per_type["hand"]["constant-velocity"]) == {"vehicle"}  # "p" appears after the history
     table = motion_table(motion_rows(evaluation.rows))
     assert table.column_names == [n for n, _, _ in MOTION_COLUMNS] and table.num_rows == 2
-    assert "| hand | log | 1 |" in motion_markdown(table)
+    assert "| hand | log |  | 1 | 0 |" in motion_markdown(table)
 
 
 def test_a_collision_counts_per_scenario_and_per_agent() -> None:
@@ -117,10 +119,22 @@ def test_a_collision_counts_per_scenario_and_per_agent() -> None:
 
             return Rollout(crash, {}, self.name)
 
-    row = {r["method"]: r for r in R.real_rows([scenario], [Crasher()]).rows}["crasher"]
+    rows = {r["predictor"] or r["method"]: r for r in R.real_rows([scenario], [Crasher()]).rows}
+    row = rows["crasher"]
     assert row["collision_vehicle"] == 1.0 and row["failure"] == 1.0
     assert row["agent_collision"] == pytest.approx(2 / 4)  # the ego and "b"
     assert row["kinematic"] == 1.0  # "b" jumps 30 m in a step
+
+
+def test_log_and_rollouts_are_scored_the_same_way() -> None:
+    """An overlap already in the log counts for the log row and for a rollout that keeps it (no baseline)."""
+    scenario = _scenario()
+    xy = scenario.states.xy.copy()
+    xy[2] = xy[0] + np.array([1.0, 0.0])  # "b" overlaps the ego over the whole log
+    scenario = replace(scenario, states=replace(scenario.states, xy=xy))
+    rows = {r["predictor"] or r["method"]: r for r in R.real_rows([scenario], [ConstantVelocityPredictor()]).rows}
+    for name in ("log", "constant-velocity"):
+        assert rows[name]["collision_vehicle"] == 1.0 and rows[name]["agent_collision"] == pytest.approx(2 / 4)
 
 
 def test_resample_to_10_hz() -> None:
@@ -157,7 +171,7 @@ def test_real_samples(shared_data, sample: str) -> None:
     scenario = R.scenario_of_log(log)
     assert scenario.start_step == 11 and not scenario.resampled and len(scenario.map.lanes) > 100
     evaluation = R.real_rows([scenario], [ConstantVelocityPredictor()])
-    rows = {r["method"]: r for r in evaluation.rows}
+    rows = {r["predictor"] or r["method"]: r for r in evaluation.rows}
     log_row, cv = rows["log"], rows["constant-velocity"]
     assert log_row["ade_3s"] is None
     assert 0.05 < cv["ade_3s"] < cv["ade_8s"] < 5.0  # metres: the log's agents mostly keep their velocity
