@@ -196,8 +196,6 @@ def _route_of(request: RolloutRequest, row: int, kind: str, last_obs: int, lanes
         return STATIC_OBJECT, None
     if not valid[last_obs]:
         return (APPEARS_LATER if valid[last_obs + 1:].any() else NOT_OBSERVED), None
-    if int(valid[:last_obs + 1].sum()) < params.min_history_steps:
-        return SHORT_HISTORY, None
     steps = np.flatnonzero(valid)
     xy, speed = states.xy[row], states.speed[row]
     moved = float(np.linalg.norm(xy[steps] - xy[steps[0]], axis=1).max())
@@ -212,7 +210,11 @@ def _route_of(request: RolloutRequest, row: int, kind: str, last_obs: int, lanes
     shift = _lane_shift(lanes, xy[last_obs], heading0, params) if kind == VEHICLE else (np.nan, np.nan)
     cap = pedestrian.walk_speed_mps if kind == PEDESTRIAN else params.max_speed_mps
     last_valid = int(future[-1])
-    if request.use_log_routes and future_len >= params.min_route_m:
+    from_log = request.use_log_routes and future_len >= params.min_route_m
+    # a logged route carries the agent's intent and speed profile; without one, the history must give them
+    if not from_log and int(valid[:last_obs + 1].sum()) < params.min_history_steps:
+        return SHORT_HISTORY, None
+    if from_log:
         pts = _smooth(_thin(xy[steps], params.point_spacing_m), params.smooth_points)
         if len(pts) >= 2:
             base = Path.from_points(pts)

@@ -153,7 +153,9 @@ class RouteParams:
         stationary_move_m: ... and whose box moves less than this are parked: kept as logged.
         reverse_speed_mps: a logged speed below minus this means the agent reverses: replayed.
         extension_blend_m: a logged route continues on the lane graph from this far past its last point.
-        min_history_steps: valid observed steps an agent needs to be driven.
+        min_history_steps: valid observed steps an agent without a logged route needs to be driven (one with
+            a logged route takes its intent and speeds from it: an edit present from the first frame is
+            reacted to from the second step).
         max_speed_mps: desired speeds are capped at this.
         refined_m: an agent whose predicted path leaves its log by more than this is ``"refined"``.
     """

@@ -10,12 +10,12 @@ import pytest
 import torch
 
 from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
-from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, SpeedSpec, TargetRef
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import node_factory
+from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.scenario.geometry import signed_polygon_distance

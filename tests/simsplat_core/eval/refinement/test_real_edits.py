@@ -11,8 +11,8 @@ from simsplat_core.eval.refinement import real_edits as E
 from simsplat_core.eval.refinement.real import RealScenario
 from simsplat_core.eval.refinement.synthetic import outcome_row
 from simsplat_core.eval.refinement.table import motion_table, outcomes_table
-from simsplat_core.motion.baselines import ConstantVelocityPredictor
 from simsplat_core.motion.motion_map import motion_map_from_features
+from simsplat_core.motion.reactive import ReactivePredictor
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.types import MapFeature
 
@@ -124,13 +124,13 @@ def test_edits_that_do_not_apply_say_why() -> None:
 
 
 def test_rows_per_mode_with_the_ego_reacting() -> None:
-    evaluation = E.evaluate_real_edits([_scenario()], ConstantVelocityPredictor())
+    evaluation = E.evaluate_real_edits([_scenario()], ReactivePredictor())
     assert evaluation.applied["road"]["lead_brakes"] == "" and "is on the spot" in evaluation.applied["road"][
         "stopped_truck"]
     rows = {r["method"]: r for r in evaluation.rows}
     assert list(rows) == ["none", "single-agent", "full"]
     assert {r["dataset"] for r in evaluation.rows} == {"hand+edits"}
-    assert rows["none"]["predictor"] == "" and rows["full"]["predictor"] == "constant-velocity"
+    assert rows["none"]["predictor"] == "" and rows["full"]["predictor"] == "reactive"
     assert rows["none"]["scenarios"] == 2 and rows["none"]["refused"] == 0  # lead_brakes and jaywalker
     # without refinement the ego (on its log) runs into the braking lead
     none = {o.case.kind: o for o in evaluation.outcomes if o.mode == "none"}
@@ -138,7 +138,8 @@ def test_rows_per_mode_with_the_ego_reacting() -> None:
     crash = "ego [log vehicle]: collision with a [edited vehicle]"
     assert any(d.startswith(crash) for d in none["lead_brakes"].details)
     full = {o.case.kind: o for o in evaluation.outcomes if o.mode == "full"}
-    assert "ego" in full["lead_brakes"].refined  # the ego is predicted too (ego_reacts)
+    assert "ego" in full["lead_brakes"].refined  # the ego is predicted too (ego_reacts) and brakes
+    assert full["lead_brakes"].failures is not None and not full["lead_brakes"].failures.collision_vehicle
     motion_table(evaluation.rows)  # valid rows
     table = outcomes_table([outcome_row(o, "hand+edits") for o in evaluation.outcomes])
     assert table.num_rows == 6 and set(table["source"].to_pylist()) == {"real-edit"}
