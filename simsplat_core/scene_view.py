@@ -54,6 +54,25 @@ def shift_in_ego_frame(cam_to_world: np.ndarray, ego_to_world: np.ndarray, shift
     return out
 
 
+def ego_pose_moved(ego_to_world: np.ndarray, xy: np.ndarray, heading: float) -> np.ndarray:
+    """``[4, 4]`` ego pose ``ego_to_world`` moved to ground position ``xy [2]`` and yaw ``heading`` (radians);
+    height, roll and pitch are kept (the yaw changes by ``heading`` minus the pose's own yaw)."""
+    pose = np.array(ego_to_world, dtype=np.float64, copy=True)
+    dyaw = float(heading) - float(np.arctan2(pose[1, 0], pose[0, 0]))
+    c, s = np.cos(dyaw), np.sin(dyaw)
+    pose[:3, :3] = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]]) @ pose[:3, :3]
+    pose[:2, 3] = np.asarray(xy, dtype=np.float64)[:2]
+    return pose
+
+
+def reposed_cameras(log: SceneLog, frame_idx: int, ego_to_world: np.ndarray) -> list[CameraView]:
+    """The log's cameras at ``frame_idx`` carried by the ego to the pose ``ego_to_world [4, 4]`` (the rig keeps
+    its mounting: ``cam' = ego' @ inv(ego_log) @ cam``)."""
+    views = shifted_cameras(log, frame_idx)
+    move = np.asarray(ego_to_world, dtype=np.float64) @ np.linalg.inv(log.ego_poses[frame_idx])
+    return [CameraView(v.camera, v.K, move @ v.cam_to_world, v.width, v.height) for v in views]
+
+
 def shifted_cameras(log: SceneLog, frame_idx: int, cameras: Sequence[str] | None = None, shift_left: float = 0.0,
                     shift_forward: float = 0.0) -> list[CameraView]:
     """The log's cameras at ``frame_idx``, moved by ``(shift_forward, shift_left)`` metres in the ego frame.

@@ -361,7 +361,8 @@ def write_edit(store: ArtifactStore, record: EditRecord, key: str, loaded: Loade
                                              tuple(int(f) for f in ctx.graph.frame_indices)))
         shown = _Shown()
         r0 = time.perf_counter()
-        for frame in render_frames(edited.graph, log, frames, progress=progress):
+        for frame in render_frames(edited.graph, log, frames, progress=progress,
+                                   ego_poses=edited.ego_poses(log.ego_poses)):
             render_s += time.perf_counter() - r0
             assert frame.node_id is not None
             for c, camera in enumerate(frame.cameras):

@@ -173,7 +173,7 @@ def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions
     if draft.delta().is_empty:
         raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
     if options.refinement != "none":
-        react(draft, options.refinement)
+        react(draft, options.refinement, options.ego_reacts)
     return draft, outcomes, draft.delta()
 
 

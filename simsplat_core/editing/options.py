@@ -9,6 +9,9 @@ with options, not separate code.
 * ``refinement``: how the traffic reacts to the edit (``motion.refine``): ``"full"`` (every other agent is
   driven by the motion predictor), ``"single-agent"`` (only the edited agents avoid conflicts) or ``"none"``
   (everyone else replays the log: deterministic editing, ``simsplat edit --no-refine``);
+* ``ego_reacts``: the ego reacts too in refinement (``"full"`` mode): it brakes for what the edit put in its
+  way, and the renders follow it (the cameras carried to its new poses, ``editing.renders.frame_views``). Off by
+  default: the renders then come from the log's own camera poses, the views the scene was reconstructed from;
 * ``check_looks``: render inserted objects asked in an achromatic colour and match their exposure
   (``editing.look_check``); off where only trajectories matter (the motion benchmark).
 
@@ -39,6 +42,7 @@ class EditorOptions:
     allow_pedestrian_insert: bool = True
     name: str = "ours"
     refinement: str = "full"
+    ego_reacts: bool = False
     check_looks: bool = True
 
     def __post_init__(self) -> None:

@@ -23,10 +23,12 @@ logger = logging.getLogger(__name__)
 MOVED_M = 1e-3
 
 
-def react(draft: Draft, mode: str) -> None:
-    """Refine the draft's traffic in ``mode`` (``motion.refine.REFINE_MODES``) and update its nodes in place."""
+def react(draft: Draft, mode: str, ego_reacts: bool = False) -> None:
+    """Refine the draft's traffic in ``mode`` (``motion.refine.REFINE_MODES``; the ego too with ``ego_reacts``) and
+    update its nodes in place."""
     before = draft.states
-    refinement = refine(before, draft.ctx.motion_map, draft.ctx.motion_predictor(), mode, original=draft.ctx.states)
+    refinement = refine(before, draft.ctx.motion_map, draft.ctx.motion_predictor(), mode, original=draft.ctx.states,
+                        ego_reacts=ego_reacts)
     after = refinement.states
     added = {a.node_id: k for k, a in enumerate(draft.added)}
     for row, node_id in enumerate(after.node_ids.tolist()):

@@ -11,7 +11,7 @@ image size in one batch (``scene.render.render_composed``), with the exact per-p
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +19,7 @@ import torch
 
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.render import render_composed
-from simsplat_core.scene_view import CameraView, shifted_cameras
+from simsplat_core.scene_view import CameraView, reposed_cameras, shifted_cameras
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -55,9 +55,12 @@ class FrameRender:
             raise KeyError(f"frame {self.frame_idx}: no camera {name!r}; cameras {list(self.cameras)}") from None
 
 
-def frame_views(log: SceneLog, frame_idx: int) -> list[CameraView]:
-    """The log's cameras at ``frame_idx`` (the order of the log's images)."""
-    return shifted_cameras(log, frame_idx)
+def frame_views(log: SceneLog, frame_idx: int, ego_to_world: np.ndarray | None = None) -> list[CameraView]:
+    """The log's cameras at ``frame_idx`` (the order of the log's images); carried to ``ego_to_world [4, 4]``
+    when the ego moves differently in the edit (refinement with ``ego_reacts``)."""
+    if ego_to_world is None:
+        return shifted_cameras(log, frame_idx)
+    return reposed_cameras(log, frame_idx, ego_to_world)
 
 
 @torch.no_grad()
@@ -86,14 +89,17 @@ def render_frame(graph: SceneGraph, frame_idx: int, views: Sequence[CameraView],
 
 def render_frames(graph: SceneGraph, log: SceneLog, frames: Sequence[int] | None = None, *,
                   with_node_ids: bool = True, backend: str = "auto",
-                  progress: FrameProgress | None = None) -> Iterator[FrameRender]:
+                  progress: FrameProgress | None = None,
+                  ego_poses: Mapping[int, np.ndarray] | None = None) -> Iterator[FrameRender]:
     """Render ``graph`` at each of ``frames`` (default: every log frame with camera images) from the log's
-    cameras, one :class:`FrameRender` per frame, lazily; ``progress(done, total)`` after each."""
+    cameras, one :class:`FrameRender` per frame, lazily; ``progress(done, total)`` after each. ``ego_poses``
+    (frame -> ``[4, 4]``) carries the cameras of those frames to a moved ego."""
     if frames is None:
         frames = sorted({img.frame_idx for img in log.images})
     total = len(frames)
     for k, frame_idx in enumerate(frames):
-        yield render_frame(graph, int(frame_idx), frame_views(log, int(frame_idx)), with_node_ids=with_node_ids,
-                           backend=backend)
+        moved = ego_poses.get(int(frame_idx)) if ego_poses is not None else None
+        yield render_frame(graph, int(frame_idx), frame_views(log, int(frame_idx), moved),
+                           with_node_ids=with_node_ids, backend=backend)
         if progress is not None:
             progress(k + 1, total)

@@ -14,9 +14,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from simsplat_core.editing.commands import EditCommand
-from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.pose_track import PoseTrack
+from simsplat_core.scene_view import ego_pose_moved
 
 if TYPE_CHECKING:
     from simsplat_core.motion.refine import Refinement
@@ -134,6 +135,17 @@ class EditedScene:
     @property
     def commands(self) -> tuple[EditCommand, ...]:
         return tuple(o.command for o in self.outcomes)
+
+    def ego_poses(self, log_poses: np.ndarray, tol_m: float = 1e-3) -> dict[int, np.ndarray]:
+        """Frame index -> ``[4, 4]`` ego pose where the edit moved the ego (refinement with ``ego_reacts``), from
+        the log's ``log_poses [T, 4, 4]``; empty when the ego replays its log."""
+        before, after = self.original_states, self.states
+        if EGO_ID not in after.object_ids or EGO_ID not in before.object_ids:
+            return {}
+        i, j = before.index(EGO_ID), after.index(EGO_ID)
+        moved = np.flatnonzero(np.linalg.norm(after.xy[j] - before.xy[i], axis=-1) > tol_m)
+        return {int(after.frame_idx[k]): ego_pose_moved(log_poses[int(after.frame_idx[k])], after.xy[j, k],
+                                                        float(after.heading[j, k])) for k in moved}
 
     def summary_lines(self) -> list[str]:
         return [o.summary for o in self.outcomes if o.summary]

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from simsplat_core.geometry import pose_from_yaw
-from simsplat_core.scene_view import shift_in_ego_frame, shifted_cameras, side_by_side
+from simsplat_core.scene_view import ego_pose_moved, reposed_cameras, shift_in_ego_frame, shifted_cameras, side_by_side
 from simsplat_core.types import CameraImage, SceneLog
 
 
@@ -29,6 +29,19 @@ def test_shift_left_moves_along_ego_y_and_keeps_orientation() -> None:
     assert np.allclose(front.cam_to_world[:3, 3] - original[:3, 3], [-1.0, 2.0, 0.0])
     assert np.array_equal(front.cam_to_world[:3, :3], original[:3, :3])
     assert np.array_equal(shift_in_ego_frame(original, log.ego_poses[1]), original)
+
+
+def test_cameras_carried_by_a_moved_ego_keep_their_mounting() -> None:
+    log = _log()
+    same = reposed_cameras(log, 1, log.ego_poses[1])
+    assert all(np.allclose(v.cam_to_world, w.cam_to_world) for v, w in zip(same, shifted_cameras(log, 1)))
+    # the ego 3 m further along its heading (world +y) and turned 0.2 rad left
+    moved = ego_pose_moved(log.ego_poses[1], log.ego_poses[1][:2, 3] + [0.0, 3.0], np.pi / 2 + 0.2)
+    assert np.allclose(moved[2, 3], log.ego_poses[1][2, 3])
+    assert np.isclose(np.arctan2(moved[1, 0], moved[0, 0]), np.pi / 2 + 0.2)
+    for view, image in zip(reposed_cameras(log, 1, moved), log.images_at(1)):
+        mount = np.linalg.inv(log.ego_poses[1]) @ image.cam_to_world  # camera in the ego frame
+        assert np.allclose(np.linalg.inv(moved) @ view.cam_to_world, mount)
 
 
 def test_default_is_every_camera_in_log_order_with_sizes() -> None:

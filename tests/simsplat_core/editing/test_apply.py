@@ -73,6 +73,25 @@ def _moving_vehicle(ctx: EditContext) -> str:
     raise AssertionError("the test world has no vehicle moving over 30 frames")
 
 
+def _stop_with_crash(ctx: EditContext) -> tuple[str, EditProgram, list[str]]:
+    """A vehicle whose stop makes a log agent run into it when everyone else replays the log, that stop, and
+    the agents that run into it."""
+    states = ctx.states
+    for oid, cat in zip(states.object_ids, states.categories):
+        if cat != "vehicle" or oid == "ego":
+            continue
+        program = _program({"op": "modify", "target": {"object_id": oid}, "behaviour": {"stop": {}}})
+        try:
+            replayed = apply_edit(ctx, program, NO_REFINE)
+        except EditRefused:
+            continue
+        hits = collision_steps(replayed.states, [replayed.states.index(oid)]).pairs[0].any(axis=1)
+        crashed = [replayed.states.object_ids[j] for j in np.flatnonzero(hits)]
+        if crashed:
+            return oid, program, crashed
+    raise AssertionError("no stop in the test world makes the replaying traffic crash")
+
+
 def test_remove_is_by_value(ctx):
     edited = apply_edit(ctx, _program({"op": "remove", "target": {"description": "the white van"}}))
     van = _node(ctx, VAN)
@@ -156,13 +175,11 @@ def test_modify_stop_retracks_the_node(ctx):
 def test_traffic_reacts_to_a_stop_and_reacting_nodes_are_retracked(ctx):
     """Refinement (default): agents behind the stopping car react, get new tracks in the delta and are validated;
     none of them overlaps the stopped car; the delta still rebuilds the edited graph."""
-    target = _moving_vehicle(ctx)
-    program = _program({"op": "modify", "target": {"object_id": target}, "behaviour": {"stop": {}}})
+    target, program, crashed = _stop_with_crash(ctx)
     edited = apply_edit(ctx, program)
-    replayed = apply_edit(ctx, program, NO_REFINE)
     assert edited.refinement is not None and edited.refinement.mode == "full"
     reacted = edited.refinement.refined_ids
-    assert reacted, "nobody reacted to a car stopping in traffic"
+    assert set(crashed) <= set(reacted), "the agents that ran into the stopped car did not react"
     for oid in reacted:
         row = edited.states.index(oid)
         assert edited.states.sources[row] == "refined"
@@ -171,10 +188,7 @@ def test_traffic_reacts_to_a_stop_and_reacting_nodes_are_retracked(ctx):
             assert node_id in edited.delta.retracked
     checked = {v.object_id for v in edited.validation.agents}
     assert {target, *reacted} <= checked
-    stopped = edited.states.index(target)
-    hits = collision_steps(edited.states, [stopped])
-    hits_replayed = collision_steps(replayed.states, [replayed.states.index(target)])
-    assert hits.vehicle.sum() <= hits_replayed.vehicle.sum()
+    assert not collision_steps(edited.states, [edited.states.index(target)]).pairs.any()  # nobody hits it now
     ego = edited.states.index("ego")
     np.testing.assert_array_equal(edited.states.xy[ego], ctx.states.xy[ctx.states.index("ego")])  # cameras fixed
     assert ctx.bank is not None
@@ -223,7 +237,26 @@ def test_insert_a_row_of_cones_standing_on_the_road(ctx):
     assert np.all(np.linalg.norm(np.diff(starts, axis=0), axis=1) > 0.5)  # a row, not a pile
     assert ctx.map_ctx.facts(starts, np.zeros(len(starts))).on_drivable.all()  # cones go on the road
     assert {a.node_id for a in edited.delta.added} <= {n.node_id for n in edited.graph.nodes}
-    assert len(edited.validation.agents) == 3
+    assert [v.object_id for v in edited.validation.agents if v.source == "inserted"] == list(
+        edited.outcomes[0].new_object_ids)  # (the traffic reacting to the cones is validated too)
+
+
+def test_ego_reacts_to_a_cone_on_its_path_only_when_asked(ctx):
+    e = ctx.states.index("ego")
+    x, y = ctx.states.xy[e, 15]  # where the ego's log takes it at step 15 (world frame = first ego pose)
+    program = _program({"op": "insert", "asset": {"description": "an orange traffic cone"},
+                        "placement": {"relation": "absolute", "position": [float(x), float(y), 0.0]}})
+    ego_fixed = apply_edit(ctx, program)
+    assert collision_steps(ego_fixed.states, [e]).static.any()  # the ego replays its log through the cone
+    assert not ego_fixed.ego_poses(ctx.log.ego_poses)  # and renders come from the log's cameras
+    reacting = apply_edit(ctx, program, dataclasses.replace(DEFAULT_OPTIONS, ego_reacts=True))
+    r = reacting.states.index("ego")
+    assert reacting.states.sources[r] == "refined"
+    assert not collision_steps(reacting.states, [r]).static.any()  # it stops short of the cone
+    poses = reacting.ego_poses(ctx.log.ego_poses)
+    assert poses and all(p.shape == (4, 4) for p in poses.values())
+    k = max(poses)
+    assert np.allclose(poses[k][:2, 3], reacting.states.xy[r, int(np.searchsorted(reacting.states.frame_idx, k))])
 
 
 def test_insert_a_vehicle_drives_along_its_lane(ctx):
