@@ -335,9 +335,8 @@ def edit(
                                             "did not change replays its log (deterministic editing).")] = False,
     predictor: Annotated[str, typer.Option(help="Motion predictor of refinement: reactive (default), "
                                            "constant-velocity, log.")] = "reactive",
-    ego_reacts: Annotated[bool, typer.Option("--ego-reacts", help="Let the ego react too (brake for what the "
-                                             "edit put in its way); the renders follow it from camera poses the "
-                                             "scene was not reconstructed from.")] = False,
+    ego_replays: Annotated[bool, typer.Option("--ego-replays", help="Keep the ego on its log (renders from the "
+                                              "log's camera poses) instead of letting it react to the edit.")] = False,
 ) -> None:
     """Edit a stored scene from language (or a command file): ground, apply, let the traffic react (multi-agent
     refinement), validate, render every frame and camera, and store the edit under
@@ -353,9 +352,8 @@ def edit(
         motion_predictor = make_predictor(predictor)
     except KeyError as exc:
         raise typer.BadParameter(str(exc.args[0]), param_hint="--predictor") from exc
-    if no_refine and ego_reacts:
-        raise typer.BadParameter("--ego-reacts needs refinement (drop --no-refine)", param_hint="--ego-reacts")
-    options = dataclasses.replace(DEFAULT_OPTIONS, refinement="none" if no_refine else "full", ego_reacts=ego_reacts)
+    options = dataclasses.replace(DEFAULT_OPTIONS, refinement="none" if no_refine else "full",
+                                  ego_reacts=not (no_refine or ego_replays))
     if prompt is None and commands is None:
         raise typer.BadParameter("give a PROMPT or --commands FILE.json", param_hint="PROMPT")
     artifacts = ArtifactStore(store)

@@ -33,6 +33,7 @@ from simsplat_core.eval.refinement.interactions import build_interactions
 from simsplat_core.eval.refinement.real import load_real_log, real_rows, replayed_summary, scenario_of_log
 from simsplat_core.eval.refinement.real_edits import edits_dataset, evaluate_real_edits
 from simsplat_core.eval.refinement.synthetic import (
+    BENCH_MODES,
     EDITING_CATEGORIES,
     MotionOutcome,
     evaluate_motion,
@@ -50,7 +51,6 @@ from simsplat_core.eval.refinement.table import (
 )
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.text import default_text_encoder
-from simsplat_core.motion.refine import REFINE_MODES
 from simsplat_core.motion.registry import DEFAULT_PREDICTOR, make_predictor
 from storage import ArtifactStore
 from storage.assets import read_asset_bank
@@ -104,7 +104,7 @@ class MotionEvaluation:
 
 
 def synthetic_rows(store_root: str, seq_ids: Sequence[str], predictor: str = DEFAULT_PREDICTOR, *,
-                   per_category: int = 30, per_kind: int = 3, seed: int = 0, modes: Sequence[str] = REFINE_MODES,
+                   per_category: int = 30, per_kind: int = 3, seed: int = 0, modes: Sequence[str] = tuple(BENCH_MODES),
                    progress: Progress | None = None) -> SyntheticMotion:
     """The edit-based rows on the store's scenes ``seq_ids`` (module docstring): the editing benchmark's prompts of
     ``synthetic.EDITING_CATEGORIES`` (``per_category`` each over all scenes, no infeasible ones) and

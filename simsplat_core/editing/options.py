@@ -10,8 +10,10 @@ with options, not separate code.
   driven by the motion predictor), ``"single-agent"`` (only the edited agents avoid conflicts) or ``"none"``
   (everyone else replays the log: deterministic editing, ``simsplat edit --no-refine``);
 * ``ego_reacts``: the ego reacts too in refinement (``"full"`` mode): it brakes for what the edit put in its
-  way, and the renders follow it (the cameras carried to its new poses, ``editing.renders.frame_views``). Off by
-  default: the renders then come from the log's own camera poses, the views the scene was reconstructed from;
+  way, and the renders follow it (the cameras carried to its new poses along, or near, its logged path:
+  ``editing.renders.frame_views``). On by default: an ego replaying its log drives through an obstacle put on
+  its path. Off (``simsplat edit --ego-replays``), the renders come from the log's own camera poses, the views
+  the scene was reconstructed from;
 * ``check_looks``: render inserted objects asked in an achromatic colour and match their exposure
   (``editing.look_check``); off where only trajectories matter (the motion benchmark).
 
@@ -42,7 +44,7 @@ class EditorOptions:
     allow_pedestrian_insert: bool = True
     name: str = "ours"
     refinement: str = "full"
-    ego_reacts: bool = False
+    ego_reacts: bool = True
     check_looks: bool = True
 
     def __post_init__(self) -> None:
@@ -83,6 +85,6 @@ DEFAULT_OPTIONS = EditorOptions()
 #: ChatSim-like: colour / type attribute matching, insert and remove only, fixed placement modes.
 CHATSIM_LIKE = EditorOptions(grounding="attributes", ops=frozenset({"insert", "remove"}),
                              relations=frozenset({"in_lane", "in_front_of", "behind", "absolute"}),
-                             name="chatsim-like")
+                             name="chatsim-like", ego_reacts=False)
 #: OmniRe-like: object ids instead of language grounding, no pedestrian insertion.
-OMNIRE_LIKE = EditorOptions(grounding="ids", allow_pedestrian_insert=False, name="omnire-like")
+OMNIRE_LIKE = EditorOptions(grounding="ids", allow_pedestrian_insert=False, name="omnire-like", ego_reacts=False)

@@ -62,8 +62,10 @@ class Method:
 
 
 #: The compared editors (SIMSplat Table 3 rows).
+#: Every editor is evaluated with the ego on its log: the world re-renders each edit from the log's camera poses
+#: (fidelity, pixel checks), and task completion is about the asked change, not the ego's.
 METHODS: dict[str, Method] = {
-    "ours": Method("ours", DEFAULT_OPTIONS, True),
+    "ours": Method("ours", dataclasses.replace(DEFAULT_OPTIONS, ego_reacts=False), True),
     "chatsim-like": Method("chatsim-like", CHATSIM_LIKE, True),
     "omnire-like": Method("omnire-like", OMNIRE_LIKE, False),
 }

@@ -5,15 +5,16 @@ refinement mode.
     outcomes = evaluate_motion(contexts, cases)                    # one per (case, mode); ctx's predictor
     rows = synthetic_rows(outcomes, log_outcomes(contexts))        # the log row, then one per mode
 
-Each case is applied by the editor itself (parse, ground, place, plan; no rendering) with refinement
-``"none"`` (others replay the log), ``"single-agent"`` (only the edited agents avoid conflicts) and
-``"full"`` (every other agent reacts). Failures are measured on every agent of the edited scenario (a
-scenario fails when any agent fails, not only the edited one), with the Waymax definitions of
-``scenario.rollout_metrics.scenario_failures``; pairs that already overlapped in the log at that step are the
-log's, not the edit's. Progress and the share of agents stopped for good are measured against the log, over
-the agents the edit did not change, so that "everyone stands still" cannot pass as safe. A case the editor
-refuses has no scenario and is counted apart (``refused``) in every mode. Each outcome also names every failing
-agent and what happened to it (``scoring.score_agents``), for the outcomes table.
+Each case is applied by the editor itself (parse, ground, place, plan; no rendering) in each of :data:`BENCH_MODES`:
+refinement ``"none"`` (others replay the log), ``"single-agent"`` (only the edited agents avoid conflicts),
+``"full"`` (every other agent reacts, the ego too: the editor's default) and ``"full-ego-log"`` (every other agent
+reacts but the ego replays its log: ``simsplat edit --ego-replays``). Failures are measured on every agent of the
+edited scenario (a scenario fails when any agent fails, not only the edited one), with the Waymax definitions of
+``scenario.rollout_metrics.scenario_failures``; pairs that already overlapped in the log at that step are the log's,
+not the edit's. Progress and the share of agents stopped for good are measured against the log, over the agents the
+edit did not change, so that "everyone stands still" cannot pass as safe. A case the editor refuses has no scenario
+and is counted apart (``refused``) in every mode. Each outcome also names every failing agent and what happened to
+it (``scoring.score_agents``), for the outcomes table.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ from simsplat_core.editing.result import EditRefused
 from simsplat_core.eval.editing.prompts import EditPrompt
 from simsplat_core.eval.refinement.interactions import InteractionPrompt
 from simsplat_core.eval.refinement.scoring import score_agents
-from simsplat_core.motion.refine import EDIT_SOURCES, REFINE_MODES, Refinement
+from simsplat_core.motion.refine import EDIT_SOURCES, Refinement
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.rollout_metrics import ScenarioFailures, progress_and_stops, rates, scenario_failures
@@ -100,9 +101,16 @@ def motion_cases(editing_prompts: Sequence[EditPrompt], interactions: Sequence[I
     return out
 
 
+#: Modes of the benchmark: ``mode -> (refinement, ego_reacts)`` (module docstring).
+BENCH_MODES: dict[str, tuple[str, bool]] = {
+    "none": ("none", False), "single-agent": ("single-agent", False), "full": ("full", True),
+    "full-ego-log": ("full", False)}
+
+
 def evaluate_case(ctx: EditContext, case: MotionCase, mode: str) -> MotionOutcome:
-    """Apply ``case`` in ``ctx`` with refinement ``mode`` and measure the edited scenario."""
-    options = dataclasses.replace(DEFAULT_OPTIONS, refinement=mode, check_looks=False)
+    """Apply ``case`` in ``ctx`` in benchmark ``mode`` (:data:`BENCH_MODES`) and measure the edited scenario."""
+    refinement, ego_reacts = BENCH_MODES[mode]
+    options = dataclasses.replace(DEFAULT_OPTIONS, refinement=refinement, ego_reacts=ego_reacts, check_looks=False)
     t = time.perf_counter()
     try:
         edited = Editor(ctx, options).edit(case.text)
@@ -132,11 +140,12 @@ def measure(case: MotionCase, mode: str, states: AgentStates, log: AgentStates, 
 
 
 def evaluate_motion(contexts: Mapping[str, EditContext], cases: Sequence[MotionCase],
-                    modes: Sequence[str] = REFINE_MODES, progress: Progress | None = None) -> list[MotionOutcome]:
+                    modes: Sequence[str] = tuple(BENCH_MODES), progress: Progress | None = None
+                    ) -> list[MotionOutcome]:
     """Every case in every mode (``contexts`` by sequence id)."""
-    unknown = sorted(set(modes) - set(REFINE_MODES))
+    unknown = sorted(set(modes) - set(BENCH_MODES))
     if unknown:
-        raise ValueError(f"unknown refinement modes {unknown}; known: {list(REFINE_MODES)}")
+        raise ValueError(f"unknown refinement modes {unknown}; known: {list(BENCH_MODES)}")
     out = []
     total = len(cases) * len(modes)
     for case in cases:

@@ -190,7 +190,7 @@ def test_traffic_reacts_to_a_stop_and_reacting_nodes_are_retracked(ctx):
     assert {target, *reacted} <= checked
     assert not collision_steps(edited.states, [edited.states.index(target)]).pairs.any()  # nobody hits it now
     ego = edited.states.index("ego")
-    np.testing.assert_array_equal(edited.states.xy[ego], ctx.states.xy[ctx.states.index("ego")])  # cameras fixed
+    np.testing.assert_array_equal(edited.states.xy[ego], ctx.states.xy[ctx.states.index("ego")])  # not affected
     assert ctx.bank is not None
     rebuilt = apply_delta(ctx.graph, edited.delta, node_factory(ctx.bank.get, ctx.graph.frame_indices))
     assert rebuilt.revision == edited.graph.revision
@@ -241,15 +241,15 @@ def test_insert_a_row_of_cones_standing_on_the_road(ctx):
         edited.outcomes[0].new_object_ids)  # (the traffic reacting to the cones is validated too)
 
 
-def test_ego_reacts_to_a_cone_on_its_path_only_when_asked(ctx):
+def test_ego_reacts_to_a_cone_on_its_path_unless_told_to_replay(ctx):
     e = ctx.states.index("ego")
     x, y = ctx.states.xy[e, 15]  # where the ego's log takes it at step 15 (world frame = first ego pose)
     program = _program({"op": "insert", "asset": {"description": "an orange traffic cone"},
                         "placement": {"relation": "absolute", "position": [float(x), float(y), 0.0]}})
-    ego_fixed = apply_edit(ctx, program)
+    ego_fixed = apply_edit(ctx, program, dataclasses.replace(DEFAULT_OPTIONS, ego_reacts=False))
     assert collision_steps(ego_fixed.states, [e]).static.any()  # the ego replays its log through the cone
     assert not ego_fixed.ego_poses(ctx.log.ego_poses)  # and renders come from the log's cameras
-    reacting = apply_edit(ctx, program, dataclasses.replace(DEFAULT_OPTIONS, ego_reacts=True))
+    reacting = apply_edit(ctx, program)  # the default: the ego reacts
     r = reacting.states.index("ego")
     assert reacting.states.sources[r] == "refined"
     assert not collision_steps(reacting.states, [r]).static.any()  # it stops short of the cone
