@@ -51,11 +51,14 @@ RELATIVES = ("that is", "that are", "which is", "which are", "who is", "who are"
 _DIRECTION = re.compile(r"(?:from (?:the )?(?:left|right)|(?:left|right) to"
                         r"|(?:to|towards|toward) the (?:left|right))\b")
 #: A describing clause ends where the clause's own verb's complement starts: a result ("bring the car turning
-#: *to a halt*") or a change of speed ("make the car which is going straight *10 km/h faster*", "*twice as fast*").
+#: *to a halt*"), a change of speed ("make the car which is going straight *10 km/h faster*", "*twice as fast*")
+#: or where to stop ("stop the car which is going straight *before it reaches* the crosswalk").
 _VERB_COMPLEMENT = re.compile(
     r"(?:to an? (?:complete |full |dead |gentle |smooth |sudden |quick )?(?:stop|halt|standstill)"
     r"|\d+(?:\.\d+)? (?:km/h|m/s|mph|%) (?:faster|slower|quicker|more|less)"
-    r"|(?:twice|thrice|half|\S+ times) (?:as|faster|slower|quicker|the speed))\b")
+    r"|(?:twice|thrice|half|\S+ times) (?:as|faster|slower|quicker|the speed)"
+    r"|(?:before|until|till) (?:it |they |he |she )?(?:reaches|reaching|gets to|getting to|arrives at|arriving at"
+    r"|enters|entering|hits))\b")
 COORDINATOR_STARTS = ("the", "a", "an", "all", "every", "each", "node", "object", "this", "that", "those", "these",
                       "both", "another", "any", "it", "them")
 

@@ -544,6 +544,14 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
     ("make the van that is driving in the right lane 20% slower",
      [{"op": MOD, "target.description": "the van that is driving in the right lane", SP_MODE: "factor",
        SP_VAL: 0.8}]),
+    # "before it reaches / getting to the crosswalk" is where to stop, also after a describing clause
+    ("Stop the silver sedan which is continuing straight in the oncoming lane before it reaches the crosswalk.",
+     [{"op": MOD, "target.description": "the silver sedan which is continuing straight in the oncoming lane",
+       "behaviour.stop.before": "crosswalk"}]),
+    ("the van should stop before it gets to the intersection",
+     [{"op": MOD, "target.description": "the van", "behaviour.stop.before": "intersection"}]),
+    ("stop the car before reaching the crosswalk",
+     [{"op": MOD, "target.description": "the car", "behaviour.stop.before": "crosswalk"}]),
     # a crossing direction after "pedestrian crossing" makes "crossing" a participle, not a crosswalk
     ("Get rid of each pedestrian crossing from the left to the right ahead of the ego car.",
      [{"op": REM, "target.description": "each pedestrian crossing from the left to the right ahead of the ego car",
