@@ -528,6 +528,12 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
     ("make the cyclist on our right stop", [{"op": MOD, TD: "the cyclist on our right", "behaviour.stop": "set"}]),
     ("have the car parked on the right pull out",
      [{"op": MOD, "target.description": "the car parked on the right", "behaviour.longitudinal": "accelerate"}]),
+    # "standing still" after a vehicle anchor is the anchor's (a stationary vehicle), not the placed person's
+    ("Add a man wearing a yellow hoodie 1 meter right of the grey vehicle standing still.",
+     [{"op": INS, AC: "pedestrian", PR: "right_of", PD: 1.0,
+       "placement.anchor.description": "the grey vehicle standing still", "behaviour": None}]),
+    ("add a woman in front of the van sitting still",
+     [{"op": INS, PR: "in_front_of", "placement.anchor.description": "the van sitting still", "behaviour": None}]),
     # "bring X to a halt / stop / standstill" is a stop; a describing clause before it keeps only the description
     ("Bring the silver car turning to a halt.",
      [{"op": MOD, "target.description": "the silver car turning", "behaviour.stop": "set"}]),
