@@ -290,12 +290,14 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     motion = Motion.planned(plan, describe_behaviour(behaviour))
-    if behaviour.delay_s is not None:
+    if behaviour.delay_s is not None or behaviour.start_time_s is not None:
         def free_plan() -> Motion:
             return Motion.planned(_plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
                                         object_id=states.object_ids[row], with_traffic=False), "")
 
-        _check_delay_kept(draft, row, motion, free_plan, log, behaviour.delay_s, start.step, index, label)
+        late = (f"set off {behaviour.delay_s:g} s later" if behaviour.delay_s is not None
+                else f"wait until {behaviour.start_time_s:g} s and then set off")
+        _check_delay_kept(draft, row, motion, free_plan, log, late, start.step, index, label)
     return motion
 
 
@@ -328,8 +330,9 @@ def first_overlap(states: AgentStates, motion: Motion, size: np.ndarray,
 
 
 def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callable[[], Motion], log: LogTrajectory,
-                      delay: float, start_step: int, index: int, label: str) -> None:
-    """Refuse a delayed start that is meaningless or cannot be carried out: the agent does not move in its log
+                      late: str, start_step: int, index: int, label: str) -> None:
+    """Refuse a delayed start (a delay or a start time; ``late`` says which: "set off 2 s later") that is
+    meaningless or cannot be carried out: the agent does not move in its log
     (nothing to start later), or, held back by the other agents (which replay their log and do not make room),
     it covers under :data:`DELAY_PROGRESS_SHARE` of what the same delayed start covers on a free road
     (``free_plan()``) -- naming the agent in its way."""
@@ -357,7 +360,7 @@ def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callabl
         ahead = blocker_ahead(states, motion, int(steps[-1]), (states.object_ids[row],))
         why = (f"{_name(draft, ahead)} ahead of it holds it back" if ahead is not None
                else "the traffic around it holds it back")
-    raise EditRefused(f"{label} cannot set off {delay:g} s later: {why}; it would move {got:.1f} m where a free road "
+    raise EditRefused(f"{label} cannot {late}: {why}; it would move {got:.1f} m where a free road "
                       f"lets it cover {expected:.1f} m (the other agents replay their log and do not make room)",
                       reason="infeasible_motion", command_index=index)
 

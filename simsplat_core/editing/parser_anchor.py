@@ -56,11 +56,14 @@ def agent_kind(query_categories: Sequence[str]) -> str | None:
 def motion_kinds(phrase: str) -> frozenset[str]:
     """Agent kinds that can do every motion the phrase names: for each motion keyword it holds, a kind whose
     vocabulary has one of the keyword's classes ("crossing the road" -> pedestrian, "waiting to cross" ->
-    pedestrian, "stopped at the light" -> vehicle and pedestrian)."""
+    pedestrian, "stopped at the light" -> vehicle and pedestrian). A keyword found only inside a longer one's
+    words is that one's ("standing still" is stationary, for vehicles too, not a pedestrian's "stand")."""
+    found = [(m.span(), named) for rx, named in MOTION_KEYWORDS if (m := re.search(rx, phrase)) is not None]
     kinds = frozenset(MOTION_VOCABULARIES)
-    for rx, named in MOTION_KEYWORDS:
-        if re.search(rx, phrase):
-            kinds &= {kind for kind, vocabulary in MOTION_VOCABULARIES.items() if set(named) & set(vocabulary.names)}
+    for (a, b), named in found:
+        if any(c <= a and b <= d and d - c > b - a for (c, d), _ in found):
+            continue
+        kinds &= {kind for kind, vocabulary in MOTION_VOCABULARIES.items() if set(named) & set(vocabulary.names)}
     return kinds
 
 

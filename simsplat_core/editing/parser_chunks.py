@@ -47,6 +47,18 @@ ING_NOUNS = frozenset({"thing", "something", "anything", "nothing", "building", 
 ED_PARTICIPLES = frozenset("parked stopped halted stalled abandoned double-parked stationed positioned located placed "
                            "seated queued queueing queuing dressed standing sitting waiting idling".split())
 RELATIVES = ("that is", "that are", "which is", "which are", "who is", "who are", "that", "which", "who")
+#: A direction after an ``-ing`` word: it is a participle ("the pedestrian crossing *from the left*").
+_DIRECTION = re.compile(r"(?:from (?:the )?(?:left|right)|(?:left|right) to"
+                        r"|(?:to|towards|toward) the (?:left|right))\b")
+#: A describing clause ends where the clause's own verb's complement starts: a result ("bring the car turning
+#: *to a halt*"), a change of speed ("make the car which is going straight *10 km/h faster*", "*twice as fast*")
+#: or where to stop ("stop the car which is going straight *before it reaches* the crosswalk").
+_VERB_COMPLEMENT = re.compile(
+    r"(?:to an? (?:complete |full |dead |gentle |smooth |sudden |quick )?(?:stop|halt|standstill)"
+    r"|\d+(?:\.\d+)? (?:km/h|m/s|mph|%) (?:faster|slower|quicker|more|less)"
+    r"|(?:twice|thrice|half|\S+ times) (?:as|faster|slower|quicker|the speed)"
+    r"|(?:before|until|till) (?:it |they |he |she )?(?:reaches|reaching|gets to|getting to|arrives at|arriving at"
+    r"|enters|entering|hits))\b")
 COORDINATOR_STARTS = ("the", "a", "an", "all", "every", "each", "node", "object", "this", "that", "those", "these",
                       "both", "another", "any", "it", "them")
 
@@ -69,8 +81,8 @@ def head_noun(tokens: Sequence[str], i: int) -> int:
     for n in range(min(lex.HEAD_NOUN_MAX_WORDS, len(tokens) - i), 0, -1):
         if " ".join(tokens[i : i + n]) in lex.HEAD_NOUNS:
             if (n > 1 and tokens[i + n - 1].endswith("ing") and i + n < len(tokens)
-                    and tokens[i + n] in COORDINATOR_STARTS):
-                continue  # "the pedestrian crossing the street": a participle, not "pedestrian crossing"
+                    and (tokens[i + n] in COORDINATOR_STARTS or _DIRECTION.match(" ".join(tokens[i + n :])))):
+                continue  # "the pedestrian crossing the street / from left to right": a participle, not a crosswalk
             return n
     return 0
 
@@ -256,7 +268,8 @@ def clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
             continue
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
                 or j > first and _to_verb(tokens, j) or match(tokens, j, lex.SCENE_PHRASES)
-                or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)):  # "by 1 s"
+                or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)  # "by 1 s"
+                or _VERB_COMPLEMENT.match(" ".join(tokens[j:]))):
             break
         if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
                 and not _verb_as_noun(tokens, j)):

@@ -223,6 +223,8 @@ class PromptParser(PromptState):
         else:
             particle = tokens[1:start]
         rest = tokens[j:]
+        if verb == "bring" and not re.match(r"(?:(?:down|up) )?to ", " ".join([*particle, *rest, ""])):
+            return False  # "bring the van to a halt" (a stop or a speed), not "bring the taxi back"
         placement: PlacementParse | None = None
         if placing and re.fullmatch(_SIDEWAYS, " ".join(rest)):
             placing, verb = False, "shift"  # "move the car 1 m to the left": sideways, not left of the ego

@@ -46,7 +46,7 @@ CAUSATIVES: tuple[str, ...] = (
 TARGET_FIRST_VERBS: tuple[str, ...] = (
     "stop", "halt", "slow", "speed", "accelerate", "decelerate", "brake", "reverse", "back", "turn", "steer",
     "delay", "hold", "move", "shift", "pull", "park", "drive", "merge", "redirect", "reroute", "send", "nudge",
-    "hurry", "freeze", "relocate", "reposition", "put", "place", "position",
+    "hurry", "freeze", "relocate", "reposition", "put", "place", "position", "bring",
 )
 #: Verbs whose object is placed, not described ("move the van 5 m behind the bus").
 PLACING_VERBS: tuple[str, ...] = ("move", "put", "place", "position", "relocate", "reposition")

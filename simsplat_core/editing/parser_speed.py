@@ -24,6 +24,10 @@ _SPEED = _N + r" (km/h|m/s|mph)"
 _STOP_PLACES = (r"(crosswalk|zebra crossing|zebra|pedestrian crossing|crossing|" + voc.INTERSECTION_RX
                 + r"|stop line|stop sign|traffic lights?|lights?|red light|signal)")
 
+#: "before *it reaches* the crosswalk", "before *getting to* the junction": the place is the same.
+_REACHES = (r"(?:(?:it |they |he |she )?(?:reaches|reach|reaching|gets to|get to|getting to|arrives at|arrive at"
+            r"|arriving at|enters|enter|entering|hits|hit|hitting) )?")
+
 
 def _factor(word: str) -> float | None:
     table = {"twice": 2.0, "double": 2.0, "doubles": 2.0, "triple": 3.0, "triples": 3.0, "thrice": 3.0,
@@ -125,7 +129,8 @@ def stop_rules(w: PredicateWork) -> None:
         w.stop(before=kind, **({"gap_m": float(m.group(1))} if m.group(1) else {}))
 
     w.take(r"(?:" + _N + r" m )?(?:right |just |directly )?(?:before|at|short of|in front of|ahead of|prior to|by"
-           r"|near|for|behind|ahead)? ?(?:the |a )?(?:next |upcoming |first |nearest |coming )?" + _STOP_PLACES, before)
+           r"|near|for|behind|ahead)? ?" + _REACHES + r"(?:the |a )?(?:next |upcoming |first |nearest |coming )?"
+           + _STOP_PLACES, before)
     for m in re.finditer(r"(?:(\d+(?:\.\d+)?) m )?(?:right |directly |just |close )?(?:behind|in back of|back of"
                          r"|after)(?= )", w.text):
         if "|" in m.group(0):

@@ -463,10 +463,13 @@ def test_a_car_inserted_at_a_speed_holds_it_or_is_refused_naming_the_car_ahead(c
     assert outcomes["held"] + outcomes["moved"] > 0, outcomes
 
 
-def test_a_delayed_start_sets_off_later_or_is_refused_saying_why(ctx):
-    """A delay of a vehicle that stands in its log is refused as meaningless; every moving one either sets off
-    after the delay, or is refused naming the agent in its way (covering under ``DELAY_PROGRESS_SHARE`` of what a
-    free road allows; never carried out standing where it was the whole time)."""
+@pytest.mark.parametrize(("behaviour", "refusal"), [(Behaviour(delay_s=1.5), "cannot set off 1.5 s later"),
+                                                    (Behaviour(start_time_s=1.5), "cannot wait until 1.5 s")])
+def test_a_delayed_start_sets_off_later_or_is_refused_saying_why(ctx, behaviour, refusal):
+    """A delay (or a start time: "wait 1.5 s before moving") of a vehicle that stands in its log is refused as
+    meaningless; every moving one either sets off after the delay, or is refused naming the agent in its way
+    (covering under ``DELAY_PROGRESS_SHARE`` of what a free road allows; never carried out standing where it was
+    the whole time)."""
     st = ctx.states
     outcomes = {"kept": 0, "refused": 0, "standing": 0}
     for r, (oid, category) in enumerate(zip(st.object_ids, st.categories, strict=True)):
@@ -476,14 +479,17 @@ def test_a_delayed_start_sets_off_later_or_is_refused_saying_why(ctx):
         log_moved = float(np.linalg.norm(st.xy[r, valid[-1]] - st.xy[r, valid[0]]))
         try:
             edited = apply_edit(ctx, EditProgram(commands=[EditCommand(
-                op="modify", target=TargetRef(object_id=oid), behaviour=Behaviour(delay_s=1.5))]))
+                op="modify", target=TargetRef(object_id=oid), behaviour=behaviour)]))
         except EditRefused as refused:
             assert refused.reason == "infeasible_motion", str(refused)
+            if "cannot start at 1.5 s: the edit begins at" in str(refused):
+                assert st.times[valid[0]] > 1.5, str(refused)  # a start time before the agent is there
+                continue
             if log_moved < 1.0:
                 assert "does not move in the log" in str(refused)
                 outcomes["standing"] += 1
             else:
-                assert "cannot set off 1.5 s later" in str(refused) and "replaying its log" in str(refused) \
+                assert refusal in str(refused) and "replaying its log" in str(refused) \
                     or "holds it back" in str(refused), str(refused)
                 outcomes["refused"] += 1
             continue

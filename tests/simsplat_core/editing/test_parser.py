@@ -528,6 +528,42 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
     ("make the cyclist on our right stop", [{"op": MOD, TD: "the cyclist on our right", "behaviour.stop": "set"}]),
     ("have the car parked on the right pull out",
      [{"op": MOD, "target.description": "the car parked on the right", "behaviour.longitudinal": "accelerate"}]),
+    # "standing still" after a vehicle anchor is the anchor's (a stationary vehicle), not the placed person's
+    ("Add a man wearing a yellow hoodie 1 meter right of the grey vehicle standing still.",
+     [{"op": INS, AC: "pedestrian", PR: "right_of", PD: 1.0,
+       "placement.anchor.description": "the grey vehicle standing still", "behaviour": None}]),
+    ("add a woman in front of the van sitting still",
+     [{"op": INS, PR: "in_front_of", "placement.anchor.description": "the van sitting still", "behaviour": None}]),
+    # "bring X to a halt / stop / standstill" is a stop; a describing clause before it keeps only the description
+    ("Bring the silver car turning to a halt.",
+     [{"op": MOD, "target.description": "the silver car turning", "behaviour.stop": "set"}]),
+    ("bring the gray vehicle that's heading straight on to a complete standstill",
+     [{"op": MOD, "target.description": "the gray vehicle that is heading straight on", "behaviour.stop": "set"}]),
+    ("bring the bus turning left to a stop before the crosswalk",
+     [{"op": MOD, TD: "the bus turning left", "behaviour.stop.before": "crosswalk"}]),
+    # a relative speed after a describing clause is the edit, not part of the description
+    ("Make the yellow hatchback which is going straight 10 km/h faster.",
+     [{"op": MOD, "target.description": "the yellow hatchback which is going straight", SP_MODE: "delta",
+       SP_VAL: 10.0, SP_UNIT: "km/h"}]),
+    ("make the car turning left twice as fast",
+     [{"op": MOD, "target.description": "the car turning left", SP_MODE: "factor", SP_VAL: 2.0}]),
+    ("make the van that is driving in the right lane 20% slower",
+     [{"op": MOD, "target.description": "the van that is driving in the right lane", SP_MODE: "factor",
+       SP_VAL: 0.8}]),
+    # "before it reaches / getting to the crosswalk" is where to stop, also after a describing clause
+    ("Stop the silver sedan which is continuing straight in the oncoming lane before it reaches the crosswalk.",
+     [{"op": MOD, "target.description": "the silver sedan which is continuing straight in the oncoming lane",
+       "behaviour.stop.before": "crosswalk"}]),
+    ("the van should stop before it gets to the intersection",
+     [{"op": MOD, "target.description": "the van", "behaviour.stop.before": "intersection"}]),
+    ("stop the car before reaching the crosswalk",
+     [{"op": MOD, "target.description": "the car", "behaviour.stop.before": "crosswalk"}]),
+    # a crossing direction after "pedestrian crossing" makes "crossing" a participle, not a crosswalk
+    ("Get rid of each pedestrian crossing from the left to the right ahead of the ego car.",
+     [{"op": REM, "target.description": "each pedestrian crossing from the left to the right ahead of the ego car",
+       TG: True}]),
+    ("remove the pedestrian crossing from right to left",
+     [{"op": REM, "target.description": "the pedestrian crossing from right to left", TG: False}]),
 ]
 
 TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI + TYPED + FAMILIES
@@ -627,7 +663,8 @@ class _NoEncoder:
 
 @pytest.mark.parametrize("prompt", ["remove the white van and make the red car stop",
                                     "add a row of orange cones in the ego lane 20 m ahead",
-                                    "make the taxi 10 km/h slower", "make the pedestrian cross the street"])
+                                    "make the taxi 10 km/h slower", "make the pedestrian cross the street",
+                                    "bring the silver car to a halt"])
 def test_rule_covered_prompts_do_not_embed(prompt: str) -> None:
     assert parse_prompt(prompt, encoder=_NoEncoder()).commands
 
