@@ -14,7 +14,8 @@ Three modes, the rows of the issue's Table 4 analogue:
 
 In ``"full"`` mode only the agents the edit affects change: the predictor also rolls the unedited scenario out,
 and an agent whose rollout with the edit stays within :data:`AFFECTED_M` of its rollout without it keeps its
-log exactly (the predictor's own error against the log is not passed off as a reaction to the edit).
+log exactly (the predictor's own error against the log is not passed off as a reaction to the edit), unless its
+log runs into an agent the edit added, changed or made react (then it keeps its rollout).
 
 The ego is fixed by default: its cameras render the scene, and a render is only as good as the views the scene
 was reconstructed from. With ``ego_reacts=True`` the ego is driven like any other free agent of the mode (for
@@ -35,6 +36,7 @@ import numpy as np
 
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor, RolloutRequest
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
+from simsplat_core.scenario.metrics import collision_steps
 from simsplat_core.scenario.trajectory import agent_kind
 
 logger = logging.getLogger(__name__)
@@ -125,8 +127,7 @@ def _only_affected(out: AgentStates, states: AgentStates, original: AgentStates,
     base_fixed = [k for k, oid in enumerate(original.object_ids) if oid in fixed_ids or oid not in states.object_ids]
     base = predictor.rollout(RolloutRequest(original, start, np.asarray(base_fixed, dtype=np.int64),
                                             motion_map)).states
-    xy, heading, speed = out.xy.copy(), out.heading.copy(), out.speed.copy()
-    valid, z, sources = out.valid.copy(), out.z.copy(), list(out.sources)
+    unaffected = []
     for r, oid in enumerate(out.object_ids):
         if oid in fixed_ids or oid not in original.object_ids:
             continue
@@ -135,8 +136,24 @@ def _only_affected(out: AgentStates, states: AgentStates, original: AgentStates,
         gap = np.linalg.norm(out.xy[r, start:] - base.xy[k, start:], axis=-1)[both]
         same_presence = np.array_equal(out.valid[r, start:], base.valid[k, start:])
         if same_presence and float(gap.max(initial=0.0)) <= AFFECTED_M:
-            xy[r], heading[r], speed[r] = states.xy[r], states.heading[r], states.speed[r]
-            valid[r], z[r], sources[r] = states.valid[r], states.z[r], states.sources[r]
+            unaffected.append(r)
+    restored = _restored(out, states, unaffected)
+    # an agent the predictor drives the same with and without the edit may still need its rollout: its log runs
+    # into the edit (the predictor already held it back for something else, where the log did not stop)
+    if unaffected:
+        hits = collision_steps(restored, unaffected).pairs[:, :, start:].any(axis=(1, 2))
+        keep_log = [r for r, hit in zip(unaffected, hits.tolist()) if not hit]
+        restored = _restored(out, states, keep_log)
+    return restored
+
+
+def _restored(out: AgentStates, states: AgentStates, rows: list[int]) -> AgentStates:
+    """``out`` with ``rows`` taken from ``states`` (trajectory, validity and source)."""
+    xy, heading, speed = out.xy.copy(), out.heading.copy(), out.speed.copy()
+    valid, z, sources = out.valid.copy(), out.z.copy(), list(out.sources)
+    for r in rows:
+        xy[r], heading[r], speed[r] = states.xy[r], states.heading[r], states.speed[r]
+        valid[r], z[r], sources[r] = states.valid[r], states.z[r], states.sources[r]
     return dataclasses.replace(out, xy=xy, heading=heading, speed=speed, valid=valid, z=z, sources=tuple(sources))
 
 

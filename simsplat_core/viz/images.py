@@ -51,7 +51,7 @@ def encode_mp4(frames: list[np.ndarray] | tuple[np.ndarray, ...], fps: float = 1
                              f"{shape} uint8 RGB like frame 0")
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "video.mp4")
-        writer = cv2.VideoWriter(path, cv2.VideoWriter_fourcc(*"mp4v"), float(fps), (int(shape[1]), int(shape[0])))
+        writer = cv2.VideoWriter(path, cv2.VideoWriter.fourcc(*"mp4v"), float(fps), (int(shape[1]), int(shape[0])))
         if not writer.isOpened():
             raise OSError("OpenCV could not open an MP4 writer (mp4v)")
         try:
