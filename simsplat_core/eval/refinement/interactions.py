@@ -1,7 +1,8 @@
 """Interaction-heavy edit prompts for the motion benchmark: edits that other agents must react to.
 
 Written from a synthetic scene's ground truth (``eval.editing.truth.SceneTruth``), in varied wording, each
-about a well-visible object that a description singles out (``eval.editing.references.object_phrase``):
+about a well-visible object that a description singles out (``eval.editing.references.object_phrase``, which
+brings its own article: "the blue car taking a right"):
 
 * ``sudden_stop``: a moving vehicle with another vehicle following it in its lane brakes hard / stops;
 * ``cut_in``: a moving vehicle changes into a neighbouring lane where another vehicle drives just behind;
@@ -45,23 +46,23 @@ CROSSWALK_AHEAD_M = 12.0
 
 FORMS: dict[str, tuple[str, ...]] = {
     "sudden_stop": (
-        "The {T} brakes hard.", "Make the {T} stop suddenly.", "Have the {T} slam on the brakes.",
-        "{T} should come to an abrupt stop.", "Let the {T} do an emergency stop.",
+        "{T} brakes hard.", "Make {T} stop suddenly.", "Have {T} slam on the brakes.",
+        "{T} should come to an abrupt stop.", "Let {T} do an emergency stop.",
     ),
     "cut_in": (
-        "The {T} cuts into the {side} lane.", "Make the {T} change lanes to the {side}.",
-        "Have the {T} merge into the {side} lane.", "{T} should move over to the {side} lane.",
+        "{T} cuts into the {side} lane.", "Make {T} change lanes to the {side}.",
+        "Have {T} merge into the {side} lane.", "{T} should move over to the {side} lane.",
     ),
     "jaywalker": (
-        "A pedestrian jaywalks across the road {d} m in front of the {T}.",
-        "Add a person crossing the street {d} m ahead of the {T}.",
-        "Insert a jaywalker {d} metres in front of the {T}.",
-        "Put a pedestrian walking across the road {d} m in front of the {T}.",
+        "A pedestrian jaywalks across the road {d} m in front of {T}.",
+        "Add a person crossing the street {d} m ahead of {T}.",
+        "Insert a jaywalker {d} metres in front of {T}.",
+        "Put a pedestrian walking across the road {d} m in front of {T}.",
     ),
     "lane_obstacle": (
-        "Insert a stopped truck {d} m in front of the {T}.", "Park a white van {d} m ahead of the {T}.",
-        "Put a row of cones {d} m in front of the {T}.", "Place a broken-down car {d} metres ahead of the {T}.",
-        "Add a barrier {d} m in front of the {T}.",
+        "Insert a stopped truck {d} m in front of {T}.", "Park a white van {d} m ahead of {T}.",
+        "Put a row of cones {d} m in front of {T}.", "Place a broken-down car {d} metres ahead of {T}.",
+        "Add a barrier {d} m in front of {T}.",
     ),
     "blocked_crosswalk": (
         "Put a barrier on the crosswalk.", "Block the crosswalk with a road barrier.",
