@@ -111,8 +111,13 @@ def test_edit_stores_every_output_and_leaves_the_scene_alone(store_root, target)
     renders = [f for f in files if f.startswith("renders/")]
     assert len(renders) == FRAMES * CAMERAS
     for name in ("command.json", "trajectories.parquet", "delta/delta.json", "delta/pose_tracks.parquet",
-                 "bev.png", "before_after.png", "validation.json", "_SUCCESS.json"):
+                 "bev.png", "bev.mp4", "before_after.png", "validation.json", "_SUCCESS.json"):
         assert name in files, name
+    reaction = out["refinement"]
+    assert reaction["mode"] == "full" and reaction["predictor"] == "reactive"
+    assert all(isinstance(why, str) and why for why in reaction["replayed"].values())
+    sources = set(read_trajectories(store, "r1", "synth-000000", out["edit_id"]).column("source").to_pylist())
+    assert sources <= {"log", "refined"} and ("refined" in sources) == bool(reaction["refined"])
     header = read_exr_header(store, f"{rel}/{renders[0]}")
     assert header["channels"] == ["R", "G", "B", "A", "id"] and header["format"] == ["float", "half"]
     trajectories = read_trajectories(store, "r1", "synth-000000", out["edit_id"])
@@ -127,6 +132,18 @@ def test_edit_stores_every_output_and_leaves_the_scene_alone(store_root, target)
     code, again = _edit(store_root, "--run-id", "r1", f"remove the {target.words}")
     assert code == 0 and again["skipped"] is True and again["edit_id"] == out["edit_id"]
     assert len(read_edit_records(store, "r1")) == 1
+
+
+def test_no_refine_keeps_everyone_else_on_the_log(store_root, target):
+    code, out = _edit(store_root, "--run-id", "r4", f"remove the {target.words}", "--no-refine")
+    assert code == 0, out
+    assert out["refinement"] is None
+    store = ArtifactStore(store_root)
+    sources = set(read_trajectories(store, "r4", "synth-000000", out["edit_id"]).column("source").to_pylist())
+    assert sources == {"log"}
+    bad = runner.invoke(app, ["edit", "--store", store_root, "--seq", "synth-000000", "--predictor", "psychic",
+                              f"remove the {target.words}"])
+    assert bad.exit_code == 2 and "psychic" in bad.output
 
 
 def test_a_refused_edit_writes_only_its_failure_record(store_root):
