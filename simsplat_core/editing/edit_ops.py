@@ -32,6 +32,7 @@ from simsplat_core.editing.motion_glue import (
     blocker_ahead,
     changed_motion,
     describe_behaviour,
+    no_room_note,
     plan_inserted,
     plan_modified,
     resolve,
@@ -342,7 +343,7 @@ def _check_speed_held(draft: Draft, command: EditCommand, asset: Asset, motion: 
 def _speed_refusal(draft: Draft, command: EditCommand, asset: Asset, motion: Motion, target: float, step: int,
                    index: int, within: str) -> EditRefused | None:
     """The refusal of an inserted vehicle asked to drive at ``target`` m/s whose plan cannot hold it, naming the
-    vehicle ahead that holds it back (the other agents replay their log and do not make room); ``None``: held."""
+    vehicle ahead that holds it back (``motion_glue.no_room_note``); ``None``: held."""
     short, at = speed_shortfall(motion, target, step)
     if at < 0:
         return None
@@ -358,8 +359,8 @@ def _speed_refusal(draft: Draft, command: EditCommand, asset: Asset, motion: Mot
             who = f"{draft.states.categories[row]} {draft.states.object_ids[row]!r} ahead of it"
     return EditRefused(f"cannot insert {asset.caption} driving at {target:.1f} m/s "
                        f"({describe_behaviour(command.behaviour)}){within}: {who} slows it to {target - short:.1f} "
-                       f"m/s (from {draft.states.times[at]:.1f} s on; the other agents replay their log and do not "
-                       "make room)", reason="infeasible_motion", command_index=index)
+                       f"m/s (from {draft.states.times[at]:.1f} s on; {no_room_note(draft)})",
+                       reason="infeasible_motion", command_index=index)
 
 
 def modify(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:

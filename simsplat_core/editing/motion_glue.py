@@ -37,6 +37,7 @@ from simsplat_core.editing.motion_requests import (
 from simsplat_core.editing.placement import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import wrap_angle
+from simsplat_core.motion.refine import fixed_rows
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.scenario.trajectory import agent_kind
@@ -159,6 +160,43 @@ def _start_speed(behaviour: Behaviour, cruise: float) -> float:
     return cruise
 
 
+#: Agents within this of the planned agent's heading drive the same way (a leader ahead does not make room).
+SAME_WAY_DEG = 45.0
+
+
+def making_room(draft: Draft, start: StartState, exclude: tuple[str, ...]) -> tuple[str, ...]:
+    """Ids of the agents that will make room for the planned one, so that its plan need not keep clear of them:
+    with full refinement (``EditorOptions.refinement``) every agent the predictor drives reacts to the edited
+    ones (follows, yields at crossings), except those ahead of it driving the same way, which keep their pace.
+    The ego (unless it reacts), static objects, edited and inserted agents and agents standing through the log
+    make no room; nor does anyone without refinement (the other agents replay their log)."""
+    if draft.options.refinement != "full":
+        return ()
+    states = draft.states
+    fixed = set(fixed_rows(states, "full", ego_reacts=draft.options.ego_reacts).tolist())
+    k = min(max(int(start.step), 0), states.num_steps - 1)
+    forward = np.array([np.cos(start.heading), np.sin(start.heading)])
+    out = []
+    for r, oid in enumerate(states.object_ids):
+        if r in fixed or oid in exclude or not states.valid[r, k]:
+            continue
+        steps = np.flatnonzero(states.valid[r])
+        if float(np.linalg.norm(states.xy[r, steps] - states.xy[r, steps[0]], axis=1).max()) < LOG_MOVES_M:
+            continue  # stands through the log: the predictor keeps it there
+        ahead = float((states.xy[r, k] - np.asarray(start.xy, np.float64)) @ forward) > 0.0
+        same_way = abs(float(wrap_angle(states.heading[r, k] - start.heading))) <= np.deg2rad(SAME_WAY_DEG)
+        if not (ahead and same_way):
+            out.append(oid)
+    return tuple(out)
+
+
+def no_room_note(draft: Draft) -> str:
+    """Why the traffic does not make room, for refusals (depends on ``EditorOptions.refinement``)."""
+    if draft.options.refinement == "full":
+        return "the traffic ahead keeps its pace; only agents behind and crossing react"
+    return "the other agents replay their log and do not make room"
+
+
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
           object_id: str | None, with_traffic: bool = True) -> PlannedTrajectory:
@@ -170,6 +208,7 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
         if kind == VEHICLE:
             leader = _other(draft, behaviour.follow, index, "agent to follow")
             exclude = tuple(o for o in (object_id, leader.object_id if leader else None) if o is not None)
+            exclude += making_room(draft, start, exclude)
             request = VehicleMotionRequest.from_behaviour(
                 behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
                 leader=leader, stop_behind=stop_behind,
@@ -355,13 +394,13 @@ def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callabl
     hit = first_overlap(states, motion, states.size[row], (states.object_ids[row],))
     if hit is not None:
         other, k = hit
-        why = f"{_name(draft, other)} (replaying its log) runs into it at {times[k]:.1f} s"
+        why = f"{_name(draft, other)} runs into it at {times[k]:.1f} s"
     else:
         ahead = blocker_ahead(states, motion, int(steps[-1]), (states.object_ids[row],))
         why = (f"{_name(draft, ahead)} ahead of it holds it back" if ahead is not None
                else "the traffic around it holds it back")
     raise EditRefused(f"{label} cannot {late}: {why}; it would move {got:.1f} m where a free road "
-                      f"lets it cover {expected:.1f} m (the other agents replay their log and do not make room)",
+                      f"lets it cover {expected:.1f} m ({no_room_note(draft)})",
                       reason="infeasible_motion", command_index=index)
 
 
@@ -423,7 +462,7 @@ def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behav
         who = f" ({_name(draft, row)})" if row is not None else ""
         raise EditRefused(f"{label} cannot reach {target:.1f} m/s ({describe_behaviour(behaviour)}): keeping its gap "
                           f"to the traffic ahead{who} it gets to {top:.1f} m/s at most and ends at {reached:.1f} m/s "
-                          "(the other agents replay their log and do not make room)",
+                          f"({no_room_note(draft)})",
                           reason="infeasible_motion", command_index=index)
 
 
