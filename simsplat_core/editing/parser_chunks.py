@@ -234,6 +234,10 @@ _ADJECTIVE_NOUNS: dict[str, frozenset[str]] = {
 _TURN_COMPLEMENTS = frozenset({"left", "right", "around", "back", "into", "onto"})
 #: Words before "to" that keep "to <verb>" in a description ("the car waiting *to turn* left", "about to").
 TO_KEEPERS = frozenset({"about", "ready", "able", "trying", "going", "waiting", "starting", "planning", "set"})
+#: Words whose own complement is "to a stop / halt": "the truck *coming to a stop*", "the car *braking to a
+#: halt*" still describe the object (unlike "bring the car turning *to a halt*").
+COMING_TO_REST = frozenset({"coming", "braking", "slowing", "grinding", "rolling", "pulling", "drawing", "gliding",
+                            "easing", "screeching"})
 
 
 def _verb_as_noun(tokens: Sequence[str], j: int) -> bool:
@@ -269,7 +273,7 @@ def clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
                 or j > first and _to_verb(tokens, j) or match(tokens, j, lex.SCENE_PHRASES)
                 or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)  # "by 1 s"
-                or _VERB_COMPLEMENT.match(" ".join(tokens[j:]))):
+                or _VERB_COMPLEMENT.match(" ".join(tokens[j:])) and tokens[j - 1] not in COMING_TO_REST):
             break
         if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
                 and not _verb_as_noun(tokens, j)):

@@ -541,6 +541,12 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
      [{"op": MOD, "target.description": "the gray vehicle that is heading straight on", "behaviour.stop": "set"}]),
     ("bring the bus turning left to a stop before the crosswalk",
      [{"op": MOD, TD: "the bus turning left", "behaviour.stop.before": "crosswalk"}]),
+    # ... but "coming / braking to a halt" describes the object itself
+    ("Place a traffic cone 1 meter ahead of the silver hatchback braking to a halt.",
+     [{"op": INS, PR: "in_front_of", "placement.anchor.description": "the silver hatchback braking to a halt",
+       "behaviour": None}]),
+    ("Delay the red pickup truck coming to a stop on my left by 2 secs.",
+     [{"op": MOD, TD: "the red pickup truck coming to a stop on my left", "behaviour.delay_s": 2.0}]),
     # a relative speed after a describing clause is the edit, not part of the description
     ("Make the yellow hatchback which is going straight 10 km/h faster.",
      [{"op": MOD, "target.description": "the yellow hatchback which is going straight", SP_MODE: "delta",
