@@ -141,7 +141,7 @@ def _only_affected(out: AgentStates, states: AgentStates, original: AgentStates,
     # an agent the predictor drives the same with and without the edit may still need its rollout: its log runs
     # into the edit (the predictor already held it back for something else, where the log did not stop)
     if unaffected:
-        hits = collision_steps(restored, unaffected).pairs[:, :, start:].any(axis=(1, 2))
+        hits = np.asarray(collision_steps(restored, unaffected).pairs[:, :, start:].any(axis=(1, 2)), dtype=bool)
         keep_log = [r for r, hit in zip(unaffected, hits.tolist()) if not hit]
         restored = _restored(out, states, keep_log)
     return restored
