@@ -42,7 +42,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
-from simsplat_core.editing.assets import AssetBank, wanted_from_spec
+from simsplat_core.editing.assets import AssetBank, asked_top_color
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import Draft, apply_command, node_factory
@@ -225,7 +225,7 @@ def _asked_colors(outcomes: list[CommandOutcome], delta: EditDelta) -> dict[int,
     asked = {}
     for outcome, nodes in zip(outcomes, _added_nodes(outcomes, delta)):
         spec = outcome.command.asset
-        color = wanted_from_spec(spec).color if spec is not None else None
+        color = asked_top_color(spec) if spec is not None else None  # a pedestrian's top: its main colour
         if color is not None:
             asked.update(dict.fromkeys(nodes, color))
     return asked

@@ -9,9 +9,9 @@ named the asset's colour -- every non-glass achromatic cluster but black when th
 non-black, non-glass cluster. For a pedestrian only the upper body (hips to neck) is searched: the
 asset's colour is its top's.
 
-An exposure variant (``exposed``) scales every Gaussian's colour by one gain: the same body seen under
-another scene's light (``editing.look_check`` picks the gain that makes an inserted object read as the
-asked achromatic colour where it is placed).
+An exposure variant (``exposed``) scales every Gaussian's colour (a pedestrian's: its upper body's) by one
+gain: the same body seen under another scene's light (``editing.look_check`` picks the gain that makes an
+inserted object read as the asked achromatic colour where it is placed).
 
 The shift keeps the shading: each body Gaussian's luminance relative to the body's median luminance
 scales the target's display colour (``color_names.DISPLAY_RGB``), itself scaled by how the body's median
@@ -142,7 +142,8 @@ def exposure_suffix(gain: float) -> str:
 
 def exposed(asset: Asset, gain: float) -> Asset:
     """A variant of ``asset`` with every Gaussian's display colour times ``gain`` (clipped to ``RGB_RANGE``;
-    id ``<asset_id>~exp<gain>``, ``attributes["exposed_from"]`` names the source).
+    id ``<asset_id>~exp<gain>``, ``attributes["exposed_from"]`` names the source). A pedestrian's upper body
+    (``UPPER_BODY``: its top, the colour it is asked and checked in) is scaled alone.
 
     Raises:
         ValueError: ``gain`` outside ``EXPOSURE_GAIN_RANGE``.
@@ -150,7 +151,9 @@ def exposed(asset: Asset, gain: float) -> Asset:
     gain = round(float(gain), 2)
     if not EXPOSURE_GAIN_RANGE[0] <= gain <= EXPOSURE_GAIN_RANGE[1]:
         raise ValueError(f"exposure gain {gain} outside {EXPOSURE_GAIN_RANGE}")
-    rgb = torch.clamp(asset.gaussians.rgb * gain, *RGB_RANGE)
+    rgb = asset.gaussians.rgb
+    rows = torch.as_tensor(_search_rows(asset)).unsqueeze(1)
+    rgb = torch.where(rows, torch.clamp(rgb * gain, *RGB_RANGE), rgb)
     colors = logit(rgb.to(asset.gaussians.colors.dtype))
     gs = asset.gaussians.map_rows(lambda name, t: colors if name == "colors" else t)
     return dataclasses.replace(asset, asset_id=f"{asset.asset_id}{VARIANT_SEP}{exposure_suffix(gain)}", gaussians=gs,

@@ -15,9 +15,10 @@
 3. Size (``size_m``): a cut-out fits when every side is within ``SIZE_TOLERANCE`` (relative, at least
    ``SIZE_TOLERANCE_M``) of the wanted one; a procedural asset fits when it can be rebuilt at that size
    (``procedural_assets.RESIZE_RANGE``) and is.
-4. Colour: assets of that colour (a pedestrian's top or trousers) come first; when the type exists but
-   not in that colour, the best one is *recoloured* (``asset_colors.recolored``; procedural assets are
-   rebuilt in the colour), and the variant records ``recoloured_from``.
+4. Colour: assets of that colour come first (a pedestrian's top, or its trousers when the description
+   names the colour for them only; among those, ones whose other garment is the other named colour first);
+   when the type exists but not in that colour, the best one is *recoloured* (``asset_colors.recolored``;
+   procedural assets are rebuilt in the colour), and the variant records ``recoloured_from``.
 5. Ranking: cosine of the description (E5 query) with each caption (E5 passage, embeddings cached per
    encoder; when recolouring, the captions as they will read in the new colour), plus ``QUALITY_WEIGHT`` x
    the asset's side coverage (``seen_from`` picks one side: the one the camera will see), for pedestrians
@@ -63,7 +64,7 @@ from simsplat_core.editing.procedural_assets import (
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.appearance.captioner import caption_text
 from simsplat_core.language.query_lexicon import SUBTYPE_FIT
-from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS
+from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS, parse_query
 from simsplat_core.language.text import TextEncoder
 
 logger = logging.getLogger(__name__)
@@ -183,6 +184,43 @@ def _rebuildable(asset: Asset, wanted: tuple[float, float, float]) -> bool:
 
 def _has_color(asset: Asset, color: str) -> bool:
     return asset.color == color or (asset.category == "pedestrian" and asset.attributes.get(LOWER_COLOR) == color)
+
+
+def clothing_colors(description: str) -> tuple[str | None, str | None]:
+    """``(top colour, lower colour)`` a pedestrian's description names ("in a black shirt and blue jeans"),
+    as ``COLOR_NAMES`` names (``None``: not named)."""
+    query = parse_query(description)
+    return (COLOR_SYNONYMS.get(query.upper_color or "", query.upper_color),
+            COLOR_SYNONYMS.get(query.lower_color or "", query.lower_color))
+
+
+def asked_top_color(spec: AssetSpec) -> str | None:
+    """The colour a spec asks of a pedestrian's top: its colour unless the description names that colour as the
+    lower garment's only ("someone in blue trousers": ``None``); for other categories, the spec's colour."""
+    wanted = wanted_from_spec(spec)
+    if wanted.color is None or wanted.category != "pedestrian":
+        return wanted.color
+    upper, lower = clothing_colors(spec.description)
+    return None if lower == wanted.color and upper != wanted.color else wanted.color
+
+
+def _color_pool(assets: Sequence[Asset], typed: list[int], spec: AssetSpec, wanted: Wanted) -> list[int]:
+    """The typed assets of the asked colour (point 4). For pedestrians the colour goes in the slot the
+    description names (top unless only the lower garment is named in it), and assets matching the other named
+    garment's colour too come first. A top asked that no asset wears is made by recolouring (trousers of that
+    colour do not make a top of it)."""
+    color = wanted.color
+    if color is None:
+        return typed
+    if wanted.category != "pedestrian":
+        return [k for k in typed if _has_color(assets[k], color)]
+    top = asked_top_color(spec)
+    if top is None:  # the trousers' colour only
+        return [k for k in typed if assets[k].attributes.get(LOWER_COLOR) == color] or [
+            k for k in typed if _has_color(assets[k], color)]
+    lower = clothing_colors(spec.description)[1]
+    slot = [k for k in typed if assets[k].color == top]
+    return [k for k in slot if assets[k].attributes.get(LOWER_COLOR) == lower] or slot
 
 
 def _canonical(asset: Asset) -> bool:
@@ -325,7 +363,7 @@ class AssetBank:
         if not typed:
             raise EditRefused(self._refusal(spec.description, wanted), reason="no_asset")
         typed = [k for k in typed if self.assets[k].asset_id not in exclude] or typed
-        exact = [k for k in typed if wanted.color is None or _has_color(self.assets[k], wanted.color)]
+        exact = _color_pool(self.assets, typed, spec, wanted)
         pool = exact or typed
         recolour = None if exact else wanted.color
         scores = self._scores(spec.description, pool, encoder, seen_from, walking, recolour)
@@ -436,4 +474,5 @@ def _with_attributes(asset: Asset, attributes: dict[str, str]) -> Asset:
 
 
 __all__ = ["Asset", "AssetBank", "QUALITY_WEIGHT", "SIZE_TOLERANCE", "SIZE_TOLERANCE_M", "WALKING_BONUS", "Wanted",
-           "color_variant", "content_hash", "normalise_color", "resized_variant", "subtype_fits", "wanted_from_spec"]
+           "asked_top_color", "clothing_colors", "color_variant", "content_hash", "normalise_color",
+           "resized_variant", "subtype_fits", "wanted_from_spec"]

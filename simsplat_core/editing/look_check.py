@@ -4,19 +4,19 @@ An asset keeps the light of the scene it was cut from: a white car whose rear wa
 grey rear wherever it is inserted, and "add a white car 20 m ahead" would put a silver one on the road.
 White, silver, grey and black differ only in lightness, so the fix is an exposure gain, not a recolour.
 
-After the edited graph is built, every added node whose command asked an achromatic colour (vehicles and
-static objects; a pedestrian's clothes are two colours and are left alone) is rendered with the whole edited
-scene, occlusions included, at up to ``LOOK_FRAMES`` frames where it exists, from the cameras its box (grown by
-``BOX_MARGIN_M``) may show in (``look_renders``). The built-in captioner
-(``language.appearance.captioner.describe_track``, the same one that captions the scene for grounding) names
-its main colour from the crops with at least ``MIN_LOOK_PIXELS`` of its pixels; it reads as asked when the
-track's colour is the asked one and the crops that are cover ``LOOK_SHARE`` of its pixels. Otherwise the crops
-are re-captioned under the gains of ``BRIGHTER_GAINS`` (asked colour lighter) or ``DARKER_GAINS`` (darker), and
-the first gain under which they read as asked becomes an exposure variant of the asset
-(``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the variant, so a stored edit rebuilds to
-the same pixels. The gain is verified on a render of the variant and raised along its ladder when it falls
-short (``VERIFY_ROUNDS`` renders at most). A node that still does not read as asked is reported
-(``LookNote.fitted`` false): ``editing.apply`` then tries the program once more without that asset.
+After the edited graph is built, every added node whose command asked an achromatic colour (a vehicle's or
+static object's body, a pedestrian's top) is rendered with the whole edited scene, occlusions included, at up
+to ``LOOK_FRAMES`` frames where it exists, from the cameras its box (grown by ``BOX_MARGIN_M``) may show in
+(``look_renders``). The built-in captioner (``language.appearance.captioner.describe_track``, the same one
+that captions the scene for grounding) names its main colour from the crops with at least ``MIN_LOOK_PIXELS``
+of its pixels; it reads as asked when the track's colour is the asked one and the crops that are cover
+``LOOK_SHARE`` of its pixels. Otherwise the crops are re-captioned under the gains of ``BRIGHTER_GAINS``
+(asked colour lighter) or ``DARKER_GAINS`` (darker), and the first gain under which they read as asked becomes
+an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the
+variant, so a stored edit rebuilds to the same pixels. The gain is verified on a render of the variant and
+raised along its ladder when it falls short (``VERIFY_ROUNDS`` renders at most). A node that still does not
+read as asked is reported (``LookNote.fitted`` false): ``editing.apply`` then tries the program once more
+without that asset.
 
     delta, graph, notes = match_exposure(log, graph, delta, wanted, states, asset_of, build)
 """
@@ -57,8 +57,9 @@ DARKER_GAINS = (0.9, 0.8, 0.7, 0.6)
 BOX_MARGIN_M = 0.5
 #: Renders verifying (and, when needed, raising) the gains.
 VERIFY_ROUNDS = 2
-#: Categories whose colour is one body colour (a pedestrian's clothes are two).
-CHECKED_CATEGORIES = ("vehicle", "static")
+#: Categories checked: one body colour, or a pedestrian's top (the captioner's main colour of a pedestrian; the
+#: gain of a pedestrian's variant scales its upper body only, ``asset_colors.exposed``).
+CHECKED_CATEGORIES = ("vehicle", "static", "pedestrian")
 
 
 @dataclasses.dataclass(frozen=True)

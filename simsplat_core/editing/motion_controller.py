@@ -205,7 +205,8 @@ def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGr
     """``(s_join, lane route making the turn)``: followed from the start, or from a little further along the
     agent's own path when the lane nearest the start runs elsewhere than the path (overlapping lanes in an
     intersection): the first candidate heading the way the path does over the next 10 m wins, else the
-    first that makes the turn."""
+    first that makes the turn. Going straight, a candidate starting on a turning lane is no candidate (the
+    point is on the path's own turn: the lane there keeps it)."""
     label, turn = req.label, req.turn
     assert turn is not None
     making: list[tuple[float, Route]] = []
@@ -214,6 +215,8 @@ def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGr
         cand = lane_route(lanes, base.position(s_p), float(base.heading(s_p)), turn)
         if cand is None or (turn != "straight" and "turn" not in cand[0].marks):
             continue
+        if turn == "straight" and lanes is not None and lanes.turn_of(cand[1].lanes[0]) != "straight":
+            continue  # from a point of the path already in a turn lane: following it would keep the turn
         route = cand[0]
         s_c = route.project(base.position(s_p))[0]
         probe = np.linspace(0.0, 10.0, 6)

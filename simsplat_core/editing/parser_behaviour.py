@@ -71,16 +71,22 @@ def _lateral_rules(w: PredicateWork) -> None:
         w.take(_AMBIGUOUS_LANE)
 
 
+#: "... straight instead of turning (left)": the turn given up is part of the go-straight phrase.
+_NOT_TURNING = (r"(?:,? (?:instead of|rather than|and not)(?: (?:making|taking|doing))?(?: (?:a|an|the|its|their))?"
+                r"(?: (?:left|right)(?:[- ]hand)?)? turn(?:ing|s)?(?: (?:off )?(?:to the )?(?:left|right)"
+                r"(?:[- ]hand)?)?)?")
+
+
 def _turn_rules(w: PredicateWork) -> None:
     if w.take(r"u[- ]?turn|u[- ]?turns|turn(?:s)? (?:it |them )?(?:around|back)|do a 180|pull a 180"):
         w.out.refusal = "U-turns are not supported (turn left or right, or go straight, at the next intersection)"
         w.out.refusal_field = "turn"
-    w.take(r"(?:do not|does not|not|never|no|without) turn(?:ing)?(?: (?:left|right))?"
+    w.take(r"(?:(?:do not|does not|not|never|no|without) turn(?:ing)?(?: (?:left|right))?"
            r"|(?:go|goes|going|drive|drives|driving|continue"
            r"|continues|continuing|keep|keeps|keep going|keep driving|carry on|carries on|head|heads|proceed|proceeds"
            r"|stay|stays|travel|travels|run)(?: on)? straight(?: on| ahead| through| across)?|"
            r"straight (?:through|across"
-           r"|on|ahead)", lambda m: w.set("turn", "straight"))
+           r"|on|ahead))" + _NOT_TURNING, lambda m: w.set("turn", "straight"))
     w.take(r"(?:turn|turns|turning|hang|hangs|take|takes|make|makes|swing|swings|bear|bears|go|goes|head|heads|hook"
            r"|hooks)(?: off)?(?: a| an| the)?(?: (?:next|first|upcoming))? (?:to the )?(left|right)(?:[- ]hand)?"
            r"(?: turn)?(?! lane)|(left|right)(?:[- ]hand)? turn",

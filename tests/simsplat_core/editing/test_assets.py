@@ -4,13 +4,14 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from simsplat_core.editing.asset_colors import body_rows
 from simsplat_core.editing.asset_record import RECOLOURED_FROM
-from simsplat_core.editing.assets import AssetBank, wanted_from_spec
+from simsplat_core.editing.assets import AssetBank, asked_top_color, wanted_from_spec
 from simsplat_core.editing.commands import AssetSpec
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
@@ -170,3 +171,26 @@ def test_asset_modules_are_framework_free() -> None:
         "'pyarrow')); assert not bad, bad"
     )
     subprocess.run([sys.executable, "-c", code], check=True)
+
+
+def test_a_pedestrian_top_colour_is_not_taken_from_trousers(encoder) -> None:
+    # grey top over black trousers vs black top over blue trousers: "a black shirt" is the second one's top
+    grey = replace(walking_pedestrian(asset_id="t.ped-grey"), color="gray",
+                   caption="a pedestrian in a gray top and black trousers", attributes={"lower_color": "black"})
+    black = replace(walking_pedestrian(asset_id="t.ped-black"), color="black",
+                    caption="a pedestrian in a black top and blue trousers", attributes={"lower_color": "blue"})
+    bank = AssetBank.from_assets([grey, black])
+    for description in ("a person wearing a black shirt", "a pedestrian in a black hoodie"):
+        assert bank.retrieve(_spec(description, category="pedestrian", color="black"), encoder).asset_id == \
+            "t.ped-black"
+    assert bank.retrieve(_spec("someone in black trousers", color="black"), encoder).asset_id == "t.ped-grey"
+    assert asked_top_color(_spec("someone in black trousers", color="black")) is None
+    assert asked_top_color(_spec("a person in a black top and black jeans", color="black")) == "black"
+    # both garments named: the asset wearing both wins over one with the top only
+    brown = replace(walking_pedestrian(asset_id="t.ped-blue-brown"), color="blue",
+                    caption="a pedestrian in a blue top and brown trousers", attributes={"lower_color": "brown"})
+    blue = replace(walking_pedestrian(asset_id="t.ped-blue-gray", n=12), color="blue",
+                   caption="a pedestrian in a blue top and gray trousers", attributes={"lower_color": "gray"})
+    bank = AssetBank.from_assets([brown, blue])
+    assert bank.retrieve(_spec("a person in a blue top and brown jeans", color="blue"), encoder).asset_id == \
+        "t.ped-blue-brown"

@@ -10,7 +10,7 @@ import pytest
 import torch
 
 from simsplat_core.editing.apply import EditContext, apply_edit
-from simsplat_core.editing.asset_colors import exposed
+from simsplat_core.editing.asset_colors import UPPER_BODY, exposed
 from simsplat_core.editing.asset_record import EXPOSED_FROM, Asset
 from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import EditProgram
@@ -132,3 +132,40 @@ def test_look_renders_only_the_cameras_that_see_the_object(edit_log, edit_graph,
     box = box_corners(edited.states, added.object_id, 0)
     assert box.shape == (8, 3) and np.allclose(box[:, :2].mean(axis=0), edited.states.xy[
         edited.states.index(added.object_id), 0])
+
+
+PED = (0.8, 0.6, 1.75)
+PED_PROGRAM = {"commands": [{"op": "insert", "asset": {"description": "a person in a white top"},
+                             "placement": {"relation": "in_lane", "distance_m": 5}}]}
+
+
+def _dim_white_top_pedestrian(value: float, n: int = 600) -> Asset:
+    """A standing pedestrian: a top of grey ``value`` (caption: white) over blue trousers."""
+    g = torch.Generator().manual_seed(5)
+    means = (torch.rand((n, 3), generator=g) - 0.5) * torch.tensor(PED)
+    upper = means[:, 2] > 0.0
+    rgb = torch.where(upper.unsqueeze(1), torch.full((n, 3), value), torch.tensor([[0.1, 0.2, 0.6]]))
+    gs = GaussianSet.create(means, torch.full((n,), 0.1), rgb, 0.95)
+    return Asset(asset_id="unit.dimped", category="pedestrian", subtype="adult",
+                 caption="a pedestrian in a white top and blue trousers", color="white", size=PED,
+                 source_seq="unit", source_object="ped", gaussians=gs, attributes={"lower_color": "blue"})
+
+
+def test_a_pedestrian_exposure_variant_scales_its_top_only():
+    asset = _dim_white_top_pedestrian(0.4)
+    variant = exposed(asset, 1.5)
+    z = asset.gaussians.means[:, 2]
+    top = (z >= -PED[2] / 2 + UPPER_BODY[0] * PED[2]) & (z <= -PED[2] / 2 + UPPER_BODY[1] * PED[2])
+    assert torch.allclose(variant.gaussians.rgb[top], asset.gaussians.rgb[top] * 1.5, atol=1e-4)
+    assert torch.allclose(variant.gaussians.rgb[~top], asset.gaussians.rgb[~top], atol=1e-5)
+
+
+def test_apply_edit_exposure_matches_a_pedestrian_top_asked_white(edit_log, edit_graph, edit_language, engine):
+    bank = AssetBank.from_assets([_dim_white_top_pedestrian(0.45)])
+    ctx = EditContext.create(edit_log, _clear_background(edit_graph), edit_language, engine, bank)
+    edited = apply_edit(ctx, EditProgram.model_validate(PED_PROGRAM))
+    added = edited.delta.added[0]
+    assert added.asset_id.startswith("unit.dimped~exp")
+    renders = list(render_frames(edited.graph, edit_log, look_frames(edited.states, added.object_id)))
+    crops = node_crops(renders, added.node_id, added.object_id, "pedestrian", PED)
+    assert crops and describe_track(crops).upper_color == "white"

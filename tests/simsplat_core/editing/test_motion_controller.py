@@ -452,3 +452,22 @@ def test_a_stop_by_a_time_even_hard_braking_cannot_make_is_refused(world) -> Non
     with pytest.raises(EditRefused, match=r"cannot be at rest by 0.5 s: braking as hard as allowed") as err:
         _car(world, Behaviour(stop=StopSpec(at_time_s=0.5)), speed=14.0, before_stop_m=70.0, n=60)
     assert err.value.reason == "infeasible_motion"
+
+
+@pytest.mark.parametrize("before_stop_m", [6.0, 12.0])
+def test_a_car_whose_log_turns_left_goes_straight_when_asked(world, before_stop_m: float) -> None:
+    """Asked to go straight, a car whose log turns left at the intersection drives straight through it: the
+    lane under a point of its path already in the turn is a turning lane, not a straight candidate."""
+    layout = world["layout"]
+    n = 80
+    times, frames = _steps(n)
+    xy0 = layout.arm_point("W", layout.stopline_s("W") + before_stop_m, layout.lane_offset("W", True, 0))
+    lp = world["lanes"].follow(xy0, 0.0, "left")
+    s = lp.start_s + 7.0 * times
+    log = LogTrajectory(lp.path.position(s), lp.path.heading(s), np.full(n, 7.0), np.ones(n, bool))
+    assert np.rad2deg(log.heading[-1] - log.heading[0]) > 60.0  # the log turns left
+    req = VehicleMotionRequest.from_behaviour(Behaviour(turn="straight"), times=times, frame_idx=frames,
+                                              start=StartState.from_log(log, times), size=CAR, log=log)
+    plan = plan_vehicle(req, world["lanes"], world["ctx"])
+    assert abs(np.rad2deg(plan.heading[-1] - plan.heading[0])) < 10.0
+    assert world["lanes"].nearest(plan.xy).distance.max() < 0.3
