@@ -240,6 +240,13 @@ COMING_TO_REST = frozenset({"coming", "braking", "slowing", "grinding", "rolling
                             "easing", "screeching"})
 
 
+def _coming_to_rest(tokens: Sequence[str], j: int) -> bool:
+    """Whether "to a stop / halt" at ``j`` completes a describing participle ("coming to a stop", "pulling *up* to
+    a stop") rather than starting the verb's result."""
+    before = [t for t in tokens[max(0, j - 2):j] if t not in ("up", "over", "in", "down")]
+    return bool(before) and before[-1] in COMING_TO_REST
+
+
 def _verb_as_noun(tokens: Sequence[str], j: int) -> bool:
     """Whether the verb form ``tokens[j]`` is a noun here ("making a right *turn*", "reducing its *speed*")."""
     before = tokens[j - 1]
@@ -273,7 +280,7 @@ def clause_tail(tokens: Sequence[str], j: int, relative: bool) -> int:
         if (t in PUNCT or t in ("and", "but", "then") or match(tokens, j, lex.MODALS) and t != "to"
                 or j > first and _to_verb(tokens, j) or match(tokens, j, lex.SCENE_PHRASES)
                 or t in ("by", "for", "at", "to", "after", "within") and is_quantity(tokens, j + 1)  # "by 1 s"
-                or _VERB_COMPLEMENT.match(" ".join(tokens[j:])) and tokens[j - 1] not in COMING_TO_REST):
+                or _VERB_COMPLEMENT.match(" ".join(tokens[j:])) and not _coming_to_rest(tokens, j)):
             break
         if (t in lex.PREDICATE_VERBS and not (relative and j == first) and not is_participle(t)
                 and not _verb_as_noun(tokens, j)):

@@ -100,6 +100,8 @@ class PromptParser(PromptState):
         words = " ".join(tokens)
         forms = (
             (r"(?:replace|swap(?: out)?|exchange|switch(?: out)?|trade) (.+?) (?:with|for|by) (.+)", False),
+            # the old object's description may hold "by" / "with" itself: "swap the sedan parked by the road for a van"
+            (r"(?:replace|swap(?: out)?|exchange|switch(?: out)?|trade) (.+) (?:with|for|by) (.+)", False),
             (r"substitute (.+?) for (.+)", True),
             (r"(?:change|turn|convert|transform|morph|make) (.+?) into (.+)", False),
             (r"(?:change|switch) (.+?) (?:to|for) ((?:a|an|another) .+)", False),

@@ -554,6 +554,12 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
        "behaviour": None}]),
     ("Delay the red pickup truck coming to a stop on my left by 2 secs.",
      [{"op": MOD, TD: "the red pickup truck coming to a stop on my left", "behaviour.delay_s": 2.0}]),
+    ("Put a traffic cone right behind the sport utility vehicle that is pulling up to a stop to our left.",
+     [{"op": INS, PR: "behind",
+       "placement.anchor.description": "the sport utility vehicle that is pulling up to a stop to our left"}]),
+    # the replaced object's description may hold "by" itself
+    ("Swap the sedan parked by the side of the road for a yellow hatchback.",
+     [{"op": "replace", TD: "the sedan parked by the side of the road", "asset.color": "yellow"}]),
     # a relative speed after a describing clause is the edit, not part of the description
     ("Make the yellow hatchback which is going straight 10 km/h faster.",
      [{"op": MOD, "target.description": "the yellow hatchback which is going straight", SP_MODE: "delta",
