@@ -102,6 +102,7 @@ def _nouns() -> dict[str, tuple[Noun, bool]]:
         (("cab", "cabs"), ("vehicle",), "car"),
         (("vehicle", "vehicles"), ("vehicle",), None),
         (("sedan", "sedans"), ("vehicle",), "sedan"),
+        (("saloon car", "saloon cars"), ("vehicle",), "sedan"),
         (("saloon", "saloons"), ("vehicle",), "sedan"),
         (("hatchback", "hatchbacks"), ("vehicle",), "hatchback"),
         (("sport utility vehicle", "sport utility vehicles"), ("vehicle",), "SUV"),

@@ -53,6 +53,8 @@ from simsplat_core.scenario import vocabulary as voc
             dict(categories=("pedestrian",), motion=voc.CROSSING, group=True, noun="pedestrian"),
         ),
         ("every parked car", dict(categories=("vehicle",), motion=voc.PARKED, group=True)),
+        ("the saloon cars", dict(subtype="sedan", group=True)),  # a plural compound noun is a group
+        ("the saloon car", dict(subtype="sedan", group=False)),
         ("the purple bus", dict(subtype="bus", colors=("purple",), motion="", sector="", context="", group=False)),
         (
             "Show me the white sedan that is making a right turn.",
