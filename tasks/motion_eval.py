@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections import Counter
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -125,9 +126,7 @@ def synthetic_rows(store_root: str, seq_ids: Sequence[str], predictor: str = DEF
     cases = motion_cases(prompts, build_interactions(truths, per_kind=per_kind, seed=seed))
     contexts = {s.truth.seq_id: s.loaded.ctx for s in scenes}
     outcomes = evaluate_motion(contexts, cases, modes, progress=progress)
-    counts: dict[str, int] = {}
-    for c in cases:
-        counts[c.kind] = counts.get(c.kind, 0) + 1
+    counts = dict(Counter(c.kind for c in cases))
     rows = rows_of_outcomes(outcomes, log_outcomes(contexts), predictor=chosen.name)
     return SyntheticMotion(rows, outcomes, counts, tuple(seq_ids))
 

@@ -15,7 +15,7 @@ import logging
 import numpy as np
 
 from simsplat_core.editing.edit_ops import Draft, track_from_states
-from simsplat_core.motion.refine import EDIT_SOURCES, refine
+from simsplat_core.motion.refine import refine
 
 logger = logging.getLogger(__name__)
 
@@ -39,7 +39,7 @@ def react(draft: Draft, mode: str, ego_reacts: bool = False) -> None:
         if node_id in added:
             k = added[node_id]
             draft.added[k] = dataclasses.replace(draft.added[k], track=track, arc_length=None)
-        elif after.sources[row] in EDIT_SOURCES or after.sources[row] == "refined":
+        else:  # a stored node that reacted (or, in single-agent mode, an edited one the predictor adjusted)
             draft.set_track(node_id, track)
     draft.states = after
     draft.refinement = refinement
