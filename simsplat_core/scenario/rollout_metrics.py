@@ -208,17 +208,39 @@ def scenario_failures(states: AgentStates, map_ctx: MapContext, rows: Sequence[i
 
     Unlike edit validation, pairs of two log agents count: in a rollout every agent moves, and the log's own
     rate is measured the same way. Given ``baseline`` (the log on the same steps), a pair that overlapped
-    there at the same step is the log's overlap and does not count (``metrics.collision_steps``).
+    there at the same step is the log's overlap and does not count (``metrics.collision_steps``), and an agent
+    that drives exactly its baseline trajectory (:func:`unchanged_rows`) has no off-road or kinematic failure
+    of its own: a car parked half off the road in the log is not the edit's failure.
     """
     rows = np.arange(states.num_agents) if rows is None else np.asarray(rows, dtype=np.int64).reshape(-1)
     coll = collision_steps(states, rows, baseline, count_log_pairs=True)
-    off = offroad_steps(states, map_ctx, rows).any(axis=1)  # [R]
-    kin = kinematic_violations(states, rows=rows).any(axis=1)  # [R]
+    own = ~unchanged_rows(states, rows, baseline)  # [R]
+    off = offroad_steps(states, map_ctx, rows).any(axis=1) & own  # [R]
+    kin = kinematic_violations(states, rows=rows).any(axis=1) & own  # [R]
     veh, ped, sta = coll.vehicle.any(axis=1), coll.pedestrian.any(axis=1), coll.static.any(axis=1)  # [R]
     failed = veh | ped | sta | off | kin
     return ScenarioFailures(collision_vehicle=bool(veh.any()), collision_pedestrian=bool(ped.any()),
                             collision_static=bool(sta.any()), offroad=bool(off.any()), kinematic=bool(kin.any()),
                             failed_agents=tuple(states.object_ids[int(r)] for r in rows[failed]))
+
+
+def unchanged_rows(states: AgentStates, rows: Sequence[int] | np.ndarray, baseline: AgentStates | None
+                   ) -> np.ndarray:
+    """``[R]`` bool: agent ``rows`` of ``states`` exist in ``baseline`` (by id) with the same validity and box
+    centres (within 1 mm) at every step; all ``False`` without a baseline."""
+    rows = np.asarray(rows, dtype=np.int64).reshape(-1)
+    out = np.zeros(len(rows), dtype=bool)
+    if baseline is None:
+        return out
+    for k, r in enumerate(rows):
+        oid = states.object_ids[int(r)]
+        if oid not in baseline.object_ids:
+            continue
+        b = baseline.index(oid)
+        valid = states.valid[r]
+        out[k] = bool(np.array_equal(valid, baseline.valid[b])
+                      and np.abs(states.xy[r, valid] - baseline.xy[b, valid]).max(initial=0.0) <= 1e-3)
+    return out
 
 
 def rates(failures: Sequence[ScenarioFailures]) -> dict[str, float]:

@@ -20,6 +20,7 @@ import numpy as np
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.metrics import collision_steps, kinematic_violations, offroad_steps, validate_agents
+from simsplat_core.scenario.rollout_metrics import unchanged_rows
 
 
 @dataclass(frozen=True)
@@ -48,8 +49,9 @@ def score_agents(states: AgentStates, context: MapContext, baseline: AgentStates
     rows = np.arange(states.num_agents)
     coll = collision_steps(states, rows, baseline, count_log_pairs=True)
     hit = np.asarray(coll.pairs.any(axis=(1, 2)), dtype=bool)  # [A]
-    off = offroad_steps(states, context, rows)  # [A, T]
-    kin = np.asarray(kinematic_violations(states, rows=rows).any(axis=1), dtype=bool)  # [A]
+    own = ~unchanged_rows(states, rows, baseline)  # [A] the log's own off-road / kinematics are not failures
+    off = offroad_steps(states, context, rows) & own[:, None]  # [A, T]
+    kin = np.asarray(kinematic_violations(states, rows=rows).any(axis=1), dtype=bool) & own  # [A]
     failed = np.flatnonzero(hit | off.any(axis=1) | kin)
     kin_detail = {}
     if kin.any():

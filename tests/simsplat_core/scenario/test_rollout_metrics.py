@@ -157,6 +157,12 @@ def test_pedestrian_collision_and_offroad_of_rows() -> None:
     car = _states(_lines([0.0], [2.5]), ["vehicle"])  # half of the box beyond the road edge at y = 3
     off = R.scenario_failures(car, road)
     assert off.offroad and off.failure and not off.collision_vehicle
+    # against a baseline, an agent still on its baseline trajectory brings its off-road with it; a moved one does not
+    assert not R.scenario_failures(car, road, baseline=car).offroad
+    moved = _states(_lines([0.0], [2.6]), ["vehicle"])
+    assert R.scenario_failures(moved, road, baseline=car).offroad
+    assert R.unchanged_rows(moved, [0], car).tolist() == [False]
+    assert R.unchanged_rows(car, [0], None).tolist() == [False]
 
 
 def test_rates_are_shares_of_scenarios() -> None:
