@@ -29,7 +29,9 @@ is infeasible, or that changes nothing is refused (``EditRefused``, with the com
 After the commands, the traffic reacts (``motion.refine``, ``EditorOptions.refinement``; default ``"full"``):
 every other agent is rolled out by the motion predictor (default ``motion.reactive.ReactivePredictor``) around
 the edited agents' fixed trajectories, reacting agents get ``source == "refined"`` and new pose tracks in
-the delta, and they are validated with the edited ones. ``"none"`` keeps the log for everyone else.
+the delta, and they are validated with the edited ones. ``"none"`` keeps the log for everyone else. When the
+reacting traffic cannot take an inserted object where asked without a crash, the program is applied again with
+the inserted objects a little further along their lanes, within the placement's slack (``editing.room``).
 """
 
 from __future__ import annotations
@@ -52,6 +54,7 @@ from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_
 from simsplat_core.editing.parser import parse_prompt
 from simsplat_core.editing.reaction import react
 from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
+from simsplat_core.editing.room import ROOM_SHIFTS, searches_room, traffic_copes
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.static_location import with_static_locations
@@ -131,7 +134,7 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
     excluded: frozenset[str] = frozenset()
     best: tuple[int, Draft, SceneGraph, EditDelta, list[CommandOutcome]] | None = None
     for attempt in range(LOOK_RETRIES + 1):
-        draft, outcomes, delta = _run_commands(ctx, program, options, excluded)
+        draft, outcomes, delta = _run_with_room(ctx, program, options, excluded)
         if not options.check_looks:
             best = (0, draft, _build_graph(ctx, draft, delta), delta, outcomes)
             break
@@ -161,11 +164,31 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
 LOOK_RETRIES = 1
 
 
-def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str]
-                  ) -> tuple[Draft, list[CommandOutcome], EditDelta]:
-    """Every command on a fresh draft (assets in ``excluded`` are not retrieved when another fits)."""
+def _run_with_room(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str]
+                   ) -> tuple[Draft, list[CommandOutcome], EditDelta]:
+    """:func:`_run_commands` with the inserted objects where asked; when the reacting traffic cannot cope there,
+    the first of ``room.ROOM_SHIFTS`` where it can (else the asked spot)."""
+    asked = _run_commands(ctx, program, options, excluded)
+    if not searches_room(program, options.refinement) or traffic_copes(asked[0]):
+        return asked
+    for share in ROOM_SHIFTS:
+        try:
+            moved = _run_commands(ctx, program, options, excluded, room_shift=share)
+        except EditRefused:  # no room there (or the program fails there): the next spot
+            continue
+        if traffic_copes(moved[0]):
+            logger.info("%s: inserted objects moved by %+.1f of their placement slack for the traffic", ctx.log.seq_id,
+                        share)
+            return moved
+    return asked
+
+
+def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str],
+                  room_shift: float = 0.0) -> tuple[Draft, list[CommandOutcome], EditDelta]:
+    """Every command on a fresh draft (assets in ``excluded`` are not retrieved when another fits; inserted rows
+    moved by ``room_shift``, ``Draft.room_shift``)."""
     grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding)
-    draft = Draft.start(ctx, grounder, options, excluded)
+    draft = Draft.start(ctx, grounder, options, excluded, room_shift)
     outcomes = []
     for index, command in enumerate(program.commands):
         options.check(command, index)

@@ -46,8 +46,10 @@ from simsplat_core.editing.placement import (
     PlacedPose,
     distance_slack,
     place_clear_row,
+    shift_row,
 )
 from simsplat_core.editing.result import AddedNode, CommandOutcome, EditDelta, EditRefused
+from simsplat_core.editing.room import movable
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scene.nodes import ObjectNode
@@ -62,6 +64,8 @@ logger = logging.getLogger(__name__)
 
 #: ``object_id`` prefix of inserted agents (``inserted_00``, ``inserted_01``, ...).
 INSERTED_PREFIX = "inserted_"
+#: Why an inserted row stands off its asked spot when ``Draft.room_shift`` moved it (``editing.apply``'s room search).
+ROOM_NOTE = "(within the asked distance's slack) so that the traffic can react without a crash"
 #: Default gap between the objects of a row, by asset category (metres between box edges).
 ROW_GAP_M = {"static": 1.5, "vehicle": 3.0, "pedestrian": 0.8}
 
@@ -98,7 +102,9 @@ class Draft:
 
     ``removed`` / ``retracked`` / ``added`` make the delta; ``gone`` are the stored nodes a ``remove`` dropped
     (not grounded again); ``replaced`` maps a stored node a ``replace`` swapped to its new node, so later
-    commands naming the same object act on the new one.
+    commands naming the same object act on the new one. ``room_shift`` moves every inserted row by that share
+    of its placement's reach (``placement.distance_slack`` of an asked distance, else ``NUDGE_M``) along its
+    lane: ``editing.apply`` tries a few when the traffic cannot react to the edit as asked without a crash.
     """
 
     ctx: EditContext
@@ -114,12 +120,14 @@ class Draft:
     replaced: dict[int, int] = field(default_factory=dict)
     excluded_assets: frozenset[str] = frozenset()
     refinement: Refinement | None = None
+    room_shift: float = 0.0
 
     @classmethod
     def start(cls, ctx: EditContext, grounder: Grounder, options: EditorOptions,
-              excluded_assets: frozenset[str] = frozenset()) -> Draft:
+              excluded_assets: frozenset[str] = frozenset(), room_shift: float = 0.0) -> Draft:
         return cls(ctx=ctx, grounder=grounder, options=options, states=ctx.states,
-                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1, excluded_assets=excluded_assets)
+                   next_node_id=max(n.node_id for n in ctx.graph.nodes) + 1, excluded_assets=excluded_assets,
+                   room_shift=room_shift)
 
     def delta(self) -> EditDelta:
         return EditDelta(removed_node_ids=tuple(self.removed), added=tuple(self.added), retracked=dict(self.retracked))
@@ -271,6 +279,10 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
         row = place_clear_row(first, count=command.asset.count, spacing_m=gap, size=asset.size,
                               lanes=draft.ctx.lanes, map_ctx=draft.ctx.map_ctx, occupied=draft.states,
                               frame=int(draft.states.frame_idx[step]), reach=reach, category=asset.category)
+        if draft.room_shift and movable(command):
+            row = shift_row(row, draft.room_shift * reach, size=asset.size, lanes=draft.ctx.lanes,
+                            map_ctx=draft.ctx.map_ctx, occupied=draft.states,
+                            frame=int(draft.states.frame_idx[step]), why=ROOM_NOTE)
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
     for placed in row:

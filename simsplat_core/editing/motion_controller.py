@@ -195,7 +195,7 @@ def _vehicle_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: Lan
         target = _neighbour_route(req, lanes)
         length = max(MIN_RAMP_M * 1.5, req.lane_change_s * max(abs(start.speed), req.target_speed_mps or 0.0,
                                                                  DEFAULT_CRUISE_MPS if abs(start.speed) < 0.3 else 0.0))
-        route = merge_onto(base, s0, target, length, final_offset_m=req.lateral_offset_m)
+        route = merge_onto(base, s0 + req.lane_change_after_m, target, length, final_offset_m=req.lateral_offset_m)
     elif req.lateral_offset_m:
         route = offset_route(base, s0, req.lateral_offset_m, ramp)
     return route, route.project(start.xy)[0] if route is not base else s0

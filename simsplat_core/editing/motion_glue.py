@@ -12,6 +12,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -21,6 +23,7 @@ import torch
 
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import Behaviour, Placement, TargetRef
+from simsplat_core.editing.merge_gap import squeezed_follower
 from simsplat_core.editing.motion_controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
 from simsplat_core.editing.motion_requests import (
     DEFAULT_CRUISE_MPS,
@@ -41,9 +44,11 @@ from simsplat_core.motion.refine import fixed_rows
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.geometry import footprints_overlap
 from simsplat_core.scenario.trajectory import agent_kind
-from simsplat_core.scenario.vocabulary import PARKED, VEHICLE
+from simsplat_core.scenario.vocabulary import PARKED, PEDESTRIAN, VEHICLE
 from simsplat_core.scene.pose_track import PoseTrack
 from simsplat_core.scene.transforms import poses_from_boxes
+
+logger = logging.getLogger(__name__)
 
 if TYPE_CHECKING:
     from simsplat_core.editing.edit_ops import Draft
@@ -169,16 +174,19 @@ def making_room(draft: Draft, start: StartState, exclude: tuple[str, ...]) -> tu
     with full refinement (``EditorOptions.refinement``) every agent the predictor drives reacts to the edited
     ones (follows, yields at crossings), except those ahead of it driving the same way, which keep their pace.
     The ego (unless it reacts), static objects, edited and inserted agents and agents standing through the log
-    make no room; nor does anyone without refinement (the other agents replay their log)."""
+    make no room; nor does a pedestrian already on the carriageway (crossing or jaywalking: it gives way only
+    from the kerb, and stopping in the lane frees nothing); nor does anyone without refinement (the other agents
+    replay their log)."""
     if draft.options.refinement != "full":
         return ()
     states = draft.states
     fixed = set(fixed_rows(states, "full", ego_reacts=draft.options.ego_reacts).tolist())
     k = min(max(int(start.step), 0), states.num_steps - 1)
     forward = np.array([np.cos(start.heading), np.sin(start.heading)])
+    on_road = _pedestrians_on_road(draft, k)
     out = []
     for r, oid in enumerate(states.object_ids):
-        if r in fixed or oid in exclude or not states.valid[r, k]:
+        if r in fixed or oid in exclude or not states.valid[r, k] or r in on_road:
             continue
         steps = np.flatnonzero(states.valid[r])
         if float(np.linalg.norm(states.xy[r, steps] - states.xy[r, steps[0]], axis=1).max()) < LOG_MOVES_M:
@@ -190,6 +198,16 @@ def making_room(draft: Draft, start: StartState, exclude: tuple[str, ...]) -> tu
     return tuple(out)
 
 
+def _pedestrians_on_road(draft: Draft, step: int) -> set[int]:
+    """Rows of the pedestrians standing on the carriageway (drivable, not sidewalk) at ``step``."""
+    states, map_ctx = draft.states, draft.ctx.map_ctx
+    rows = np.flatnonzero(np.array([agent_kind(c) == PEDESTRIAN for c in states.categories]) & states.valid[:, step])
+    if not rows.size or not map_ctx.has_drivable:
+        return set()
+    facts = map_ctx.facts(states.xy[rows, step], states.heading[rows, step])
+    return set(rows[facts.on_drivable & ~facts.on_sidewalk].tolist())
+
+
 def no_room_note(draft: Draft) -> str:
     """Why the traffic does not make room, for refusals (depends on ``EditorOptions.refinement``)."""
     if draft.options.refinement == "full":
@@ -199,7 +217,7 @@ def no_room_note(draft: Draft) -> str:
 
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
-          object_id: str | None, with_traffic: bool = True) -> PlannedTrajectory:
+          object_id: str | None, with_traffic: bool = True, lane_change_after_m: float = 0.0) -> PlannedTrajectory:
     """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
     current trajectories: the log, or what earlier commands made of them; ``with_traffic=False``: to none)."""
     ctx, states = draft.ctx, draft.states
@@ -214,6 +232,8 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
                 leader=leader, stop_behind=stop_behind,
                 traffic=traffic_from_states(states, exclude) if with_traffic else (),
                 backfill=backfill, label=label)
+            if lane_change_after_m:
+                request = dataclasses.replace(request, lane_change_after_m=lane_change_after_m)
             return plan_vehicle(request, ctx.lanes, ctx.map_ctx)
         ped = PedestrianMotionRequest.from_behaviour(
             behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
@@ -326,6 +346,12 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     size3 = (float(states.size[row, 0]), float(states.size[row, 1]), float(states.size[row, 2]))
     plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
                  object_id=states.object_ids[row])
+    if kind == VEHICLE and behaviour.lane_change is not None:
+        def delayed(after_m: float) -> PlannedTrajectory:
+            return _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
+                         object_id=states.object_ids[row], lane_change_after_m=after_m)
+
+        plan = _into_a_gap(draft, plan, delayed, row, start)
     if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     motion = Motion.planned(plan, describe_behaviour(behaviour))
@@ -338,6 +364,38 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
                 else f"wait until {behaviour.start_time_s:g} s and then set off")
         _check_delay_kept(draft, row, motion, free_plan, log, late, start.step, index, label)
     return motion
+
+
+#: A lane change that would cut in too close waits for a gap in steps of this much driving, s ...
+MERGE_WAIT_S = 0.5
+#: ... as long as it still gets this share of its lateral move done before the log ends.
+MERGE_DONE_SHARE = 0.5
+
+
+def _into_a_gap(draft: Draft, plan: PlannedTrajectory, delayed: Callable[[float], PlannedTrajectory], row: int,
+                start: StartState) -> PlannedTrajectory:
+    """A lane change that leaves every vehicle it cuts in front of room to brake behind it
+    (``merge_gap.squeezed_follower``): ``plan`` when it does, else the first start of the move along the own lane
+    (``delayed(metres)``, every :data:`MERGE_WAIT_S` of driving) from which it does and that still gets
+    :data:`MERGE_DONE_SHARE` of the move done; else ``plan`` (the validation reports the squeeze)."""
+    states = draft.states
+    exclude = (states.object_ids[row],)
+
+    def squeezes(p: PlannedTrajectory) -> bool:
+        return squeezed_follower(states, p.xy, p.heading, p.speed, p.valid, states.size[row], exclude,
+                                 start.step) is not None
+
+    if not squeezes(plan):
+        return plan
+    remaining = float(states.times[-1] - states.times[start.step])
+    move_s = VehicleMotionRequest.lane_change_s
+    pace = max(abs(start.speed), 1.0)
+    for wait in np.arange(MERGE_WAIT_S, remaining - MERGE_DONE_SHARE * move_s + 1e-9, MERGE_WAIT_S).tolist():
+        later = delayed(wait * pace)
+        if not squeezes(later):
+            logger.info("%s: lane change begins %.1f s later, in a gap", states.object_ids[row], wait)
+            return later
+    return plan
 
 
 #: A delayed start is carried out when the agent then covers at least this share of what the same delayed

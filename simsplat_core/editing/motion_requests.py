@@ -188,7 +188,9 @@ class VehicleMotionRequest(_Common):
     Attributes:
         reverse: back up (along its own past path, else straight back) at ``target_speed_mps`` or
             :data:`REVERSE_MPS`.
-        lane_change: ``"left"`` / ``"right"``; lane_change_s: its duration at the cruise speed, s.
+        lane_change: ``"left"`` / ``"right"``; lane_change_s: its duration at the cruise speed, s;
+            lane_change_after_m: how far it drives on in its own lane before the move begins (waiting for a gap
+            in the target lane), m.
         turn: ``"left"`` / ``"right"`` / ``"straight"`` at the next intersection.
         leader: agent to follow; follow_gap_m: standstill gap to it (and to traffic), m; headway_s: time gap, s.
         traffic: other agents (replaying their logs) to keep a gap to whenever they are on the route ahead,
@@ -198,6 +200,7 @@ class VehicleMotionRequest(_Common):
     reverse: bool = False
     lane_change: str | None = None
     lane_change_s: float = 3.5
+    lane_change_after_m: float = 0.0
     turn: str | None = None
     leader: OtherAgent | None = None
     traffic: tuple[OtherAgent, ...] = ()

@@ -621,6 +621,55 @@ def row_blockers(row: Sequence[PlacedPose], size: Sequence[float], occupied: Age
     return out
 
 
+def row_shifter(first: PlacedPose, lanes: LaneGraph | None, reach: float) -> Callable[[float], PlacedPose]:
+    """``d -> PlacedPose``: ``first`` moved ``d`` metres (``|d| <= reach``) along its lane (or its heading when it is
+    not in a lane), note and flags kept."""
+    if first.lane is not None and lanes is not None:
+        lp = lanes.follow(first.xy, first.heading, "straight", max_length_m=reach + 20.0)
+
+        def along_lane(d: float) -> PlacedPose:
+            s_new = lp.start_s + d
+            return PlacedPose(lp.path.position(s_new), float(lp.path.heading(s_new)), first.lane, first.z,
+                              first.area, first.note, first.parked)
+
+        return along_lane
+    forward = np.array([np.cos(first.heading), np.sin(first.heading)])
+
+    def along_heading(d: float) -> PlacedPose:
+        return PlacedPose(first.xy + d * forward, first.heading, None, first.z, first.area, first.note, first.parked)
+
+    return along_heading
+
+
+def shift_row(row: Sequence[PlacedPose], d: float, *, size: Sequence[float], lanes: LaneGraph | None,
+              map_ctx: MapContext, occupied: AgentStates | None, frame: int, why: str) -> list[PlacedPose]:
+    """The placed ``row`` moved ``d`` metres along its first member's lane (or heading), its first member's note
+    saying so and ``why``; ``EditRefused`` when a member would then overlap an agent at ``frame`` or leave the
+    first's kind of area."""
+    first = row[0]
+    moved = place_row(row_shifter(first, lanes, abs(d))(d), count=len(row),
+                      spacing_m=_row_spacing(row, size), size=size, lanes=lanes)
+    if row_blockers(moved, size, occupied, frame) or not all(
+            _area_kind_ok(map_ctx, p.xy, p.heading, first.area) for p in moved):
+        raise _refuse(f"no room {abs(d):.1f} m {'ahead' if d > 0 else 'back'} of the asked spot")
+    return _noted(moved, first.note, f"placed {abs(d):.1f} m {'further ahead' if d > 0 else 'further back'} {why}")
+
+
+def _noted(row: list[PlacedPose], before: str, note: str) -> list[PlacedPose]:
+    """``row`` with its first member's note ``before; note``."""
+    head = row[0]
+    row[0] = PlacedPose(head.xy, head.heading, head.lane, head.z, head.area, f"{before}; {note}" if before else note,
+                        head.parked)
+    return row
+
+
+def _row_spacing(row: Sequence[PlacedPose], size: Sequence[float]) -> float:
+    """The gap between the boxes of a placed ``row`` (0 for a single object)."""
+    if len(row) < 2:
+        return 0.0
+    return float(np.linalg.norm(row[1].xy - row[0].xy)) - float(size[0])
+
+
 def place_clear_row(first: PlacedPose, *, count: int, spacing_m: float, size: Sequence[float],
                     lanes: LaneGraph | None, map_ctx: MapContext, occupied: AgentStates | None, frame: int,
                     reach: float = NUDGE_M, category: str = STATIC) -> list[PlacedPose]:
@@ -637,30 +686,14 @@ def place_clear_row(first: PlacedPose, *, count: int, spacing_m: float, size: Se
     oid = occupied.object_ids[agent]
     what = "the ego vehicle" if oid == EGO_ID else f"{occupied.categories[agent]} {oid!r}"
     steps = np.arange(NUDGE_STEP_M, reach + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
-    if first.lane is not None and lanes is not None:
-        lp = lanes.follow(first.xy, first.heading, "straight", max_length_m=reach + 20.0)
-
-        def shifted(d: float) -> PlacedPose:
-            s_new = lp.start_s + d
-            return PlacedPose(lp.path.position(s_new), float(lp.path.heading(s_new)), first.lane, first.z,
-                              first.area, first.note, first.parked)
-    else:
-        forward = np.array([np.cos(first.heading), np.sin(first.heading)])
-
-        def shifted(d: float) -> PlacedPose:
-            return PlacedPose(first.xy + d * forward, first.heading, None, first.z, first.area, first.note,
-                              first.parked)
+    shifted = row_shifter(first, lanes, reach)
     for d in sorted([*steps.tolist(), *(-steps).tolist()], key=lambda x: (abs(x), -x)):
         moved = place_row(shifted(d), count=count, spacing_m=spacing_m, size=size, lanes=lanes)
         if row_blockers(moved, size, occupied, frame):
             continue
         if not all(_area_kind_ok(map_ctx, p.xy, p.heading, first.area) for p in moved):
             continue
-        note = f"row shifted {abs(d):.1f} m {'ahead' if d > 0 else 'back'} to clear {what}"
-        head = moved[0]
-        moved[0] = PlacedPose(head.xy, head.heading, head.lane, head.z, head.area,
-                              f"{first.note}; {note}" if first.note else note, head.parked)
-        return moved
+        return _noted(moved, first.note, f"row shifted {abs(d):.1f} m {'ahead' if d > 0 else 'back'} to clear {what}")
     raise _refuse(f"cannot place a row of {count} {_NOUNS[kind_of(category)][2:]}s there: member {member + 1} "
                   f"overlaps {what} at frame {frame} (no shift of the row within {reach:.0f} m clears every member)")
 

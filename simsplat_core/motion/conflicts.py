@@ -1,6 +1,6 @@
 """Gap acceptance at conflict points: where another agent's predicted path crosses a driven agent's route.
 
-For each candidate pair whose headings cross (``GapAcceptanceParams.crossing_deg``), the other agent's
+For each candidate pair whose headings cross or oppose (``GapAcceptanceParams.crossing_deg``), the other agent's
 predicted positions (``[H]`` samples every ``sample_dt_s`` over ``horizon_s``: fixed agents' given future,
 driven agents along their routes) are projected onto the driven agent's route. The first sample inside
 the corridor, ahead of the agent's front and within its look-ahead, is the other's arrival ``tau_other``,
@@ -95,7 +95,7 @@ def yield_gaps(grid: RouteGrid, k0: np.ndarray, width: int, pairs: Pairs, crossi
 
     Args:
         grid, k0, width: the driven agents' routes and windows; pairs: candidate pairs (``corridor.route_pairs``).
-        crossing: ``[P]`` bool, the pair's headings cross.
+        crossing: ``[P]`` bool, the pair's headings cross or oppose.
         agents, profiles: the driven agents and their lateral offset profiles.
         pred: every agent's predicted positions.
         size: ``[M, 2]`` (length, width) of every agent.

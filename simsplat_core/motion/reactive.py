@@ -171,7 +171,8 @@ class ReactivePredictor:
             pairs = route_pairs(grid, k0, width, cur_xy[drv.rows], drv.rows, see_xy, see_heading, size2, vel,
                                 seen, reach)
             offset = drv.profiles.offset(pairs.i, pairs.along)
-            crossing = np.abs(np.cos(see_heading[pairs.j] - pairs.yaw)) < cos_cross
+            # crossing or oncoming: a moving agent heading against the route is a conflict, never a leader
+            crossing = np.cos(see_heading[pairs.j] - pairs.yaw) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
             follows = ~(crossing & moving) & cur_valid[pairs.j]  # moving crossing agents: gap acceptance
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
@@ -197,7 +198,9 @@ class ReactivePredictor:
             if logger.isEnabledFor(logging.DEBUG):
                 self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
             self._lane_change(drv, pairs, follows, cur_valid[pairs.j], lead, a_lead)
-            v_new = next_speed(drv.v, accel, dt, np.minimum(lead.gap, y_gap), drv.idm)
+            # the positional bound holds against real obstacles only: a give-way line is no wall, an agent that
+            # finds it too late brakes at the hard-brake limit and stops a little past it
+            v_new = next_speed(drv.v, accel, dt, lead.gap, drv.idm)
             drv.s = drv.s + v_new * dt
             drv.v = v_new
             pos, yaw = self._pose(grid, drv)

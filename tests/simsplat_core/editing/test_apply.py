@@ -9,13 +9,18 @@ import numpy as np
 import pytest
 import torch
 
+from simsplat_core.editing import apply as apply_module
 from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.assets import AssetBank
 from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, SpeedSpec, TargetRef
 from simsplat_core.editing.delta import apply_delta
-from simsplat_core.editing.edit_ops import node_factory
+from simsplat_core.editing.edit_ops import Draft, node_factory
+from simsplat_core.editing.grounding import Grounder
+from simsplat_core.editing.motion_glue import making_room
+from simsplat_core.editing.motion_requests import StartState
 from simsplat_core.editing.options import DEFAULT_OPTIONS
+from simsplat_core.editing.placement import distance_slack
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.scenario.geometry import signed_polygon_distance
@@ -534,3 +539,41 @@ def test_an_asked_faster_speed_is_met_at_the_end_or_refused_naming_the_traffic(c
         assert met or end >= end_speed(st.speed[r], st.times) - 0.1, (oid, start, end)
         outcomes["met" if met else "limited"] += 1
     assert outcomes["met"] > 0, outcomes
+
+
+def test_an_insert_the_traffic_cannot_take_moves_within_its_slack(ctx, monkeypatch):
+    """A cone a few metres in front of the moving ego leaves it no way to stop: the room search moves the cone
+    further along the lane (within the asked distance's slack) to where the reacting ego can stop for it, and
+    says so; without the search the ego runs into it."""
+    program = _program({"op": "insert", "asset": {"description": "an orange traffic cone"},
+                        "placement": {"relation": "in_lane", "distance_m": 4}})
+    edited = apply_edit(ctx, program)
+    e = edited.states.index("ego")
+    assert edited.states.sources[e] == "refined"
+    assert not collision_steps(edited.states, [e]).static.any()
+    assert "so that the traffic can react" in edited.outcomes[0].summary
+    cone = edited.states.index("inserted_00")
+    ahead = float(np.linalg.norm(edited.states.xy[cone, 0] - ctx.states.xy[e, 0]))
+    assert 4.0 < ahead <= 4.0 + distance_slack(4.0) + 0.5
+    monkeypatch.setattr(apply_module, "ROOM_SHIFTS", ())
+    as_asked = apply_edit(ctx, program)
+    assert collision_steps(as_asked.states, [as_asked.states.index("ego")]).static.any() or not \
+        as_asked.validation.ok
+
+
+def test_a_pedestrian_on_the_carriageway_makes_no_room_for_a_planned_car(ctx):
+    """Under full refinement a crossing pedestrian still on the kerb gives way (the plan may ignore it); one
+    already walking on the carriageway cannot clear the lane by stopping, so the plan keeps clear of it."""
+    draft = Draft.start(ctx, Grounder(ctx.language, ctx.engine, ctx.graph, DEFAULT_OPTIONS.grounding),
+                        DEFAULT_OPTIONS)
+    e = ctx.states.index("ego")
+    start = StartState(0, ctx.states.xy[e, 0] + np.array([-30.0, 0.0]), float(ctx.states.heading[e, 0]), 6.0)
+    walkers = [r for r, c in enumerate(ctx.states.categories) if c == "pedestrian"
+               and np.linalg.norm(ctx.states.xy[r, -1] - ctx.states.xy[r, 0]) > 1.0]
+    facts = ctx.map_ctx.facts(ctx.states.xy[walkers, 0], ctx.states.heading[walkers, 0])
+    row = walkers[int(np.flatnonzero(facts.on_sidewalk | ~facts.on_drivable)[0])]  # on the kerb at the start
+    assert ctx.states.object_ids[row] in making_room(draft, start, ())
+    xy = ctx.states.xy.copy()
+    xy[row] += ctx.states.xy[e, 0] + np.array([10.0, 0.0]) - ctx.states.xy[row, 0]  # on the ego's lane
+    draft.states = dataclasses.replace(ctx.states, xy=xy)
+    assert ctx.states.object_ids[row] not in making_room(draft, start, ())

@@ -283,3 +283,21 @@ def test_vectorised_leader_gaps_match_a_per_agent_loop(seed: int) -> None:
     both = same & (ref_leader >= 0)
     np.testing.assert_allclose(lead.gap[both], ref_gap[both], atol=0.05)
     np.testing.assert_array_equal(np.isinf(lead.gap[same]), np.isinf(ref_gap[same]))
+
+
+# ------------------------------------------------------------------------------------------ (g) oncoming traffic
+def test_an_oncoming_car_that_has_passed_is_no_leader_of_a_left_turn() -> None:
+    """A car turns left across the westbound lane (y = 3.5) after an oncoming car has passed there: while the
+    oncoming car comes towards it, it lies in the turning corridor but drives against it, a conflict to check by
+    gap acceptance (it is clear well before the turn), not a leader to brake for."""
+    v, radius, x_turn = 8.0, 10.0, 25.0
+    s = v * TIMES
+    ang = np.clip((s - x_turn) / radius, 0.0, np.pi / 2)
+    x = np.where(s < x_turn, s, x_turn + radius * np.sin(ang))
+    y = np.where(s < x_turn, 0.0, radius * (1.0 - np.cos(ang))) + np.clip(s - x_turn - radius * np.pi / 2, 0.0, None)
+    oncoming = track(45.0 - v * TIMES, 3.5)
+    st = states([("turner", "vehicle", track(x, y), CAR), ("oncoming", "vehicle", oncoming, CAR)])
+    assert not collides(st, 0)
+    out = rollout(st, ["oncoming"])
+    assert not collides(out.states, 0) and feasible(out.states, 0)
+    assert out.states.speed[0, START:].min() > 0.75 * v  # never braked for it

@@ -1,0 +1,45 @@
+"""Room for the traffic: whether the reacting traffic takes an edit without a failure, and where else to try.
+
+An inserted object placed exactly where the prompt says can leave the traffic no way to react: a car put a
+few metres in front of a faster one, a barrier inside a moving car's stopping distance, a pedestrian where a
+car turning across has already committed. ``editing.apply`` then tries the inserted rows a little further
+ahead or back along their lanes (shares :data:`ROOM_SHIFTS` of the placement's reach: the slack of an asked
+distance, ``placement.NUDGE_M`` otherwise) and keeps the first spot where :func:`traffic_copes`; when none
+does, the spot as asked, whose failures the validation reports.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from simsplat_core.editing.commands import EditCommand, EditProgram
+from simsplat_core.motion.refine import EDIT_SOURCES
+from simsplat_core.scenario.metrics import validate_agents
+
+if TYPE_CHECKING:
+    from simsplat_core.editing.edit_ops import Draft
+
+#: Shares of an inserted row's placement reach tried, in order, after the asked spot (share 0).
+ROOM_SHIFTS: tuple[float, ...] = (0.5, -0.5, 1.0, -1.0)
+
+
+def searches_room(program: EditProgram, refinement: str) -> bool:
+    """Whether an edit may move its inserted objects for the traffic: it inserts something at a relative spot (an
+    absolute position is taken as given) and the traffic reacts (``refinement`` other than ``"none"``, whose
+    other agents replay their log whatever happens)."""
+    return refinement != "none" and any(movable(c) for c in program.commands)
+
+
+def movable(command: EditCommand) -> bool:
+    """Whether ``command`` inserts something the room search may move: not at an absolute position."""
+    return command.op == "insert" and (command.placement is None or command.placement.position is None)
+
+
+def traffic_copes(draft: Draft) -> bool:
+    """Whether every edited, inserted and reacting agent of ``draft`` is free of collisions, off-road and
+    kinematic failures that the unedited scene did not already have."""
+    states = draft.states
+    rows = np.flatnonzero([s in (*EDIT_SOURCES, "refined") for s in states.sources])
+    return validate_agents(states, draft.ctx.map_ctx, rows, baseline=draft.ctx.states).ok
