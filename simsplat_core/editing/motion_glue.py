@@ -22,8 +22,8 @@ import numpy as np
 import torch
 
 from simsplat_core.editing.asset_record import Asset
-from simsplat_core.editing.commands import Behaviour, Placement, TargetRef
-from simsplat_core.editing.merge_gap import squeezed_follower
+from simsplat_core.editing.commands import Behaviour, Placement, StopSpec, TargetRef
+from simsplat_core.editing.merge_gap import unsafe_merge
 from simsplat_core.editing.motion_controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
 from simsplat_core.editing.motion_requests import (
     DEFAULT_CRUISE_MPS,
@@ -217,7 +217,8 @@ def no_room_note(draft: Draft) -> str:
 
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
-          object_id: str | None, with_traffic: bool = True, lane_change_after_m: float = 0.0) -> PlannedTrajectory:
+          object_id: str | None, with_traffic: bool = True, lane_change_after_m: float = 0.0,
+          pace_mps: float | None = None) -> PlannedTrajectory:
     """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
     current trajectories: the log, or what earlier commands made of them; ``with_traffic=False``: to none)."""
     ctx, states = draft.ctx, draft.states
@@ -232,8 +233,10 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
                 leader=leader, stop_behind=stop_behind,
                 traffic=traffic_from_states(states, exclude) if with_traffic else (),
                 backfill=backfill, label=label)
-            if lane_change_after_m:
-                request = dataclasses.replace(request, lane_change_after_m=lane_change_after_m)
+            if lane_change_after_m or pace_mps is not None:  # a lane change waiting for a gap
+                request = dataclasses.replace(request, lane_change_after_m=lane_change_after_m,
+                                              target_speed_mps=request.target_speed_mps if pace_mps is None
+                                              else pace_mps)
             return plan_vehicle(request, ctx.lanes, ctx.map_ctx)
         ped = PedestrianMotionRequest.from_behaviour(
             behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
@@ -283,7 +286,36 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
     plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
                  object_id=None)
-    return Motion.planned(plan, describe_behaviour(behaviour))
+    motion = Motion.planned(plan, describe_behaviour(behaviour))
+    if kind != VEHICLE and behaviour.stop is None and not behaviour.cross_street:
+        motion = _walk_up_to_who_stands(draft, behaviour, start, asset, index, motion)
+    return motion
+
+
+def _walk_up_to_who_stands(draft: Draft, behaviour: Behaviour, start: StartState, asset: Asset, index: int,
+                           motion: Motion) -> Motion:
+    """An inserted pedestrian walking into someone (or something) that stands in its way through the log stops
+    behind it instead, as people do on a pavement (the planner has no traffic for pedestrians; the traffic
+    model keeps fixed agents fixed), or, already too close to stop walking, stands where it was put. ``motion``
+    when nobody stands in its way."""
+    states = draft.states
+    hit = first_overlap(states, motion, np.asarray(asset.size, np.float64), (EGO_ID,))
+    if hit is None:
+        return motion
+    row = hit[0]
+    steps = np.flatnonzero(states.valid[row])
+    if float(np.linalg.norm(states.xy[row, steps] - states.xy[row, steps[0]], axis=1).max()) >= LOG_MOVES_M:
+        return motion  # it moves: the traffic model makes it wait, or the validation reports it
+    waiting = behaviour.model_copy(update={"stop": StopSpec(behind=TargetRef(object_id=states.object_ids[row]))})
+    try:
+        plan = _plan(draft, PEDESTRIAN, waiting, start, asset.size, None, index, asset.caption,
+                     backfill=start.step > 0, object_id=None)
+    except EditRefused as exc:  # too close to stop behind it walking: it waits where it was put
+        logger.debug("%s stands: %s", asset.caption, exc)
+        return Motion.standing(start.xy, start.heading, states.num_steps,
+                               f"standing behind {_name(draft, row)}, who stands in its way")
+    return Motion.planned(plan, f"{describe_behaviour(behaviour)}; stops behind {_name(draft, row)} standing "
+                                "in its way")
 
 
 #: An inserted vehicle asked to drive at a speed holds it when its plan never falls more than this below it
@@ -347,11 +379,11 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     plan = _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
                  object_id=states.object_ids[row])
     if kind == VEHICLE and behaviour.lane_change is not None:
-        def delayed(after_m: float) -> PlannedTrajectory:
+        def delayed(after_m: float, pace: float | None) -> PlannedTrajectory:
             return _plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,
-                         object_id=states.object_ids[row], lane_change_after_m=after_m)
+                         object_id=states.object_ids[row], lane_change_after_m=after_m, pace_mps=pace)
 
-        plan = _into_a_gap(draft, plan, delayed, row, start)
+        plan = _into_a_gap(draft, plan, delayed, row, start, may_slow=behaviour.speed is None)
     if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     motion = Motion.planned(plan, describe_behaviour(behaviour))
@@ -368,33 +400,44 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
 
 #: A lane change that would cut in too close waits for a gap in steps of this much driving, s ...
 MERGE_WAIT_S = 0.5
-#: ... as long as it still gets this share of its lateral move done before the log ends.
+#: ... as long as it still gets this share of its lateral move done before the log ends ...
 MERGE_DONE_SHARE = 0.5
+#: ... if need be slowing to these amounts below the speed of the vehicle it would squeeze, to merge behind it, m/s.
+MERGE_DROP_MPS: tuple[float, ...] = (2.0, 4.0)
 
 
-def _into_a_gap(draft: Draft, plan: PlannedTrajectory, delayed: Callable[[float], PlannedTrajectory], row: int,
-                start: StartState) -> PlannedTrajectory:
+def _into_a_gap(draft: Draft, plan: PlannedTrajectory, delayed: Callable[[float, float | None], PlannedTrajectory],
+                row: int, start: StartState, may_slow: bool) -> PlannedTrajectory:
     """A lane change that leaves every vehicle it cuts in front of room to brake behind it
-    (``merge_gap.squeezed_follower``): ``plan`` when it does, else the first start of the move along the own lane
-    (``delayed(metres)``, every :data:`MERGE_WAIT_S` of driving) from which it does and that still gets
-    :data:`MERGE_DONE_SHARE` of the move done; else ``plan`` (the validation reports the squeeze)."""
+    (``merge_gap.unsafe_merge``): ``plan`` when it does; else the first start of the move along the own lane
+    (``delayed(metres, None)``, every :data:`MERGE_WAIT_S` of driving) from which it does and that still gets
+    :data:`MERGE_DONE_SHARE` of the move done; else, when no speed was asked (``may_slow``), the same at a pace
+    :data:`MERGE_DROP_MPS` below the squeezed vehicle's, letting it pass to merge behind it
+    (``delayed(metres, pace)``); else ``plan`` (the validation reports the squeeze)."""
     states = draft.states
     exclude = (states.object_ids[row],)
 
-    def squeezes(p: PlannedTrajectory) -> bool:
-        return squeezed_follower(states, p.xy, p.heading, p.speed, p.valid, states.size[row], exclude,
-                                 start.step) is not None
+    def squeezed(p: PlannedTrajectory) -> tuple[int, int] | None:
+        return unsafe_merge(states, p.xy, p.heading, p.speed, p.valid, states.size[row], exclude, start.step)
 
-    if not squeezes(plan):
+    hit = squeezed(plan)
+    if hit is None:
         return plan
     remaining = float(states.times[-1] - states.times[start.step])
-    move_s = VehicleMotionRequest.lane_change_s
-    pace = max(abs(start.speed), 1.0)
-    for wait in np.arange(MERGE_WAIT_S, remaining - MERGE_DONE_SHARE * move_s + 1e-9, MERGE_WAIT_S).tolist():
-        later = delayed(wait * pace)
-        if not squeezes(later):
-            logger.info("%s: lane change begins %.1f s later, in a gap", states.object_ids[row], wait)
-            return later
+    waits = np.arange(MERGE_WAIT_S, remaining - MERGE_DONE_SHARE * VehicleMotionRequest.lane_change_s + 1e-9,
+                      MERGE_WAIT_S).tolist()
+    own = abs(start.speed)
+    paces: list[float | None] = [None]
+    if may_slow:
+        other = max(float(states.speed[hit[0], start.step]), 0.0)
+        paces += [max(other - drop, 0.0) for drop in MERGE_DROP_MPS if other - drop < own]
+    for pace in paces:
+        for wait in waits:
+            later = delayed(wait * max(own if pace is None else pace, 1.0), pace)
+            if squeezed(later) is None:
+                logger.info("%s: lane change begins %.1f s later%s, in a gap", states.object_ids[row], wait,
+                            "" if pace is None else f" at {pace:.1f} m/s, behind {states.object_ids[hit[0]]}")
+                return later
     return plan
 
 

@@ -577,3 +577,15 @@ def test_a_pedestrian_on_the_carriageway_makes_no_room_for_a_planned_car(ctx):
     xy[row] += ctx.states.xy[e, 0] + np.array([10.0, 0.0]) - ctx.states.xy[row, 0]  # on the ego's lane
     draft.states = dataclasses.replace(ctx.states, xy=xy)
     assert ctx.states.object_ids[row] not in making_room(draft, start, ())
+
+
+def test_a_pedestrian_put_behind_someone_standing_waits_behind_them(ctx):
+    """Inserted right behind a pedestrian who stands through the log, a walker would walk into them: it stops
+    behind them (here, already too close to walk, it stands), and says so."""
+    for anchor in ("ped_01", "ped_05"):
+        edited = apply_edit(ctx, _program({"op": "insert", "asset": {"description": "a pedestrian in a red top"},
+                                           "placement": {"relation": "behind", "anchor": {"object_id": anchor},
+                                                         "distance_m": 1.0}}))
+        row = edited.states.index("inserted_00")
+        assert not collision_steps(edited.states, [row]).pairs.any()
+        assert "who stands in its way" in edited.outcomes[0].summary

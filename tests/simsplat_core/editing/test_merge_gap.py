@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from simsplat_core.editing.merge_gap import squeezed_follower
+from simsplat_core.editing.merge_gap import unsafe_merge
 from simsplat_core.scenario.agents import AgentStates
 
 T = 40
@@ -33,16 +33,23 @@ def _lane_change(x0: float, v: float = 10.0, y0: float = 0.0) -> tuple[np.ndarra
 
 def test_cutting_in_right_in_front_of_a_follower_squeezes_it() -> None:
     states = _follower(0.0)
-    hit = squeezed_follower(states, *_lane_change(3.0), CAR, ("planned",), 0)
+    hit = unsafe_merge(states, *_lane_change(3.0), CAR, ("planned",), 0)
     assert hit is not None and hit[0] == 0 and 5 <= hit[1] <= 25  # while moving over
 
 
 def test_a_lane_change_with_room_ahead_of_the_follower_is_fine() -> None:
     states = _follower(0.0)
-    assert squeezed_follower(states, *_lane_change(35.0), CAR, ("planned",), 0) is None
+    assert unsafe_merge(states, *_lane_change(35.0), CAR, ("planned",), 0) is None
 
 
 def test_a_car_already_ahead_in_the_lane_is_not_cutting_in() -> None:
     states = _follower(0.0)
-    assert squeezed_follower(states, *_lane_change(8.0, y0=3.5), CAR, ("planned",), 0) is None
-    assert squeezed_follower(states, *_lane_change(3.0), CAR, ("f",), 0) is None  # excluded
+    assert unsafe_merge(states, *_lane_change(8.0, y0=3.5), CAR, ("planned",), 0) is None
+    assert unsafe_merge(states, *_lane_change(3.0), CAR, ("f",), 0) is None  # excluded
+
+
+def test_merging_right_behind_a_vehicle_is_unsafe_for_the_merging_car() -> None:
+    states = _follower(0.0)
+    hit = unsafe_merge(states, *_lane_change(-5.0), CAR, ("planned",), 0)  # its front 0.5 m from the other's rear
+    assert hit is not None and hit[0] == 0
+    assert unsafe_merge(states, *_lane_change(-40.0), CAR, ("planned",), 0) is None  # far behind: a gap
