@@ -15,7 +15,8 @@ Three modes, the rows of the issue's Table 4 analogue:
 In ``"full"`` mode only the agents the edit affects change: the predictor also rolls the unedited scenario out,
 and an agent whose rollout with the edit stays within :data:`AFFECTED_M` of its rollout without it keeps its
 log exactly (the predictor's own error against the log is not passed off as a reaction to the edit), unless its
-log runs into an agent the edit added, changed or made react (then it keeps its rollout).
+log runs into an agent the edit added, changed or made react, or into one that keeps its rollout for this very
+reason (then it keeps its rollout too; repeated until no log runs into a rollout).
 
 The ego is fixed by default: its cameras render the scene, and a render is only as good as the views the scene
 was reconstructed from. With ``ego_reacts=True`` the ego is driven like any other free agent of the mode (for
@@ -137,14 +138,18 @@ def _only_affected(out: AgentStates, states: AgentStates, original: AgentStates,
         same_presence = np.array_equal(out.valid[r, start:], base.valid[k, start:])
         if same_presence and float(gap.max(initial=0.0)) <= AFFECTED_M:
             unaffected.append(r)
-    restored = _restored(out, states, unaffected)
     # an agent the predictor drives the same with and without the edit may still need its rollout: its log runs
-    # into the edit (the predictor already held it back for something else, where the log did not stop)
-    if unaffected:
-        hits = np.asarray(collision_steps(restored, unaffected).pairs[:, :, start:].any(axis=(1, 2)), dtype=bool)
-        keep_log = [r for r, hit in zip(unaffected, hits.tolist()) if not hit]
+    # into the edit (the predictor already held it back for something else, where the log did not stop), or into
+    # an agent that needs its rollout for that reason (a car merging behind one that now keeps its rollout)
+    keep_log = unaffected
+    while True:
         restored = _restored(out, states, keep_log)
-    return restored
+        if not keep_log:
+            return restored
+        hits = np.asarray(collision_steps(restored, keep_log).pairs[:, :, start:].any(axis=(1, 2)), dtype=bool)
+        if not hits.any():
+            return restored
+        keep_log = [r for r, hit in zip(keep_log, hits.tolist()) if not hit]
 
 
 def _restored(out: AgentStates, states: AgentStates, rows: list[int]) -> AgentStates:

@@ -12,6 +12,7 @@ from simsplat_core.motion.refine import edit_start_step, fixed_rows, refine
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.scenario.metrics import collision_steps
 
 T = 20
 
@@ -123,3 +124,34 @@ def test_ego_reacts_frees_the_ego_in_full_mode_only() -> None:
     free_ego = refine(edited, _map(), _Nudge(), "full", original=log, start_step=3, ego_reacts=True)
     assert free_ego.refined_ids == ("ego", "a2")
     assert free_ego.states.xy[0, -1, 1] == pytest.approx(log.xy[0, -1, 1] + 1.0)
+
+
+class _StopAll:
+    """Test double: every free agent stops where it is at step 3, with the edit or without (a predictor error
+    that has nothing to do with the edit)."""
+
+    name = "stop-all"
+
+    def rollout(self, request: RolloutRequest) -> Rollout:
+        s = request.states
+        xy, sources = s.xy.copy(), list(s.sources)
+        for r in request.free_rows:
+            xy[r, 3:] = xy[r, 3]
+            sources[r] = "refined"
+        return Rollout(dataclasses.replace(s, xy=xy, sources=tuple(sources)), {}, self.name)
+
+
+def test_an_agent_whose_log_runs_into_a_kept_rollout_keeps_its_rollout_too() -> None:
+    """a1 (edited) stops at step 5; a2 follows it 10 m behind, a3 10 m behind a2, all at 10 m/s. Both rollouts
+    stop a2 and a3 alike, with or without the edit: a2 keeps its rollout because its log runs into a1, and then
+    a3 must keep its own, because its log runs into a2's rollout (not into a2's log)."""
+    log = _states(["log", "log", "log", "log"])
+    log.xy[0, :, 1] = -50.0  # the ego, out of the way
+    for k, x0 in ((1, 20.0), (2, 10.0), (3, 0.0)):
+        log.xy[k, :, 0] = x0 + np.arange(T)
+        log.xy[k, :, 1] = 0.0
+    edited = dataclasses.replace(log, sources=("log", "edited", "log", "log"), xy=log.xy.copy())
+    edited.xy[1, 5:, 0] = edited.xy[1, 5, 0]
+    out = refine(edited, _map(), _StopAll(), "full", original=log)
+    assert set(out.refined_ids) == {"a2", "a3"}
+    assert not collision_steps(out.states, [2, 3]).pairs.any()
