@@ -218,9 +218,11 @@ def no_room_note(draft: Draft) -> str:
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
           object_id: str | None, with_traffic: bool = True, lane_change_after_m: float = 0.0,
-          pace_mps: float | None = None) -> PlannedTrajectory:
+          pace_mps: float | None = None, sidestep_m: float = 0.0) -> PlannedTrajectory:
     """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
-    current trajectories: the log, or what earlier commands made of them; ``with_traffic=False``: to none)."""
+    current trajectories: the log, or what earlier commands made of them; ``with_traffic=False``: to none).
+    ``lane_change_after_m`` / ``pace_mps``: a lane change waiting for a gap; ``sidestep_m``: a pedestrian's path
+    shifted sideways (+ left) to pass someone."""
     ctx, states = draft.ctx, draft.states
     stop_behind = _other(draft, behaviour.stop.behind if behaviour.stop else None, index, "object to stop behind")
     try:
@@ -241,6 +243,8 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
         ped = PedestrianMotionRequest.from_behaviour(
             behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
             stop_behind=stop_behind, backfill=backfill, label=label)
+        if sidestep_m:  # passing someone in its way
+            ped = dataclasses.replace(ped, lateral_offset_m=ped.lateral_offset_m + sidestep_m)
         return plan_pedestrian(ped, ctx.map_ctx)
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
@@ -288,21 +292,39 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
                  object_id=None)
     motion = Motion.planned(plan, describe_behaviour(behaviour))
     if kind != VEHICLE and behaviour.stop is None and not behaviour.cross_street:
-        motion = _walk_up_to_who_stands(draft, behaviour, start, asset, index, motion)
+        motion = _walk_clear(draft, behaviour, start, asset, index, motion)
     return motion
 
 
-def _walk_up_to_who_stands(draft: Draft, behaviour: Behaviour, start: StartState, asset: Asset, index: int,
-                           motion: Motion) -> Motion:
-    """An inserted pedestrian walking into someone (or something) that stands in its way through the log stops
-    behind it instead, as people do on a pavement (the planner has no traffic for pedestrians; the traffic
-    model keeps fixed agents fixed), or, already too close to stop walking, stands where it was put. ``motion``
-    when nobody stands in its way."""
+#: Sideways shifts (m, + left) an inserted pedestrian tries to pass a pedestrian in its way, in order.
+SIDESTEPS_M: tuple[float, ...] = (0.8, -0.8, 1.2, -1.2)
+
+
+def _walk_clear(draft: Draft, behaviour: Behaviour, start: StartState, asset: Asset, index: int,
+                motion: Motion) -> Motion:
+    """An inserted pedestrian walking into someone keeps clear of them, as people do on a pavement (the planner
+    has no traffic for pedestrians, and the traffic model keeps inserted agents fixed): it passes a pedestrian
+    with a sidestep (:data:`SIDESTEPS_M`, the first that clears everyone); failing that, it stops behind someone
+    (or something) standing through the log, or, already too close to stop walking, stands where it was put.
+    ``motion`` when nobody is in its way, or nothing of this clears it."""
     states = draft.states
-    hit = first_overlap(states, motion, np.asarray(asset.size, np.float64), (EGO_ID,))
+    size = np.asarray(asset.size, np.float64)
+    hit = first_overlap(states, motion, size, (EGO_ID,))
     if hit is None:
         return motion
     row = hit[0]
+    if agent_kind(states.categories[row]) == PEDESTRIAN:
+        for side in SIDESTEPS_M:
+            try:
+                passing = Motion.planned(_plan(draft, PEDESTRIAN, behaviour, start, asset.size, None, index,
+                                               asset.caption, backfill=start.step > 0, object_id=None,
+                                               sidestep_m=side), "")
+            except EditRefused:
+                continue
+            if first_overlap(states, passing, size, (EGO_ID,)) is None:
+                return dataclasses.replace(passing, description=f"{describe_behaviour(behaviour)}; steps "
+                                           f"{abs(side):g} m {'left' if side > 0 else 'right'} to pass "
+                                           f"{_name(draft, row)}")
     steps = np.flatnonzero(states.valid[row])
     if float(np.linalg.norm(states.xy[row, steps] - states.xy[row, steps[0]], axis=1).max()) >= LOG_MOVES_M:
         return motion  # it moves: the traffic model makes it wait, or the validation reports it

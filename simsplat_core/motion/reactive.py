@@ -171,8 +171,11 @@ class ReactivePredictor:
             pairs = route_pairs(grid, k0, width, cur_xy[drv.rows], drv.rows, see_xy, see_heading, size2, vel,
                                 seen, reach)
             offset = drv.profiles.offset(pairs.i, pairs.along)
-            # crossing or oncoming: a moving agent heading against the route is a conflict, never a leader
-            crossing = np.cos(see_heading[pairs.j] - pairs.yaw) < cos_cross
+            # crossing or oncoming: a moving agent heading against a vehicle's route is a conflict, never a leader;
+            # pedestrians meeting head-on keep their distance by following (they give way to vehicles only)
+            cos_rel = np.cos(see_heading[pairs.j] - pairs.yaw)
+            walkers = drv.is_pedestrian[pairs.i] & is_ped_all[pairs.j]
+            crossing = np.where(walkers, np.abs(cos_rel), cos_rel) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
             follows = ~(crossing & moving) & cur_valid[pairs.j]  # moving crossing agents: gap acceptance
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,

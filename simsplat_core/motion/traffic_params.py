@@ -62,9 +62,9 @@ class GapAcceptanceParams:
         sample_dt_s: spacing of those predicted positions.
         clearance_time_s: post-encroachment margin: an agent goes first when it clears the conflict point
             at least this long before the other arrives (accelerating at most at ``a`` up to its desired speed).
-        crossing_deg: agents whose heading differs from the route's by more than this cross it or come
-            towards the agent, oncoming included (smaller: same direction, handled as leaders; an agent
-            standing still is a leader whatever its heading).
+        crossing_deg: agents whose heading differs from the route's by more than this cross it or, for a
+            vehicle, come towards it head-on (smaller: same direction, handled as leaders; so are pedestrians
+            meeting a pedestrian head-on, and agents standing still whatever their heading).
         stop_margin_m: distance kept before the conflict zone when yielding.
     """
 

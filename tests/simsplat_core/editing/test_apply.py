@@ -10,6 +10,7 @@ import pytest
 import torch
 
 from simsplat_core.editing import apply as apply_module
+from simsplat_core.editing import motion_glue
 from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.assets import AssetBank
@@ -17,10 +18,10 @@ from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, 
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import Draft, node_factory
 from simsplat_core.editing.grounding import Grounder
-from simsplat_core.editing.motion_glue import making_room
+from simsplat_core.editing.motion_glue import first_overlap, making_room, plan_inserted
 from simsplat_core.editing.motion_requests import StartState
 from simsplat_core.editing.options import DEFAULT_OPTIONS
-from simsplat_core.editing.placement import distance_slack
+from simsplat_core.editing.placement import PlacedPose, distance_slack
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.scenario.geometry import signed_polygon_distance
@@ -589,3 +590,25 @@ def test_a_pedestrian_put_behind_someone_standing_waits_behind_them(ctx):
         row = edited.states.index("inserted_00")
         assert not collision_steps(edited.states, [row]).pairs.any()
         assert "who stands in its way" in edited.outcomes[0].summary
+
+
+def test_an_inserted_walker_sidesteps_someone_walking_towards_it(ctx, bank, monkeypatch):
+    """Someone walks head-on along the inserted walker's own path: it steps aside to pass them, and says so;
+    without the sidestep the two walk into each other."""
+    walker = bank.assets[[a.category for a in bank.assets].index("pedestrian")]
+    placed = PlacedPose(np.array([2.0, -5.4]), 0.0, None, 0.0, "sidewalk")
+    grounder = Grounder(ctx.language, ctx.engine, ctx.graph, DEFAULT_OPTIONS.grounding)
+    free = plan_inserted(Draft.start(ctx, grounder, DEFAULT_OPTIONS), None, walker, placed, 0, 0)
+    row = next(r for r, c in enumerate(ctx.states.categories) if c == "pedestrian")
+    xy, heading, valid = ctx.states.xy.copy(), ctx.states.heading.copy(), ctx.states.valid.copy()
+    xy[row] = free.xy[::-1] + np.array([0.0, 0.2])  # back along the walker's path, 0.2 m to its left
+    heading[row] = free.heading[::-1] + np.pi
+    valid[row] = True
+    draft = Draft.start(ctx, grounder, DEFAULT_OPTIONS)
+    draft.states = dataclasses.replace(ctx.states, xy=xy, heading=heading, valid=valid)
+    passing = plan_inserted(draft, None, walker, placed, 0, 0)
+    assert "to pass" in passing.description
+    assert first_overlap(draft.states, passing, np.asarray(walker.size), ("ego",)) is None
+    monkeypatch.setattr(motion_glue, "SIDESTEPS_M", ())
+    head_on = plan_inserted(draft, None, walker, placed, 0, 0)
+    assert first_overlap(draft.states, head_on, np.asarray(walker.size), ("ego",)) is not None
