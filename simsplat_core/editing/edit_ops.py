@@ -66,6 +66,8 @@ logger = logging.getLogger(__name__)
 INSERTED_PREFIX = "inserted_"
 #: Why an inserted row stands off its asked spot when ``Draft.room_shift`` moved it (``editing.apply``'s room search).
 ROOM_NOTE = "(within the asked distance's slack) so that the traffic can react without a crash"
+#: Placements that name the kind of area the object stands on, which the room search must keep.
+ASKED_AREAS: dict[str, str] = {"on_crosswalk": "crosswalk", "on_sidewalk": "sidewalk", "on_road": "road"}
 #: Default gap between the objects of a row, by asset category (metres between box edges).
 ROW_GAP_M = {"static": 1.5, "vehicle": 3.0, "pedestrian": 0.8}
 
@@ -282,7 +284,8 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
         if draft.room_shift and movable(command):
             row = shift_row(row, draft.room_shift * reach, size=asset.size, lanes=draft.ctx.lanes,
                             map_ctx=draft.ctx.map_ctx, occupied=draft.states,
-                            frame=int(draft.states.frame_idx[step]), why=ROOM_NOTE)
+                            frame=int(draft.states.frame_idx[step]), why=ROOM_NOTE,
+                            keep_area=ASKED_AREAS.get(placement.relation))
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
     for placed in row:

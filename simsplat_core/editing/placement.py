@@ -642,15 +642,17 @@ def row_shifter(first: PlacedPose, lanes: LaneGraph | None, reach: float) -> Cal
 
 
 def shift_row(row: Sequence[PlacedPose], d: float, *, size: Sequence[float], lanes: LaneGraph | None,
-              map_ctx: MapContext, occupied: AgentStates | None, frame: int, why: str) -> list[PlacedPose]:
+              map_ctx: MapContext, occupied: AgentStates | None, frame: int, why: str,
+              keep_area: str | None = None) -> list[PlacedPose]:
     """The placed ``row`` moved ``d`` metres along its first member's lane (or heading), its first member's note
-    saying so and ``why``; ``EditRefused`` when a member would then overlap an agent at ``frame`` or leave the
-    first's kind of area."""
+    saying so and ``why``; ``EditRefused`` when a member would then overlap an agent at ``frame`` or stand off
+    ``keep_area`` (default: the first member's surface, the road for a lane, road or crosswalk)."""
     first = row[0]
+    area = keep_area if keep_area is not None else ("road" if first.area in ("lane", "crosswalk") else first.area)
     moved = place_row(row_shifter(first, lanes, abs(d))(d), count=len(row),
                       spacing_m=_row_spacing(row, size), size=size, lanes=lanes)
     if row_blockers(moved, size, occupied, frame) or not all(
-            _area_kind_ok(map_ctx, p.xy, p.heading, first.area) for p in moved):
+            _area_kind_ok(map_ctx, p.xy, p.heading, area) for p in moved):
         raise _refuse(f"no room {abs(d):.1f} m {'ahead' if d > 0 else 'back'} of the asked spot")
     return _noted(moved, first.note, f"placed {abs(d):.1f} m {'further ahead' if d > 0 else 'further back'} {why}")
 

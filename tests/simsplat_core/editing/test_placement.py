@@ -19,6 +19,7 @@ from simsplat_core.editing.placement import (
     footprint,
     place_row,
     resolve_placement,
+    shift_row,
 )
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.geometry import pose_from_yaw
@@ -385,3 +386,22 @@ def test_every_member_of_a_row_gets_room_or_the_row_is_refused(world) -> None:
     assert [p.xy.tolist() for p in place_clear_row(first, count=4, spacing_m=1.5, size=CONE, lanes=world["lanes"],
                                                    map_ctx=world["ctx"], occupied=ego, frame=0)] == \
         [p.xy.tolist() for p in plain]
+
+
+def test_a_row_shifted_for_room_keeps_to_the_road_or_to_the_asked_area(world) -> None:
+    """A row of cones starting on a crosswalk may move along onto plain road (a crosswalk is road), but not when
+    the crosswalk itself was asked for; a shift onto an agent is refused."""
+    ahead = (_place(world, Placement(relation="in_lane", distance_m=d), "static", CONE) for d in range(5, 60))
+    first = next(p for p in ahead if p.area == "crosswalk")  # the first spot of the ego lane on a crosswalk
+    row = place_row(first, count=3, spacing_m=1.5, size=CONE, lanes=world["lanes"])
+    kw = {"size": CONE, "lanes": world["lanes"], "map_ctx": world["ctx"], "occupied": _ego_only(world), "frame": 0,
+          "why": "for room"}
+    moved = shift_row(row, 6.0, **kw)
+    assert np.linalg.norm(moved[0].xy - first.xy) == pytest.approx(6.0, abs=0.3)
+    assert "further ahead for room" in moved[0].note
+    assert not world["ctx"].facts(moved[0].xy[None], np.array([moved[0].heading])).in_crosswalk[0]
+    with pytest.raises(EditRefused, match="no room"):
+        shift_row(row, 6.0, **{**kw, "keep_area": "crosswalk"})
+    blocked = _with_box(_ego_only(world), "van", "vehicle", moved[1].xy, moved[1].heading, CAR)
+    with pytest.raises(EditRefused, match="no room"):
+        shift_row(row, 6.0, **{**kw, "occupied": blocked})
