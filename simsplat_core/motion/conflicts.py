@@ -11,10 +11,11 @@ The driven agent stops before the zone (a virtual standing obstacle, fed to IDM)
 * the two would occupy the zone at overlapping times: the other arrives before the agent has cleared it
   plus ``clearance_time_s`` (accelerating at ``a`` up to its desired speed), and leaves after the agent
   would arrive, and
-* either the other is in the zone already (then the agent brakes as hard as it takes), or the agent can
-  still stop at the hard-brake limit (otherwise it is committed and drives through) and the other has
-  priority: its trajectory is fixed (it will not react); or it is a pedestrian on a crosswalk and the
-  agent is not; or, both driven and neither on a crosswalk, it arrives first (ties: lower index first).
+* either the other is in the zone already, or its trajectory is fixed (it will not react: braking is the only
+  way out), and then the agent brakes whether it can stop in time or not (at most at the hard-brake limit); or
+  the agent can still stop at the hard-brake limit (otherwise it is committed and drives through) and the
+  other has priority: it is a pedestrian on a crosswalk and the agent is not; or, both driven and neither on
+  a crosswalk, it arrives first (ties: lower index first).
 
 Pedestrians give way to vehicles only (pedestrians among themselves keep distance by car following).
 """
@@ -148,6 +149,7 @@ def yield_gaps(grid: RouteGrid, k0: np.ndarray, width: int, pairs: Pairs, crossi
     first_come = (tau_other < tau_arrive) | ((tau_other == tau_arrive) & (j < agents.row[i]))
     other_first = fixed_other | (prio_other & ~prio_self) | ((prio_other == prio_self) & first_come)
     there = first == 0  # already in the way: give way whatever the priority, as hard as it takes
-    must = has & overlap & (tau_other < agents.critical_s[i]) & (there | (stoppable & other_first))
+    # a fixed other never gives way: braking (at most at the hard-brake limit) is the only way out, stoppable or not
+    must = has & overlap & (tau_other < agents.critical_s[i]) & (there | fixed_other | (stoppable & other_first))
     gap, idx = group_min(i, np.where(must, stop_gap, np.inf), n)
     return gap, np.where(idx >= 0, j[np.maximum(idx, 0)], -1)

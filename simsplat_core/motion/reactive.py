@@ -257,10 +257,11 @@ class ReactivePredictor:
         the route at the planned speed for driven ones."""
         t_count = states.num_steps
         step_dt = float(np.median(np.diff(states.times)))
-        idx = np.clip(t - 1 + np.rint(tau / step_dt).astype(np.int64), 0, t_count - 1)  # [H]
+        ahead = t - 1 + np.rint(tau / step_dt).astype(np.int64)  # [H]
+        idx = np.clip(ahead, 0, t_count - 1)
         pred_xy = states.xy[:, idx].copy()  # [A, H, 2]
         pred_heading = states.heading[:, idx].copy()  # [A, H]
-        pred_valid = states.valid[:, idx].copy()
+        pred_valid = states.valid[:, idx] & (ahead <= t_count - 1)[None]  # nobody is known past the data's end
         s_future = drv.s[:, None] + v_plan[:, None] * tau[None]  # [N, H]
         base, yaw = grid.pose(s_future)
         off = drv.profiles.offset(np.arange(len(drv.s))[:, None], s_future)

@@ -13,7 +13,9 @@ or for the infeasible set. A feasible draft is one a competent editor can carry 
   reversing for standing vehicles with free road behind; crossing the street for people standing or
   walking near the kerb (by a crosswalk, or away from one to jaywalk);
 * the asked motion runs into no traffic replaying its log (speed-ups, turns, lane changes, inserted cars
-  driving at a speed): an editor that keeps its distance would otherwise rightly not do it;
+  driving at a speed): an editor that keeps its distance would otherwise rightly not do it; a speed-up or an
+  inserted car driving at a speed also keeps the editor's following gap (``FOLLOW_GAP_M`` plus its time
+  headway at that speed) free ahead, since a car held back by a slower leader cannot hold the asked speed;
 * insert spots are free of every agent at the first frame.
 
 Infeasible drafts are what the issue names: an object that is not in the scene ("the purple bus"), a car
@@ -29,6 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.editing.commands import SPEED_UNITS
+from simsplat_core.editing.motion_requests import FOLLOW_GAP_M, VehicleMotionRequest
 from simsplat_core.eval.editing.intents import (
     EGO,
     AssetIntent,
@@ -199,19 +202,22 @@ def _free(truth: SceneTruth, xy: np.ndarray, heading: float, size: tuple[float, 
 
 
 def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, size: tuple[float, ...], skip: str = "",
-               lateral: float = 0.0, accel: float = 2.0, margin: float = CLEARANCE_M) -> bool:
+               lateral: float = 0.0, accel: float = 2.0, margin: float = CLEARANCE_M, keep_gap: bool = False) -> bool:
     """Driving ``path`` from arc length ``s0`` at ``v0`` m/s, changing to ``v1`` at ``accel`` m/s^2 (shifted
     ``lateral`` metres to the left), overlaps no agent but ``skip`` (nor the ego, ahead of it) over the log:
     the requested motion is possible without running into (or brushing past, ``margin``) traffic that replays its
-    log."""
+    log. With ``keep_gap`` the box reaches ahead by the gap the editor's planner keeps to a leader at the faster
+    speed (``FOLLOW_GAP_M`` plus its time headway): a car asked to drive at a speed can only hold it with that
+    much road free ahead of it."""
     t = truth.world.times
     dv = v1 - v0
     ta = abs(dv) / accel
     a = np.sign(dv) * accel
     s = s0 + np.where(t < ta, v0 * t + 0.5 * a * t * t, v0 * ta + 0.5 * a * ta * ta + v1 * (t - ta))
-    xy, heading = path.position(s), path.heading(s)
+    gap = FOLLOW_GAP_M + VehicleMotionRequest.headway_s * max(v0, v1) if keep_gap else 0.0
+    xy, heading = path.position(s + gap / 2.0), path.heading(s + gap / 2.0)
     xy = xy + lateral * np.stack([-np.sin(heading), np.cos(heading)], axis=1)
-    foot = (float(size[0]), float(size[1]))
+    foot = (float(size[0]) + gap, float(size[1]))
     others = [(truth.ego_xy, truth.ego_heading, EGO_SIZE)] + [
         (o.traj["xy"], o.traj["heading"], o.size) for o in truth.world.agents if o.object_id != skip]
     return not any(footprints_overlap(xy, heading, foot, oxy, oh, (float(osz[0]), float(osz[1])), margin).any()
@@ -324,7 +330,7 @@ def plan_add_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Genera
                     unit = pick(rng, ("km/h", "km/h", "m/s", "mph"))
                     said, value, mps = speed_words(float(rng.uniform(5.0, 11.0)), unit, rng)
                     lane = truth.lanes.follow(found[0], found[1], "straight")
-                    if not _clear_run(truth, lane.path, lane.start_s, mps, mps, CAR_FOOTPRINT):
+                    if not _clear_run(truth, lane.path, lane.start_s, mps, mps, CAR_FOOTPRINT, keep_gap=True):
                         continue
                     motion = MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit))
                     slots["v"] = said
@@ -549,8 +555,9 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
 
         def clear(v1: float, _own: Path = own, _s0: float = s0, _v0: float = v0, _a: Agent = agent) -> bool:
             """Driving its own path at ``v1`` (from ``v0``) stays clear of traffic: faster it may run into the car
-            ahead, slower it may meet crossing traffic it passed before."""
-            return _clear_run(truth, _own, _s0, _v0, v1, _a.size, _a.object_id)
+            ahead (or come closer to it than the editor's following gap), slower it may meet crossing traffic it
+            passed before."""
+            return _clear_run(truth, _own, _s0, _v0, v1, _a.size, _a.object_id, keep_gap=v1 > _v0)
 
         if moving and label in _CRUISING:
             unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))

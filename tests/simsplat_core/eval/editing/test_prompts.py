@@ -7,9 +7,11 @@ from collections import Counter
 import numpy as np
 
 from simsplat_core.eval.editing.intents import EGO
+from simsplat_core.eval.editing.plans import _clear_run
 from simsplat_core.eval.editing.prompts import CATEGORIES, INFEASIBLE, PromptConfig, build_prompt_set, quotas
 from simsplat_core.eval.editing.references import ABSENT_COLORS
 from simsplat_core.eval.editing.truth import world_of_log
+from simsplat_core.scenario.path import Path
 from simsplat_core.world.road import target_lane
 
 
@@ -153,3 +155,17 @@ def test_inserts_ask_for_what_the_bank_holds(truths) -> None:
     assert vehicles and all(a.subtype in ("van", None) for a in vehicles)
     people = [p.intent.asset for p in prompts if p.category == "add_pedestrian"]
     assert people and all(a.upper == "yellow" and a.lower in ("gray", None) for a in people)
+
+
+def test_a_run_behind_a_leader_within_the_editors_following_gap_is_not_clear(truths) -> None:
+    """A car 2 m behind a vehicle driving straight, at its speed, never overlaps it, yet cannot hold that speed
+    behind it in an editor that keeps its following gap: with ``keep_gap`` the run is not clear."""
+    truth = truths[0]
+    leader = next(a for a in truth.world.agents if a.category == "vehicle" and float(a.traj["speed"].min()) > 3.0
+                  and float(np.ptp(np.unwrap(a.traj["heading"]))) < 0.05)
+    xy, h, v = leader.traj["xy"], float(leader.traj["heading"][0]), float(np.mean(leader.traj["speed"]))
+    fwd = np.array([np.cos(h), np.sin(h)])
+    line = Path.from_points(np.stack([xy[0] - 30.0 * fwd, xy[-1]]))
+    s_behind = line.project(xy[0]) - float(leader.size[0]) - 2.0  # its front 2 m from the leader's rear
+    assert _clear_run(truth, line, s_behind, v, v, tuple(leader.size), skip="ego", margin=0.0)
+    assert not _clear_run(truth, line, s_behind, v, v, tuple(leader.size), skip="ego", margin=0.0, keep_gap=True)
