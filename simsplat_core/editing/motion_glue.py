@@ -292,7 +292,11 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
                  object_id=None)
     motion = Motion.planned(plan, describe_behaviour(behaviour))
     if kind != VEHICLE and behaviour.stop is None and not behaviour.cross_street:
-        motion = _walk_clear(draft, behaviour, start, asset, index, motion)
+        def replan(b: Behaviour, sidestep_m: float) -> PlannedTrajectory:
+            return _plan(draft, kind, b, start, asset.size, None, index, asset.caption, backfill=step > 0,
+                         object_id=None, sidestep_m=sidestep_m)
+
+        motion = _walk_clear(draft, behaviour, start, np.asarray(asset.size, np.float64), (EGO_ID,), motion, replan)
     return motion
 
 
@@ -300,44 +304,52 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
 SIDESTEPS_M: tuple[float, ...] = (0.8, -0.8, 1.2, -1.2)
 
 
-def _walk_clear(draft: Draft, behaviour: Behaviour, start: StartState, asset: Asset, index: int,
-                motion: Motion) -> Motion:
-    """An inserted pedestrian walking into someone keeps clear of them, as people do on a pavement (the planner
-    has no traffic for pedestrians, and the traffic model keeps inserted agents fixed): it passes a pedestrian
-    with a sidestep (:data:`SIDESTEPS_M`, the first that clears everyone); failing that, it stops behind someone
-    (or something) standing through the log, or, already too close to stop walking, stands where it was put.
-    ``motion`` when nobody is in its way, or nothing of this clears it."""
+def _log_overlaps(states: AgentStates, ids: tuple[str, ...], row: int, step: int) -> bool:
+    """Whether one of the agents ``ids`` (its log, in ``states``) already overlaps agent ``row`` at ``step``: a
+    walker in a group keeps its company."""
+    for oid in ids:
+        if oid in states.object_ids and oid != EGO_ID:
+            r = states.index(oid)
+            if states.valid[r, step] and footprints_overlap(
+                    states.xy[r, step][None], states.heading[r, step:step + 1], states.size[r, :2],
+                    states.xy[row, step][None], states.heading[row, step:step + 1], states.size[row, :2]).any():
+                return True
+    return False
+
+
+def _walk_clear(draft: Draft, behaviour: Behaviour, start: StartState, size: np.ndarray, exclude: tuple[str, ...],
+                motion: Motion, replan: Callable[[Behaviour, float], PlannedTrajectory]) -> Motion:
+    """A walker (inserted, or one whose walk an edit changed) walking into someone keeps clear of them, as people
+    do on a pavement (the planner has no traffic for pedestrians, and the traffic model keeps edited agents
+    fixed): it passes a pedestrian with a sidestep (:data:`SIDESTEPS_M`, the first that clears everyone:
+    ``replan(behaviour, metres)``); failing that, it stops behind someone (or something) standing through the
+    log, or, already too close to stop walking, stands where it is. ``motion`` when nobody (but ``exclude``) is
+    in its way, or nothing of this clears it."""
     states = draft.states
-    size = np.asarray(asset.size, np.float64)
-    hit = first_overlap(states, motion, size, (EGO_ID,))
-    if hit is None:
+    hit = first_overlap(states, motion, size, exclude)
+    if hit is None or _log_overlaps(states, exclude, *hit):
         return motion
     row = hit[0]
     if agent_kind(states.categories[row]) == PEDESTRIAN:
         for side in SIDESTEPS_M:
             try:
-                passing = Motion.planned(_plan(draft, PEDESTRIAN, behaviour, start, asset.size, None, index,
-                                               asset.caption, backfill=start.step > 0, object_id=None,
-                                               sidestep_m=side), "")
+                passing = Motion.planned(replan(behaviour, side), "")
             except EditRefused:
                 continue
-            if first_overlap(states, passing, size, (EGO_ID,)) is None:
-                return dataclasses.replace(passing, description=f"{describe_behaviour(behaviour)}; steps "
-                                           f"{abs(side):g} m {'left' if side > 0 else 'right'} to pass "
-                                           f"{_name(draft, row)}")
+            if first_overlap(states, passing, size, exclude) is None:
+                return dataclasses.replace(passing, description=f"{motion.description}; steps {abs(side):g} m "
+                                           f"{'left' if side > 0 else 'right'} to pass {_name(draft, row)}")
     steps = np.flatnonzero(states.valid[row])
     if float(np.linalg.norm(states.xy[row, steps] - states.xy[row, steps[0]], axis=1).max()) >= LOG_MOVES_M:
         return motion  # it moves: the traffic model makes it wait, or the validation reports it
     waiting = behaviour.model_copy(update={"stop": StopSpec(behind=TargetRef(object_id=states.object_ids[row]))})
     try:
-        plan = _plan(draft, PEDESTRIAN, waiting, start, asset.size, None, index, asset.caption,
-                     backfill=start.step > 0, object_id=None)
-    except EditRefused as exc:  # too close to stop behind it walking: it waits where it was put
-        logger.debug("%s stands: %s", asset.caption, exc)
+        plan = replan(waiting, 0.0)
+    except EditRefused as exc:  # too close to stop behind it walking: it waits where it is
+        logger.debug("walker stands: %s", exc)
         return Motion.standing(start.xy, start.heading, states.num_steps,
                                f"standing behind {_name(draft, row)}, who stands in its way")
-    return Motion.planned(plan, f"{describe_behaviour(behaviour)}; stops behind {_name(draft, row)} standing "
-                                "in its way")
+    return Motion.planned(plan, f"{motion.description}; stops behind {_name(draft, row)} standing in its way")
 
 
 #: An inserted vehicle asked to drive at a speed holds it when its plan never falls more than this below it
@@ -409,6 +421,13 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
     if kind == VEHICLE:
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     motion = Motion.planned(plan, describe_behaviour(behaviour))
+    if kind != VEHICLE and behaviour.stop is None and not behaviour.cross_street:
+        def replan(b: Behaviour, sidestep_m: float) -> PlannedTrajectory:
+            return _plan(draft, kind, b, start, size3, log, index, label, backfill=False,
+                         object_id=states.object_ids[row], sidestep_m=sidestep_m)
+
+        motion = _walk_clear(draft, behaviour, start, states.size[row], (EGO_ID, states.object_ids[row]), motion,
+                             replan)
     if behaviour.delay_s is not None or behaviour.start_time_s is not None:
         def free_plan() -> Motion:
             return Motion.planned(_plan(draft, kind, behaviour, start, size3, log, index, label, backfill=False,

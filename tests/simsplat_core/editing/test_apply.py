@@ -18,7 +18,7 @@ from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, 
 from simsplat_core.editing.delta import apply_delta
 from simsplat_core.editing.edit_ops import Draft, node_factory
 from simsplat_core.editing.grounding import Grounder
-from simsplat_core.editing.motion_glue import first_overlap, making_room, plan_inserted
+from simsplat_core.editing.motion_glue import first_overlap, making_room, plan_inserted, plan_modified
 from simsplat_core.editing.motion_requests import StartState
 from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.placement import PlacedPose, distance_slack
@@ -612,3 +612,27 @@ def test_an_inserted_walker_sidesteps_someone_walking_towards_it(ctx, bank, monk
     monkeypatch.setattr(motion_glue, "SIDESTEPS_M", ())
     head_on = plan_inserted(draft, None, walker, placed, 0, 0)
     assert first_overlap(draft.states, head_on, np.asarray(walker.size), ("ego",)) is not None
+
+
+def test_a_walker_told_to_run_sidesteps_someone_walking_towards_it(ctx, monkeypatch):
+    """A pedestrian told to walk faster along its path meets someone coming the other way on it: it steps aside
+    to pass (the traffic model keeps an edited walker fixed, so it must keep clear itself)."""
+    states = ctx.states
+    walker = next(r for r, c in enumerate(states.categories) if c == "pedestrian"
+                  and float(np.linalg.norm(states.xy[r, -1] - states.xy[r, 0])) > 3.0)
+    other = next(r for r, c in enumerate(states.categories) if c == "pedestrian" and r != walker)
+    fast = Behaviour(speed=SpeedSpec(value=2.5))
+    grounder = Grounder(ctx.language, ctx.engine, ctx.graph, DEFAULT_OPTIONS.grounding)
+    alone = plan_modified(Draft.start(ctx, grounder, DEFAULT_OPTIONS), walker, fast, None, 0, "the walker")
+    xy, heading, valid = states.xy.copy(), states.heading.copy(), states.valid.copy()
+    xy[other] = alone.xy[::-1] + 0.2 * np.stack([-np.sin(alone.heading[::-1]), np.cos(alone.heading[::-1])], 1)
+    heading[other], valid[other] = alone.heading[::-1] + np.pi, True
+    valid[[r for r in range(states.num_agents) if r not in (walker, other)]] = False  # nobody else about
+    draft = Draft.start(ctx, grounder, DEFAULT_OPTIONS)
+    draft.states = dataclasses.replace(states, xy=xy, heading=heading, valid=valid)
+    ids = ("ego", states.object_ids[walker])
+    passing = plan_modified(draft, walker, fast, None, 0, "the walker")
+    assert "to pass" in passing.description and first_overlap(draft.states, passing, states.size[walker], ids) is None
+    monkeypatch.setattr(motion_glue, "SIDESTEPS_M", ())
+    head_on = plan_modified(draft, walker, fast, None, 0, "the walker")
+    assert first_overlap(draft.states, head_on, states.size[walker], ids) is not None
