@@ -41,8 +41,6 @@ import logging
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numpy as np
-
 from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
 from simsplat_core.editing.assets import AssetBank, asked_top_color
 from simsplat_core.editing.commands import EditProgram
@@ -54,7 +52,7 @@ from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_
 from simsplat_core.editing.parser import parse_prompt
 from simsplat_core.editing.reaction import react
 from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
-from simsplat_core.editing.room import ROOM_SHIFTS, searches_room, traffic_copes
+from simsplat_core.editing.room import ROOM_SHIFTS, changed_rows, searches_room, traffic_copes
 from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.static_location import with_static_locations
@@ -151,8 +149,7 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
         excluded |= misfits
     assert best is not None  # the loop runs at least once
     _, draft, graph, delta, outcomes = best
-    rows = [r for r, source in enumerate(draft.states.sources) if source in ("edited", "inserted", "refined")]
-    validation = validate_agents(draft.states, ctx.map_ctx, np.asarray(rows, dtype=np.int64))
+    validation = validate_agents(draft.states, ctx.map_ctx, changed_rows(draft.states))
     logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
                 "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
     return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,

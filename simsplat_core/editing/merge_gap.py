@@ -20,7 +20,8 @@ from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.metrics import kind_of
 from simsplat_core.scenario.vocabulary import VEHICLE
 
-#: Vehicles whose heading is within this of the planned car's drive the same way (a follower it can squeeze).
+#: Agents whose heading is within this of a planned one's drive the same way (a follower it can squeeze; a leader
+#: ahead that keeps its pace, ``motion_glue.making_room``).
 SAME_WAY_DEG = 45.0
 
 

@@ -23,7 +23,7 @@ import torch
 
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import Behaviour, Placement, StopSpec, TargetRef
-from simsplat_core.editing.merge_gap import unsafe_merge
+from simsplat_core.editing.merge_gap import SAME_WAY_DEG, unsafe_merge
 from simsplat_core.editing.motion_controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
 from simsplat_core.editing.motion_requests import (
     DEFAULT_CRUISE_MPS,
@@ -165,10 +165,6 @@ def _start_speed(behaviour: Behaviour, cruise: float) -> float:
     return cruise
 
 
-#: Agents within this of the planned agent's heading drive the same way (a leader ahead does not make room).
-SAME_WAY_DEG = 45.0
-
-
 def making_room(draft: Draft, start: StartState, exclude: tuple[str, ...]) -> tuple[str, ...]:
     """Ids of the agents that will make room for the planned one, so that its plan need not keep clear of them:
     with full refinement (``EditorOptions.refinement``) every agent the predictor drives reacts to the edited
@@ -188,14 +184,19 @@ def making_room(draft: Draft, start: StartState, exclude: tuple[str, ...]) -> tu
     for r, oid in enumerate(states.object_ids):
         if r in fixed or oid in exclude or not states.valid[r, k] or r in on_road:
             continue
-        steps = np.flatnonzero(states.valid[r])
-        if float(np.linalg.norm(states.xy[r, steps] - states.xy[r, steps[0]], axis=1).max()) < LOG_MOVES_M:
-            continue  # stands through the log: the predictor keeps it there
+        if _stands_through_log(states, r):
+            continue  # the predictor keeps it there
         ahead = float((states.xy[r, k] - np.asarray(start.xy, np.float64)) @ forward) > 0.0
         same_way = abs(float(wrap_angle(states.heading[r, k] - start.heading))) <= np.deg2rad(SAME_WAY_DEG)
         if not (ahead and same_way):
             out.append(oid)
     return tuple(out)
+
+
+def _stands_through_log(states: AgentStates, row: int) -> bool:
+    """Whether agent ``row`` stays within :data:`LOG_MOVES_M` of where it first is, at every valid step."""
+    steps = np.flatnonzero(states.valid[row])
+    return float(np.linalg.norm(states.xy[row, steps] - states.xy[row, steps[0]], axis=1).max()) < LOG_MOVES_M
 
 
 def _pedestrians_on_road(draft: Draft, step: int) -> set[int]:
@@ -339,8 +340,7 @@ def _walk_clear(draft: Draft, behaviour: Behaviour, start: StartState, size: np.
             if first_overlap(states, passing, size, exclude) is None:
                 return dataclasses.replace(passing, description=f"{motion.description}; steps {abs(side):g} m "
                                            f"{'left' if side > 0 else 'right'} to pass {_name(draft, row)}")
-    steps = np.flatnonzero(states.valid[row])
-    if float(np.linalg.norm(states.xy[row, steps] - states.xy[row, steps[0]], axis=1).max()) >= LOG_MOVES_M:
+    if not _stands_through_log(states, row):
         return motion  # it moves: the traffic model makes it wait, or the validation reports it
     waiting = behaviour.model_copy(update={"stop": StopSpec(behind=TargetRef(object_id=states.object_ids[row]))})
     try:

@@ -641,16 +641,17 @@ def row_shifter(first: PlacedPose, lanes: LaneGraph | None, reach: float) -> Cal
     return along_heading
 
 
-def shift_row(row: Sequence[PlacedPose], d: float, *, size: Sequence[float], lanes: LaneGraph | None,
-              map_ctx: MapContext, occupied: AgentStates | None, frame: int, why: str,
+def shift_row(row: Sequence[PlacedPose], d: float, *, spacing_m: float, size: Sequence[float],
+              lanes: LaneGraph | None, map_ctx: MapContext, occupied: AgentStates | None, frame: int, why: str,
               keep_area: str | None = None) -> list[PlacedPose]:
-    """The placed ``row`` moved ``d`` metres along its first member's lane (or heading), its first member's note
-    saying so and ``why``; ``EditRefused`` when a member would then overlap an agent at ``frame`` or stand off
-    ``keep_area`` (default: the first member's surface, the road for a lane, road or crosswalk)."""
+    """The placed ``row`` (``place_row`` with ``spacing_m``) moved ``d`` metres along its first member's lane (or
+    heading), its first member's note saying so and ``why``; ``EditRefused`` when a member would then overlap an
+    agent at ``frame`` or stand off ``keep_area`` (default: the first member's surface, the road for a lane,
+    road or crosswalk)."""
     first = row[0]
     area = keep_area if keep_area is not None else ("road" if first.area in ("lane", "crosswalk") else first.area)
-    moved = place_row(row_shifter(first, lanes, abs(d))(d), count=len(row),
-                      spacing_m=_row_spacing(row, size), size=size, lanes=lanes)
+    moved = place_row(row_shifter(first, lanes, abs(d))(d), count=len(row), spacing_m=spacing_m, size=size,
+                      lanes=lanes)
     if row_blockers(moved, size, occupied, frame) or not all(
             _area_kind_ok(map_ctx, p.xy, p.heading, area) for p in moved):
         raise _refuse(f"no room {abs(d):.1f} m {'ahead' if d > 0 else 'back'} of the asked spot")
@@ -663,13 +664,6 @@ def _noted(row: list[PlacedPose], before: str, note: str) -> list[PlacedPose]:
     row[0] = PlacedPose(head.xy, head.heading, head.lane, head.z, head.area, f"{before}; {note}" if before else note,
                         head.parked)
     return row
-
-
-def _row_spacing(row: Sequence[PlacedPose], size: Sequence[float]) -> float:
-    """The gap between the boxes of a placed ``row`` (0 for a single object)."""
-    if len(row) < 2:
-        return 0.0
-    return float(np.linalg.norm(row[1].xy - row[0].xy)) - float(size[0])
 
 
 def place_clear_row(first: PlacedPose, *, count: int, spacing_m: float, size: Sequence[float],

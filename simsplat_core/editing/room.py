@@ -16,6 +16,7 @@ import numpy as np
 
 from simsplat_core.editing.commands import EditCommand, EditProgram
 from simsplat_core.motion.refine import EDIT_SOURCES
+from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.metrics import validate_agents
 
 if TYPE_CHECKING:
@@ -37,9 +38,12 @@ def movable(command: EditCommand) -> bool:
     return command.op == "insert" and (command.placement is None or command.placement.position is None)
 
 
+def changed_rows(states: AgentStates) -> np.ndarray:
+    """``[R]`` rows of the edited, inserted and reacting (``"refined"``) agents."""
+    return np.flatnonzero([s in (*EDIT_SOURCES, "refined") for s in states.sources]).astype(np.int64)
+
+
 def traffic_copes(draft: Draft) -> bool:
     """Whether every edited, inserted and reacting agent of ``draft`` is free of collisions, off-road and
     kinematic failures that the unedited scene did not already have."""
-    states = draft.states
-    rows = np.flatnonzero([s in (*EDIT_SOURCES, "refined") for s in states.sources])
-    return validate_agents(states, draft.ctx.map_ctx, rows, baseline=draft.ctx.states).ok
+    return validate_agents(draft.states, draft.ctx.map_ctx, changed_rows(draft.states), baseline=draft.ctx.states).ok

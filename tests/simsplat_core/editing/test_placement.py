@@ -394,8 +394,8 @@ def test_a_row_shifted_for_room_keeps_to_the_road_or_to_the_asked_area(world) ->
     ahead = (_place(world, Placement(relation="in_lane", distance_m=d), "static", CONE) for d in range(5, 60))
     first = next(p for p in ahead if p.area == "crosswalk")  # the first spot of the ego lane on a crosswalk
     row = place_row(first, count=3, spacing_m=1.5, size=CONE, lanes=world["lanes"])
-    kw = {"size": CONE, "lanes": world["lanes"], "map_ctx": world["ctx"], "occupied": _ego_only(world), "frame": 0,
-          "why": "for room"}
+    kw = {"spacing_m": 1.5, "size": CONE, "lanes": world["lanes"], "map_ctx": world["ctx"],
+          "occupied": _ego_only(world), "frame": 0, "why": "for room"}
     moved = shift_row(row, 6.0, **kw)
     assert np.linalg.norm(moved[0].xy - first.xy) == pytest.approx(6.0, abs=0.3)
     assert "further ahead for room" in moved[0].note
