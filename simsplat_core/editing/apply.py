@@ -16,7 +16,7 @@ target / anchor against the scene's language (``editing.grounding``), then
   rows of cones stand still, pedestrians walk along the sidewalk or cross when told);
 * ``modify`` re-plans a target's trajectory from its log trajectory (``editing.motion_controller``).
 
-An added object whose command asked an achromatic colour is then looked at in the edited renders and
+An added object whose command asked a colour is then looked at in the edited renders and
 exposure-matched when it reads as another shade (``editing.look_check``); when no gain makes it read as asked,
 the program is applied again without that asset (at most ``LOOK_RETRIES`` times; the attempt with the most
 objects reading as asked is kept). The edited graph is
@@ -158,7 +158,7 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
 
 
 #: Times a program is re-applied with other assets when an inserted object does not read as the asked colour.
-LOOK_RETRIES = 1
+LOOK_RETRIES = 2
 
 
 def _run_with_room(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str]

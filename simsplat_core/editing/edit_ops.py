@@ -49,7 +49,7 @@ from simsplat_core.editing.placement import (
     shift_row,
 )
 from simsplat_core.editing.result import AddedNode, CommandOutcome, EditDelta, EditRefused
-from simsplat_core.editing.room import movable
+from simsplat_core.editing.room import movable, room_reach
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scene.nodes import ObjectNode
@@ -105,8 +105,8 @@ class Draft:
     ``removed`` / ``retracked`` / ``added`` make the delta; ``gone`` are the stored nodes a ``remove`` dropped
     (not grounded again); ``replaced`` maps a stored node a ``replace`` swapped to its new node, so later
     commands naming the same object act on the new one. ``room_shift`` moves every inserted row by that share
-    of its placement's reach (``placement.distance_slack`` of an asked distance, else ``NUDGE_M``) along its
-    lane: ``editing.apply`` tries a few when the traffic cannot react to the edit as asked without a crash.
+    of its room search reach (``room.room_reach``) along its lane: ``editing.apply`` tries a few when the
+    traffic cannot react to the edit as asked without a crash.
     """
 
     ctx: EditContext
@@ -282,7 +282,8 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
                               lanes=draft.ctx.lanes, map_ctx=draft.ctx.map_ctx, occupied=draft.states,
                               frame=int(draft.states.frame_idx[step]), reach=reach, category=asset.category)
         if draft.room_shift and movable(command):
-            row = shift_row(row, draft.room_shift * reach, spacing_m=gap, size=asset.size, lanes=draft.ctx.lanes,
+            row = shift_row(row, draft.room_shift * room_reach(placement.distance_m, NUDGE_M), spacing_m=gap,
+                            size=asset.size, lanes=draft.ctx.lanes,
                             map_ctx=draft.ctx.map_ctx, occupied=draft.states,
                             frame=int(draft.states.frame_idx[step]), why=ROOM_NOTE,
                             keep_area=ASKED_AREAS.get(placement.relation))

@@ -1,22 +1,24 @@
-"""Does an inserted object read as the asked colour where it stands? Exposure matching of achromatic colours.
+"""Does an inserted object read as the asked colour where it stands? Exposure matching, else another asset.
 
 An asset keeps the light of the scene it was cut from: a white car whose rear was in shade there shows a
 grey rear wherever it is inserted, and "add a white car 20 m ahead" would put a silver one on the road.
-White, silver, grey and black differ only in lightness, so the fix is an exposure gain, not a recolour.
+White, silver, grey and black differ only in lightness, so the fix is an exposure gain, not a recolour; a hue
+read as its lighter or darker neighbour (red as pink, dark blue as black) may be fixed the same way; a hue read
+as another hue (blue as purple) is not, and another asset is tried.
 
-After the edited graph is built, every added node whose command asked an achromatic colour (a vehicle's or
+After the edited graph is built, every added node whose command asked a colour (a vehicle's or
 static object's body, a pedestrian's top) is rendered with the whole edited scene, occlusions included, at up
 to ``LOOK_FRAMES`` frames where it exists, from the cameras its box (grown by ``BOX_MARGIN_M``) may show in
 (``look_renders``). The built-in captioner (``language.appearance.captioner.describe_track``, the same one
 that captions the scene for grounding) names its main colour from the crops with at least ``MIN_LOOK_PIXELS``
 of its pixels; it reads as asked when the track's colour is the asked one and the crops that are cover
 ``LOOK_SHARE`` of its pixels. Otherwise the crops are re-captioned under the gains of ``BRIGHTER_GAINS``
-(asked colour lighter) or ``DARKER_GAINS`` (darker), and the first gain under which they read as asked becomes
-an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the
+(asked grey lighter) or ``DARKER_GAINS`` (darker; a hue: both), and the first gain under which they read as
+asked becomes an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the
 variant, so a stored edit rebuilds to the same pixels. The gain is verified on a render of the variant and
 raised along its ladder when it falls short (``VERIFY_ROUNDS`` renders at most). A node that still does not
-read as asked is reported (``LookNote.fitted`` false): ``editing.apply`` then tries the program once more
-without that asset.
+read as asked is reported (``LookNote.fitted`` false): ``editing.apply`` then tries the program again without
+that asset (``apply.LOOK_RETRIES`` times).
 
     delta, graph, notes = match_exposure(log, graph, delta, wanted, states, asset_of, build)
 """
@@ -30,7 +32,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from simsplat_core import geometry
-from simsplat_core.color_names import ACHROMATIC_NAMES
+from simsplat_core.color_names import ACHROMATIC_NAMES, COLOR_NAMES
 from simsplat_core.editing.asset_colors import exposure_suffix
 from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
 from simsplat_core.editing.renders import FrameRender, frame_views, render_frame
@@ -179,13 +181,18 @@ def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]
     if not crops:
         raise ValueError("exposure_gain needs at least one crop")
     seen, share, names = _read(crops, wanted)
-    if (seen == wanted and share >= LOOK_SHARE) or seen not in ACHROMATIC_NAMES or wanted not in ACHROMATIC_NAMES:
+    if (seen == wanted and share >= LOOK_SHARE) or (wanted in ACHROMATIC_NAMES and seen not in ACHROMATIC_NAMES):
         return seen, 1.0
-    # the track reads right but parts of it do not: lighter if most of the rest reads darker
-    off = _main_other(crops, names, wanted) if seen == wanted else seen
-    lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(off)
+    ladder: tuple[float, ...]
+    if wanted in ACHROMATIC_NAMES:
+        # the track reads right but parts of it do not: lighter if most of the rest reads darker
+        off = _main_other(crops, names, wanted) if seen == wanted else seen
+        lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(off)
+        ladder = BRIGHTER_GAINS if lighter else DARKER_GAINS
+    else:  # a hue read as a lighter or darker neighbour (red as pink, dark blue as black): both ways
+        ladder = DARKER_GAINS + BRIGHTER_GAINS
     best = (share if seen == wanted else -1.0, 1.0)
-    for gain in BRIGHTER_GAINS if lighter else DARKER_GAINS:
+    for gain in ladder:
         track, part, _ = _read(crops, wanted, gain)
         if track == wanted and part >= LOOK_SHARE:
             return seen, gain
@@ -207,8 +214,8 @@ def _main_other(crops: Sequence[ObjectCrop], names: Sequence[str], wanted: str) 
 def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: Mapping[int, str],
                    states: AgentStates, asset_of: Callable[[str], Asset], build: Callable[[EditDelta], SceneGraph]
                    ) -> tuple[EditDelta, SceneGraph, list[LookNote]]:
-    """The delta and graph with each added node of ``wanted`` (node id -> asked achromatic colour) switched to the
-    exposure variant that makes it read as that colour, and a note per checked node (module docstring).
+    """The delta and graph with each added node of ``wanted`` (node id -> asked colour) switched to the exposure
+    variant that makes it read as that colour, and a note per checked node (module docstring).
 
     A gain picked on the crops is verified on a render of the variant (scaling a crop also brightens the
     background blended into its edge pixels; the render does not): one that does not read right yet moves
@@ -225,7 +232,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
     """
     added = {a.node_id: a for a in delta.added}
     checks = {n: c for n, c in wanted.items()
-              if n in added and c in ACHROMATIC_NAMES and added[n].category in CHECKED_CATEGORIES}
+              if n in added and c in COLOR_NAMES and added[n].category in CHECKED_CATEGORIES}
     if not checks:
         return delta, graph, []
     frames = sorted({f for n in checks for f in look_frames(states, added[n].object_id)})

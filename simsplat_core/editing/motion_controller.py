@@ -32,9 +32,13 @@ import torch
 
 from simsplat_core.editing.motion_requests import (
     DEFAULT_CRUISE_MPS,
+    PASS_LEAD_M,
+    PASS_RAMP_M,
+    PASS_TRAIL_M,
     STOP_GAP_M,
     LogTrajectory,
     OtherAgent,
+    PassingStep,
     PedestrianMotionRequest,
     VehicleMotionRequest,
     _Common,
@@ -49,6 +53,7 @@ from simsplat_core.editing.motion_routes import (
     nearest_lane_segment,
     next_area_s,
     offset_route,
+    passing_route,
     polyline_route,
     straight_route,
 )
@@ -209,6 +214,8 @@ def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGr
     point is on the path's own turn: the lane there keeps it)."""
     label, turn = req.label, req.turn
     assert turn is not None
+    if turn == "straight" and (sibling := _straight_sibling(req, lanes)) is not None:
+        return s0, sibling
     making: list[tuple[float, Route]] = []
     for ahead in (0.0, 4.0, 8.0, 12.0, 16.0):
         s_p = s0 + ahead
@@ -219,7 +226,9 @@ def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGr
             continue  # from a point of the path already in a turn lane: following it would keep the turn
         route = cand[0]
         s_c = route.project(base.position(s_p))[0]
-        probe = np.linspace(0.0, 10.0, 6)
+        # a turn's lane heads the way the path does over the next 10 m; going straight, the path may be turning
+        # away from the lane (the log's own turn, just begun): the lane need only start the way the path does
+        probe = np.linspace(0.0, 2.0 if turn == "straight" else 10.0, 6)
         apart = np.abs(np.angle(np.exp(1j * (route.heading(s_c + probe) - base.heading(s_p + probe))))).max()
         logger.debug("turn %s from %.1f m ahead: %s, headings %.0f deg apart", turn, ahead, route.marks,
                      np.rad2deg(apart))
@@ -233,6 +242,41 @@ def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGr
                           "the map", reason="infeasible_motion")
     raise EditRefused(f"turning requires an intersection ahead of {label} where its lane may turn {turn}: none "
                       "within 300 m", reason="infeasible_motion")
+
+
+#: A vehicle that has begun a turn may still go straight on while it is this close to the straight lane (m) ...
+STRAIGHT_SIBLING_M = 1.5
+#: ... and heading within this of it (degrees).
+STRAIGHT_SIBLING_DEG = 25.0
+
+
+def _straight_sibling(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Route | None:
+    """The lane route going straight on from the junction entry of the turning lane the start is on, when the
+    vehicle, just into its turn, is still within :data:`STRAIGHT_SIBLING_M` and :data:`STRAIGHT_SIBLING_DEG` of
+    it; ``None`` otherwise (not on a turning lane, or too far into the turn)."""
+    start = req.start
+    if lanes is None:
+        return None
+    match = lanes.nearest(np.asarray(start.xy, np.float64)[None, :2], np.array([start.heading]), max_dist_m=2.5)
+    lane = int(match.lane[0])
+    if lane < 0 or lanes.turn_of(lane) == "straight":
+        return None
+    for entry in lanes.predecessors[lane]:
+        for other in (entry, *lanes.successors[entry]):  # a lane running on through the junction, or a connector
+            if other == lane or lanes.turn_of(other) != "straight":
+                continue
+            ln = lanes.lanes[other]
+            path = Path.from_points(ln.points)
+            s_on = path.project(start.xy)
+            apart = abs(float(np.angle(np.exp(1j * (float(ln.heading_at(s_on)) - start.heading)))))
+            if (float(np.linalg.norm(path.position(s_on) - start.xy)) > STRAIGHT_SIBLING_M
+                    or apart > np.deg2rad(STRAIGHT_SIBLING_DEG)):
+                continue
+            found = lane_route(lanes, path.position(s_on), float(ln.heading_at(s_on)), max_dist_m=0.5,
+                               align_deg=20.0)
+            if found is not None:
+                return found[0]
+    return None
 
 
 def _neighbour_route(req: VehicleMotionRequest, lanes: LaneGraph | None) -> Route:
@@ -347,6 +391,8 @@ def plan_pedestrian(request: PedestrianMotionRequest, map_ctx: MapContext) -> Pl
     s0 = route.project(start.xy)[0]
     if req.lateral_offset_m:
         route = offset_route(route, s0, req.lateral_offset_m, 3.0)
+    if req.passing is not None:
+        route = _passing(route, req.passing, s0)
     if own is not None and not req.cross_street and _keeps_log_speed(req):
         return _compose(req, route, _replay_log(req, own, s0))
     v_ref = _speed_reference(req, req.target_speed_mps, reverse=False)
@@ -357,6 +403,14 @@ def plan_pedestrian(request: PedestrianMotionRequest, map_ctx: MapContext) -> Pl
     v0 = 0.0 if req.hold_until_s is not None and _first_step(req) else start.speed
     plan = _plan(req, s0, v0, v_ref, stop, None, None, must_stop=not crossing)
     return _compose(req, route, plan)
+
+
+def _passing(route: Route, step: PassingStep, s0: float) -> Route:
+    """``route`` with the step aside ``step`` (``motion_requests.PassingStep``), begun at the walker's start ``s0``
+    at the earliest."""
+    s_from = route.project(step.from_xy)[0] - PASS_LEAD_M
+    s_until = route.project(step.until_xy)[0] + PASS_TRAIL_M
+    return passing_route(route, max(s_from, s0), s_until, step.offset_m, PASS_RAMP_M)
 
 
 def _crosswalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:

@@ -23,13 +23,13 @@ import torch
 
 from simsplat_core.editing.asset_record import Asset
 from simsplat_core.editing.commands import Behaviour, Placement, StopSpec, TargetRef
+from simsplat_core.editing.joining import start_speed
 from simsplat_core.editing.merge_gap import SAME_WAY_DEG, unsafe_merge
 from simsplat_core.editing.motion_controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
 from simsplat_core.editing.motion_requests import (
-    DEFAULT_CRUISE_MPS,
-    WALK_MPS,
     LogTrajectory,
     OtherAgent,
+    PassingStep,
     PedestrianMotionRequest,
     StartState,
     VehicleMotionRequest,
@@ -132,39 +132,6 @@ def _other(draft: Draft, ref: TargetRef | None, index: int, role: str) -> OtherA
     return OtherAgent.from_states(draft.states, draft.row_of(found.object_ids[0]), draft.describe(found.node_ids[0]))
 
 
-#: The traffic a new vehicle joins: vehicles (the ego too) at most this far behind it in its direction, m ...
-FLOW_BEHIND_M = 40.0
-#: ... at most this far to its side, m, and heading within this angle of it, rad.
-FLOW_LATERAL_M = 2.0
-FLOW_HEADING_RAD = np.deg2rad(30.0)
-
-
-def _flow_speed(states: AgentStates, xy: np.ndarray, heading: float, step: int) -> float:
-    """Speed at ``step`` of the nearest vehicle (the ego included) driving up behind ``xy`` in its lane (within
-    ``FLOW_BEHIND_M`` behind, ``FLOW_LATERAL_M`` aside, heading within ``FLOW_HEADING_RAD``), 0 when none: a
-    car inserted ahead of traffic drives at least as fast as it, so the agents replaying their log (the ego
-    first) do not run into it."""
-    forward = np.array([np.cos(heading), np.sin(heading)])
-    side = np.array([-forward[1], forward[0]])
-    rel = states.xy[:, step] - np.asarray(xy, np.float64)[None]  # [A, 2]
-    behind, lateral = -(rel @ forward), np.abs(rel @ side)
-    same_way = np.abs(wrap_angle(states.heading[:, step] - heading)) <= FLOW_HEADING_RAD
-    vehicle = np.array([agent_kind(c) == VEHICLE for c in states.categories])  # the ego's category is vehicle
-    near = (behind > 0) & (behind <= FLOW_BEHIND_M) & (lateral <= FLOW_LATERAL_M)
-    ok = states.valid[:, step] & vehicle & same_way & near
-    if not ok.any():
-        return 0.0
-    nearest = np.flatnonzero(ok)[int(np.argmin(behind[ok]))]
-    return float(abs(states.speed[nearest, step]))
-
-
-def _start_speed(behaviour: Behaviour, cruise: float) -> float:
-    """Speed an inserted mover starts with: the asked absolute speed (0 parks it), else ``cruise``."""
-    if behaviour.speed is not None:
-        return behaviour.speed.target_mps(cruise)
-    return cruise
-
-
 def making_room(draft: Draft, start: StartState, exclude: tuple[str, ...]) -> tuple[str, ...]:
     """Ids of the agents that will make room for the planned one, so that its plan need not keep clear of them:
     with full refinement (``EditorOptions.refinement``) every agent the predictor drives reacts to the edited
@@ -219,11 +186,12 @@ def no_room_note(draft: Draft) -> str:
 def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
           object_id: str | None, with_traffic: bool = True, lane_change_after_m: float = 0.0,
-          pace_mps: float | None = None, sidestep_m: float = 0.0) -> PlannedTrajectory:
+          pace_mps: float | None = None, sidestep_m: float = 0.0,
+          passing: PassingStep | None = None) -> PlannedTrajectory:
     """Plan with the motion controller; a vehicle keeps its gap to every other agent on its route (their
     current trajectories: the log, or what earlier commands made of them; ``with_traffic=False``: to none).
     ``lane_change_after_m`` / ``pace_mps``: a lane change waiting for a gap; ``sidestep_m``: a pedestrian's path
-    shifted sideways (+ left) to pass someone."""
+    shifted sideways (+ left) for good to pass someone; ``passing``: a step aside and back."""
     ctx, states = draft.ctx, draft.states
     stop_behind = _other(draft, behaviour.stop.behind if behaviour.stop else None, index, "object to stop behind")
     try:
@@ -244,8 +212,8 @@ def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size
         ped = PedestrianMotionRequest.from_behaviour(
             behaviour, times=states.times, frame_idx=states.frame_idx, start=start, size=size, log=log,
             stop_behind=stop_behind, backfill=backfill, label=label)
-        if sidestep_m:  # passing someone in its way
-            ped = dataclasses.replace(ped, lateral_offset_m=ped.lateral_offset_m + sidestep_m)
+        if sidestep_m or passing is not None:  # passing someone in its way
+            ped = dataclasses.replace(ped, lateral_offset_m=ped.lateral_offset_m + sidestep_m, passing=passing)
         return plan_pedestrian(ped, ctx.map_ctx)
     except EditRefused as exc:
         raise EditRefused(str(exc), reason=exc.reason, command_index=index) from exc
@@ -287,22 +255,25 @@ def plan_inserted(draft: Draft, behaviour: Behaviour | None, asset: Asset, place
     kind = motion_kind(asset.category, asset.caption)
     if kind == VEHICLE and placed.parked and behaviour.is_empty:
         return Motion.standing(xy, heading, steps, PARKED)
-    cruise = max(DEFAULT_CRUISE_MPS, _flow_speed(draft.states, xy, heading, step)) if kind == VEHICLE else WALK_MPS
-    start = StartState(step, xy, heading, _start_speed(behaviour, cruise))
+    start = StartState(step, xy, heading, start_speed(draft.states, behaviour, kind, xy, heading, step,
+                                                      float(asset.size[0])))
     plan = _plan(draft, kind, behaviour, start, asset.size, None, index, asset.caption, backfill=step > 0,
                  object_id=None)
     motion = Motion.planned(plan, describe_behaviour(behaviour))
     if kind != VEHICLE and behaviour.stop is None and not behaviour.cross_street:
-        def replan(b: Behaviour, sidestep_m: float) -> PlannedTrajectory:
+        def replan(b: Behaviour, sidestep_m: float, passing: PassingStep | None) -> PlannedTrajectory:
             return _plan(draft, kind, b, start, asset.size, None, index, asset.caption, backfill=step > 0,
-                         object_id=None, sidestep_m=sidestep_m)
+                         object_id=None, sidestep_m=sidestep_m, passing=passing)
 
         motion = _walk_clear(draft, behaviour, start, np.asarray(asset.size, np.float64), (EGO_ID,), motion, replan)
     return motion
 
 
-#: Sideways shifts (m, + left) an inserted pedestrian tries to pass a pedestrian in its way, in order.
+#: Sideways steps (m, + left) a walker tries, in order, to pass a pedestrian in its way: first aside and back
+#: (``motion_requests.PassingStep``), then aside for good.
 SIDESTEPS_M: tuple[float, ...] = (0.8, -0.8, 1.2, -1.2)
+#: Two walkers closer than this (m, between their boxes) are meeting: the step aside spans that stretch.
+MEETING_M = 0.5
 
 
 def _log_overlaps(states: AgentStates, ids: tuple[str, ...], row: int, step: int) -> bool:
@@ -318,33 +289,69 @@ def _log_overlaps(states: AgentStates, ids: tuple[str, ...], row: int, step: int
     return False
 
 
+def _meeting(states: AgentStates, motion: Motion, size: np.ndarray, row: int, step: int) -> PassingStep:
+    """The stretch of ``motion`` (box ``size``) around ``step`` where it comes within :data:`MEETING_M` of agent
+    ``row``, as a passing step of no offset yet (``PassingStep.from_xy`` / ``until_xy``)."""
+    both = motion.valid & states.valid[row]
+    wide = np.asarray(size, np.float64)[:2] + 2.0 * MEETING_M
+    near = np.zeros(len(both), dtype=bool)
+    ks = np.flatnonzero(both)
+    near[ks] = footprints_overlap(motion.xy[ks], motion.heading[ks], wide, states.xy[row, ks], states.heading[row, ks],
+                                  states.size[row, :2])
+    near[step] = True
+    first, last = step, step
+    while first > 0 and near[first - 1]:
+        first -= 1
+    while last + 1 < len(near) and near[last + 1]:
+        last += 1
+    return PassingStep(motion.xy[first].copy(), motion.xy[last].copy(), 0.0)
+
+
+def _keeps_footing(draft: Draft, walk: Motion, planned: Motion) -> bool:
+    """Whether ``walk`` stays on the pavement wherever the ``planned`` walk it steps aside from is on it (a step
+    aside does not take a walker into the road)."""
+    map_ctx = draft.ctx.map_ctx
+    ks = np.flatnonzero(walk.valid & planned.valid)
+    if not map_ctx.has_drivable or not ks.size:
+        return True
+    was = map_ctx.facts(planned.xy[ks], planned.heading[ks]).on_sidewalk
+    now = map_ctx.facts(walk.xy[ks], walk.heading[ks]).on_sidewalk
+    return bool(np.all(now | ~was))
+
+
 def _walk_clear(draft: Draft, behaviour: Behaviour, start: StartState, size: np.ndarray, exclude: tuple[str, ...],
-                motion: Motion, replan: Callable[[Behaviour, float], PlannedTrajectory]) -> Motion:
+                motion: Motion, replan: Callable[[Behaviour, float, PassingStep | None], PlannedTrajectory]) -> Motion:
     """A walker (inserted, or one whose walk an edit changed) walking into someone keeps clear of them, as people
     do on a pavement (the planner has no traffic for pedestrians, and the traffic model keeps edited agents
-    fixed): it passes a pedestrian with a sidestep (:data:`SIDESTEPS_M`, the first that clears everyone:
-    ``replan(behaviour, metres)``); failing that, it stops behind someone (or something) standing through the
-    log, or, already too close to stop walking, stands where it is. ``motion`` when nobody (but ``exclude``) is
-    in its way, or nothing of this clears it."""
+    fixed): it passes a pedestrian, or a sign or bin, with a step aside and back onto its path
+    (:data:`SIDESTEPS_M`, the first that clears everyone and keeps it on the pavement), else with a step aside for
+    good (``replan(behaviour, metres for good, passing step)``);
+    failing that, it stops behind someone (or something) standing through the log, or, already too close to stop
+    walking, stands where it is. ``motion`` when nobody (but ``exclude``) is in its way, or nothing of this
+    clears it."""
     states = draft.states
     hit = first_overlap(states, motion, size, exclude)
     if hit is None or _log_overlaps(states, exclude, *hit):
         return motion
     row = hit[0]
-    if agent_kind(states.categories[row]) == PEDESTRIAN:
-        for side in SIDESTEPS_M:
+    if agent_kind(states.categories[row]) != VEHICLE:  # a person, or a sign or bin on the pavement
+        meeting = _meeting(states, motion, size, *hit)
+        tries = [(0.0, dataclasses.replace(meeting, offset_m=side)) for side in SIDESTEPS_M]
+        for shift, passing in [*tries, *((side, None) for side in SIDESTEPS_M)]:
+            side = passing.offset_m if passing is not None else shift
             try:
-                passing = Motion.planned(replan(behaviour, side), "")
+                walk = Motion.planned(replan(behaviour, shift, passing), "")
             except EditRefused:
                 continue
-            if first_overlap(states, passing, size, exclude) is None:
-                return dataclasses.replace(passing, description=f"{motion.description}; steps {abs(side):g} m "
-                                           f"{'left' if side > 0 else 'right'} to pass {_name(draft, row)}")
+            if first_overlap(states, walk, size, exclude) is None and _keeps_footing(draft, walk, motion):
+                back = " and back" if passing is not None else ""
+                return dataclasses.replace(walk, description=f"{motion.description}; steps {abs(side):g} m "
+                                           f"{'left' if side > 0 else 'right'}{back} to pass {_name(draft, row)}")
     if not _stands_through_log(states, row):
         return motion  # it moves: the traffic model makes it wait, or the validation reports it
     waiting = behaviour.model_copy(update={"stop": StopSpec(behind=TargetRef(object_id=states.object_ids[row]))})
     try:
-        plan = replan(waiting, 0.0)
+        plan = replan(waiting, 0.0, None)
     except EditRefused as exc:  # too close to stop behind it walking: it waits where it is
         logger.debug("walker stands: %s", exc)
         return Motion.standing(start.xy, start.heading, states.num_steps,
@@ -422,9 +429,9 @@ def plan_modified(draft: Draft, row: int, behaviour: Behaviour, placement: Place
         _check_speed_reached(draft, plan, behaviour, start, size3, log, index, label, states.object_ids[row])
     motion = Motion.planned(plan, describe_behaviour(behaviour))
     if kind != VEHICLE and behaviour.stop is None and not behaviour.cross_street:
-        def replan(b: Behaviour, sidestep_m: float) -> PlannedTrajectory:
+        def replan(b: Behaviour, sidestep_m: float, passing: PassingStep | None) -> PlannedTrajectory:
             return _plan(draft, kind, b, start, size3, log, index, label, backfill=False,
-                         object_id=states.object_ids[row], sidestep_m=sidestep_m)
+                         object_id=states.object_ids[row], sidestep_m=sidestep_m, passing=passing)
 
         motion = _walk_clear(draft, behaviour, start, states.size[row], (EGO_ID, states.object_ids[row]), motion,
                              replan)

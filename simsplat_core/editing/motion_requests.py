@@ -234,15 +234,34 @@ class VehicleMotionRequest(_Common):
 
 
 @dataclass(frozen=True)
+class PassingStep:
+    """A walker's step aside to pass someone: ``offset_m`` sideways (+ left) from ``PASS_LEAD_M`` before the
+    point of its path nearest ``from_xy`` [2] until ``PASS_TRAIL_M`` after the one nearest ``until_xy`` [2]
+    (where its unshifted walk would meet the other person), then back onto its path."""
+
+    from_xy: np.ndarray
+    until_xy: np.ndarray
+    offset_m: float
+
+
+#: A passing step starts this far before the meeting and ends this far after it, m, easing over ``PASS_RAMP_M``.
+PASS_LEAD_M = 1.5
+PASS_TRAIL_M = 1.0
+PASS_RAMP_M = 1.5
+
+
+@dataclass(frozen=True)
 class PedestrianMotionRequest(_Common):
     """A pedestrian's new motion (fields of ``_Common`` plus):
 
     Attributes:
         cross_street: cross the road at the nearest crosswalk; jaywalk: straight across, away from crosswalks.
+        passing: a step aside to pass someone, back on the path afterwards (``None``: none).
     """
 
     cross_street: bool = False
     jaywalk: bool = False
+    passing: PassingStep | None = None
 
     @classmethod
     def from_behaviour(cls, behaviour: Behaviour, *, times: np.ndarray, frame_idx: np.ndarray, start: StartState,

@@ -185,10 +185,9 @@ def merge_onto(before: Route | None, s_join: float, after: Route, ramp_m: float,
     """
     p = before.position(s_join) if before is not None else np.asarray(point, dtype=np.float64)[:2]
     s_a, lateral = after.project(p)
-    if before is None:
-        ds = np.arange(-4 * STEP_M, after.length - s_a + STEP_M, STEP_M)
-    else:
-        ds = np.arange(0.0, max(after.length - s_a, 0.0) + STEP_M, STEP_M)
+    # sampled to the end of ``after`` and of the ramp (which may run on past it, straight), then 50 m on
+    sampled = max(after.length - s_a, ramp_m, 0.0) + STEP_M
+    ds = np.arange(-4 * STEP_M if before is None else 0.0, sampled, STEP_M)
     ds = np.concatenate([ds, [ds[-1] + 50.0]])  # run on past the end (straight)
     u = ds / max(ramp_m, 1e-6)
     offset = lateral + (final_offset_m - lateral) * quintic(u)
@@ -216,6 +215,13 @@ def merge_onto(before: Route | None, s_join: float, after: Route, ramp_m: float,
 def offset_route(route: Route, s_from: float, offset_m: float, ramp_m: float) -> Route:
     """``route`` shifted sideways by ``offset_m`` (positive = left) from ``s_from`` on, eased in over ``ramp_m``."""
     return merge_onto(route, s_from, route, ramp_m, final_offset_m=offset_m)
+
+
+def passing_route(route: Route, s_from: float, s_until: float, offset_m: float, ramp_m: float) -> Route:
+    """``route`` shifted sideways by ``offset_m`` (positive = left) from ``s_from``, eased in over ``ramp_m``,
+    and eased back onto it from ``s_until`` (at least ``ramp_m`` later) on: a step aside to pass someone."""
+    aside = offset_route(route, s_from, offset_m, ramp_m)
+    return merge_onto(aside, max(s_until, s_from + ramp_m), route, ramp_m, final_offset_m=0.0)
 
 
 def crosswalk_ends(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

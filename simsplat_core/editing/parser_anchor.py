@@ -119,6 +119,10 @@ def qualifier_length(words: Sequence[str], *, anchor: str, mover: str | None) ->
                 and (chunks.is_participle(words[j + 1]) or _span_at(words, j + 1))):
             j += 1  # "standing *and* waiting on the sidewalk": the description goes on
             continue
+        if words[j] == "not" and j + 1 < len(words) and chunks.is_participle(words[j + 1]):
+            j += 2  # "the grey car *not moving* to the left of us": a state of the anchor, not a motion to give
+            motion_start = None
+            continue
         if words[j] == "to" and j and words[j - 1] in chunks.TO_KEEPERS and _span_at(words, j + 1):
             j += 1  # "waiting to turn left", "going to the junction"
             continue

@@ -32,6 +32,9 @@ _CROSSABLE = (r"(?: over)?(?: (?:the|a) (?:street|road|lane|lanes|carriageway|cr
 #: Where a turn is made ("at the crossroads", "through the next crossing"): words that add nothing to it.
 _TURN_PLACE = (r"(?:at|in|into|through|across|on|by) (?:the |a )?(?:next |first |upcoming |coming |nearest )?"
                r"(?:" + voc.INTERSECTION_RX + r"|crossing)")
+#: Where a car reverses out of ("out of its parking space"): words that add nothing to the reversing.
+_OUT_OF_SPOT = (r"(?: out)?(?: of (?:its|the|his|her|their|a) (?:parking )?(?:spot|space|bay|place|slot|driveway|"
+                r"parking))?")
 _AMBIGUOUS_LANE = r"\b(?:change|changes|changing|switch|switches|swap|swaps)(?: the)? lanes?\b|\blane[- ]change\b"
 
 
@@ -43,8 +46,8 @@ def _lateral_rules(w: PredicateWork) -> None:
            r" sideways)?"
            r" " + _N + r" m (?:to the |towards the |over to the |to its )?(left|right)",
            lambda m: w.set("lateral_offset_m", float(m.group(1)) * (1 if m.group(2) == "left" else -1)))
-    w.take(r"reverse|reverses|reversing|back(?:s|ing)? (?:up|out|it up)|back up|(?:drive|drives|go|goes|move|moves|roll"
-           r"|rolls|head|heads|travel|travels)(?: it)? backwards?|(?:in|into) reverse(?: gear)?",
+    w.take(r"(?:reverse|reverses|reversing|back(?:s|ing)? (?:up|out|it up)|back up|(?:drive|drives|go|goes|move|moves"
+           r"|roll|rolls|head|heads|travel|travels)(?: it)? backwards?|(?:in|into) reverse(?: gear)?)" + _OUT_OF_SPOT,
            reverse)
 
     def lane(m: re.Match[str]) -> None:

@@ -3,9 +3,10 @@
 An inserted object placed exactly where the prompt says can leave the traffic no way to react: a car put a
 few metres in front of a faster one, a barrier inside a moving car's stopping distance, a pedestrian where a
 car turning across has already committed. ``editing.apply`` then tries the inserted rows a little further
-ahead or back along their lanes (shares :data:`ROOM_SHIFTS` of the placement's reach: the slack of an asked
-distance, ``placement.NUDGE_M`` otherwise) and keeps the first spot where :func:`traffic_copes`; when none
-does, the spot as asked, whose failures the validation reports.
+ahead or back along their lanes (shares :data:`ROOM_SHIFTS` of :func:`room_reach`: a fifth of an asked
+distance, at least 1.5 m, so that a said distance still reads as said; ``placement.NUDGE_M`` when none was
+said) and keeps the first spot where :func:`traffic_copes`; when none does, the spot as asked, whose failures
+the validation reports.
 """
 
 from __future__ import annotations
@@ -24,6 +25,18 @@ if TYPE_CHECKING:
 
 #: Shares of an inserted row's placement reach tried, in order, after the asked spot (share 0).
 ROOM_SHIFTS: tuple[float, ...] = (0.5, -0.5, 1.0, -1.0)
+#: The room search moves an inserted row at most this share of a said distance (at least ``ROOM_MIN_M``), m: a
+#: car asked 20 m ahead stays within 16-24 m; one asked 5 m behind within 3.5-6.5 m.
+ROOM_DISTANCE_SHARE = 0.2
+ROOM_MIN_M = 1.5
+
+
+def room_reach(distance_m: float | None, unsaid_m: float) -> float:
+    """How far (m) the room search may move an inserted row placed ``distance_m`` from its anchor (``unsaid_m``
+    when the prompt said no distance)."""
+    if distance_m is None:
+        return unsaid_m
+    return max(ROOM_MIN_M, ROOM_DISTANCE_SHARE * abs(distance_m))
 
 
 def searches_room(program: EditProgram, refinement: str) -> bool:

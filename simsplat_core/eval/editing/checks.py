@@ -64,6 +64,12 @@ NEXT_TO_M = 3.0
 PATH_TOL_M = 0.75
 #: An agent that reacts to an edit keeps within this of its logged path (a detour of at most a lane), metres.
 REACTION_PATH_M = 4.0
+#: A walker keeps to its path within this (metres) ...
+WALK_PATH_TOL_M = 0.5
+#: ... but may step up to this far aside (metres) while passing another pedestrian, one within
+#: ``PASSING_NEAR_M`` of it (metres, centres), as people do on a pavement.
+PASSING_ASIDE_M = 1.3
+PASSING_NEAR_M = 4.0
 #: The direction a path ends in is taken over its last this many metres (``_beyond_path_end``).
 END_DIRECTION_M = 1.0
 #: An inserted static object's box is within this share of its kind's catalogue box, per dimension.
@@ -598,9 +604,9 @@ def _check_delay(truth: SceneTruth, delay: float, before: AgentStates, after: Ag
     moved = float(np.linalg.norm(xy[-1] - xy[0]))
     v.measured["moved_m"] = moved
     v.require(moved > 1.0 or log_moved <= 1.0, f"moves {moved:.1f} m in total after the delay")
-    off = float(_path_distance(xy, before.xy[i, before.valid[i]]).max())
+    off, kept = _path_kept(before, after, object_id, WALK_PATH_TOL_M if pedestrian else PATH_TOL_M)
     v.measured["off_path_m"] = off
-    v.require(off <= (0.5 if pedestrian else PATH_TOL_M), f"leaves its path by {off:.1f} m")
+    v.require(kept, f"leaves its path by {off:.1f} m")
 
 
 def _check_path_kept(before: AgentStates, after: AgentStates, object_id: str, m: MotionIntent, v: Verdict) -> None:
@@ -611,12 +617,35 @@ def _check_path_kept(before: AgentStates, after: AgentStates, object_id: str, m:
     path = before.xy[i, before.valid[i]]
     if len(path) < 2 or np.linalg.norm(path[-1] - path[0]) < 1.0:
         return
-    off = float(_path_distance(after.xy[j, after.valid[j]], path).max())
+    off, kept = _path_kept(before, after, object_id,
+                           WALK_PATH_TOL_M if after.categories[j] == "pedestrian" else PATH_TOL_M)
     v.measured["off_path_m"] = off
-    tol = 0.5 if after.categories[j] == "pedestrian" else PATH_TOL_M
-    # a faster agent runs past the end of its logged path: only the part within it is comparable
-    v.require(off <= tol or _beyond_path_end(path, after.xy[j, after.valid[j]], tol),
-              f"leaves its path by {off:.1f} m")
+    v.require(kept, f"leaves its path by {off:.1f} m")
+
+
+def _path_kept(before: AgentStates, after: AgentStates, object_id: str, tol: float) -> tuple[float, bool]:
+    """``(largest distance of the agent's new positions from its logged path, m; whether it kept to it)``: within
+    ``tol``, except past the path's end (a faster agent runs on beyond it: only the part within it is comparable)
+    and, for a pedestrian, a step aside of at most :data:`PASSING_ASIDE_M` while passing another pedestrian."""
+    i, j = before.index(object_id), after.index(object_id)
+    path = before.xy[i, before.valid[i]]
+    steps = np.flatnonzero(after.valid[j])
+    xy = after.xy[j, steps]
+    off = _path_distance(xy, path)
+    loose = off > tol
+    if after.categories[j] == "pedestrian":
+        loose &= ~((off <= PASSING_ASIDE_M) & _passing_someone(after, j, steps))
+    kept = not loose.any() or _beyond_path_end(path, xy[loose], tol)
+    return float(off.max(initial=0.0)), kept
+
+
+def _passing_someone(states: AgentStates, row: int, steps: np.ndarray) -> np.ndarray:
+    """``[K]`` whether another pedestrian is within :data:`PASSING_NEAR_M` of agent ``row`` at each of ``steps``."""
+    others = np.array([r != row and c == "pedestrian" for r, c in enumerate(states.categories)])
+    if not others.any():
+        return np.zeros(len(steps), dtype=bool)
+    gap = np.linalg.norm(states.xy[others][:, steps] - states.xy[row, steps][None], axis=2)  # [O, K]
+    return ((gap <= PASSING_NEAR_M) & states.valid[others][:, steps]).any(axis=0)
 
 
 def _beyond_path_end(path: np.ndarray, xy: np.ndarray, tol: float) -> bool:

@@ -65,11 +65,23 @@ def test_an_object_asked_darker_gets_a_darkening_gain_and_one_that_reads_right_n
     assert (seen, gain) == ("white", 1.0)
 
 
-def test_chromatic_colours_are_not_exposure_matched():
-    red = ObjectCrop(np.tile(np.array([0.7, 0.1, 0.1], np.float32), (20, 20, 1)), np.ones((20, 20), bool),
-                     "vehicle", np.asarray(CAR), 0, "front", "obj")
-    assert exposure_gain([red], "blue")[1] == 1.0
-    assert exposure_gain([red], "white")[1] == 1.0
+def _flat(rgb: tuple[float, float, float]) -> ObjectCrop:
+    return ObjectCrop(np.tile(np.array(rgb, np.float32), (20, 20, 1)), np.ones((20, 20), bool), "vehicle",
+                      np.asarray(CAR), 0, "front", "obj")
+
+
+def test_a_hue_read_as_another_hue_or_a_grey_asked_of_a_hue_gets_no_gain():
+    red = _flat((0.7, 0.1, 0.1))
+    assert exposure_gain([red], "blue") == ("red", 1.0)
+    assert exposure_gain([red], "white") == ("red", 1.0)
+
+
+def test_a_dark_blue_read_as_black_is_brightened_until_it_reads_blue():
+    crops = [_flat((0.1, 0.1, 0.35))] * 2
+    seen, gain = exposure_gain(crops, "blue")
+    assert seen == "black" and gain > 1.0
+    lit = [ObjectCrop(np.clip(c.rgb * gain, 0, 1), c.mask, c.category, c.box_size, 0, "front", "obj") for c in crops]
+    assert describe_track(lit).colors[0] == "blue"
 
 
 def test_the_exposure_variant_scales_colours_and_round_trips_through_the_bank():

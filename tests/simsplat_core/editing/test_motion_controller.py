@@ -471,3 +471,27 @@ def test_a_car_whose_log_turns_left_goes_straight_when_asked(world, before_stop_
     plan = plan_vehicle(req, world["lanes"], world["ctx"])
     assert abs(np.rad2deg(plan.heading[-1] - plan.heading[0])) < 10.0
     assert world["lanes"].nearest(plan.xy).distance.max() < 0.3
+
+
+@pytest.mark.parametrize("into_turn_deg", [5.0, 15.0])
+def test_a_car_just_into_its_turn_can_still_go_straight_on(world, into_turn_deg: float) -> None:
+    """A car whose log turns right at the junction, asked to go straight on once it has turned a few degrees (on
+    the approach lane, or already on the turning connector), leaves its turn and drives straight through the
+    junction; well into the turn it can only keep turning."""
+    log_plan = _car(world, Behaviour(turn="right"), lane=1, speed=8.0, n=120)
+    times, frames = log_plan.times, log_plan.frame_idx
+    log = LogTrajectory(log_plan.xy, log_plan.heading, log_plan.speed, log_plan.valid)
+
+    def straight_from(deg: float) -> PlannedTrajectory:
+        k = int(np.flatnonzero(np.abs(np.rad2deg(log_plan.heading)) >= deg)[0])
+        start = StartState(k, log_plan.xy[k], float(log_plan.heading[k]), float(log_plan.speed[k]))
+        req = VehicleMotionRequest.from_behaviour(Behaviour(turn="straight"), times=times, frame_idx=frames,
+                                                  start=start, size=CAR, log=log)
+        return plan_vehicle(req, world["lanes"], world["ctx"])
+
+    plan = straight_from(into_turn_deg)
+    assert abs(np.rad2deg(log_plan.heading[-1]) + 90.0) < 8.0  # the log goes south
+    assert abs(np.rad2deg(plan.heading[-1])) < 5.0  # east, the way it came
+    assert plan.xy[-1, 0] > log_plan.xy[-1, 0] + 10.0
+    assert world["lanes"].nearest(plan.xy[-20:]).distance.max() < 0.3
+    assert abs(np.rad2deg(straight_from(45.0).heading[-1]) + 90.0) < 8.0

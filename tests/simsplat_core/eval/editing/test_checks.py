@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -307,3 +309,43 @@ def test_a_speed_up_runs_on_past_a_log_that_ends_standing(truth, before) -> None
     assert ok.passed, ok.reason
     swerving = straight(s_fast, np.where(s_fast > stop_s + 5.0, 3.0, 0.0))
     assert "leaves its path" in check_states(truth, intent, _obs(halting, swerving)).reason
+
+
+def test_a_faster_walker_may_step_aside_only_to_pass_someone(truth, before) -> None:
+    """A walker told to walk faster keeps its path within half a metre, except for a step aside of about a metre
+    while another pedestrian is close by (passing them); the same step with nobody about leaves its path."""
+    walkers = [a for a in truth.world.agents if a.category == "pedestrian" and a.object_id in before.object_ids
+               and before.valid[before.index(a.object_id)].all() and float(np.min(a.traj["speed"])) > 0.5]
+    walker, other = walkers[0], next(a for a in truth.world.agents if a.category == "pedestrian"
+                                     and a is not walkers[0] and a.object_id in before.object_ids)
+    row, far = before.index(walker.object_id), before.index(other.object_id)
+    t = before.times - before.times[0]
+    target = 1.25 * float(walker.traj["speed"][0])
+    s = walker.traj["s"][0] + target * t
+    heading = walker.motion.path.heading(s)
+    left = np.stack([-np.sin(heading), np.cos(heading)], axis=1)
+    bump = np.clip(1.0 - np.abs(t - t[-1] / 3.0) / 1.0, 0.0, 1.0)  # [T] up to 1 m aside around a third of the way
+    xy = walker.motion.path.position(s) + bump[:, None] * left
+    after = before.with_agent(walker.object_id, "pedestrian", "edited", xy=xy, heading=heading,
+                              speed=np.gradient(s, before.times), valid=np.ones(len(t), bool), size=before.size[row],
+                              node_id=int(before.node_ids[row]))
+    intent = EditIntent("modify", (walker.object_id,), motion=MotionIntent(
+        speed_mps=target, speed=SpeedWords("absolute", target, "m/s")))
+
+    def with_other_at(spot: np.ndarray) -> tuple[AgentStates, AgentStates]:
+        states = []
+        for base in (before, after):
+            other_xy = base.xy.copy()
+            other_xy[far] = spot  # standing there, in the log and after the edit alike
+            valid = base.valid.copy()
+            valid[far] = True
+            states.append(dataclasses.replace(base, xy=other_xy, valid=valid,
+                                              speed=np.where(np.arange(base.num_agents)[:, None] == far, 0.0,
+                                                             base.speed)))
+        return states[0], states[1]
+
+    peak = int(np.argmax(bump))
+    passing = check_states(truth, intent, _obs(*with_other_at(xy[peak] - 1.2 * left[peak])))
+    assert passing.passed, passing.reason
+    alone = check_states(truth, intent, _obs(*with_other_at(xy[peak] + 40.0 * left[peak])))
+    assert not alone.passed and "leaves its path" in alone.reason
