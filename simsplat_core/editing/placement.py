@@ -521,11 +521,9 @@ def _clear(ctx: _Context, placed: PlacedPose, spot: _Spot, occupied: AgentStates
     what = f"{occupied.categories[blocked[0]]} {first!r}" if first != EGO_ID else "the ego vehicle"
     limit = NUDGE_M if ctx.placement.distance_m is None else distance_slack(ctx.placement.distance_m)
     steps = np.arange(NUDGE_STEP_M, limit + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
-    deltas = sorted([*steps.tolist(), *(-steps).tolist()], key=lambda d: (abs(d), -d))
-    if ctx.placement.distance_m is None and spot.side == "behind":  # no distance said: only away from the anchor
-        deltas = [d for d in deltas if d < 0]
-    elif ctx.placement.distance_m is None and spot.side == "in_front_of":
-        deltas = [d for d in deltas if d > 0]
+    # no distance said: away from the anchor first, then closer to it (still clear of it and on its side)
+    away = {"behind": -1.0, "in_front_of": 1.0}.get(spot.side or "", 1.0) if ctx.placement.distance_m is None else 1.0
+    deltas = sorted([*steps.tolist(), *(-steps).tolist()], key=lambda d: (abs(d), -d * away))
     along = _nudger(ctx, placed, spot.side, limit)
     for d in deltas:
         xy, heading = along(d)

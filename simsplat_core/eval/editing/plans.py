@@ -201,6 +201,21 @@ def _free(truth: SceneTruth, xy: np.ndarray, heading: float, size: tuple[float, 
                                       np.array([h]), (float(sz[0]), float(sz[1])), margin)[0] for c, h, sz in boxes)
 
 
+#: Metres from one cone of a row to the next (the editor's row spacing between boxes plus a cone's length).
+ROW_STEP_M = 1.5 + CONE_FOOTPRINT[0]
+
+
+def _row_free(truth: SceneTruth, distance: float, side: int, count: int) -> bool:
+    """Whether a row of ``count`` cones starting ``distance`` ahead in the ego's lane (``side`` as
+    :func:`_ego_lane_spot`) and running on along it has every cone's spot free (a row reaches past its first
+    cone: a car standing a few metres further leaves no room for it)."""
+    for k in range(1, count):
+        found = _ego_lane_spot(truth, distance + k * ROW_STEP_M, side)
+        if found is None or not _free(truth, *found, size=CONE_FOOTPRINT, margin=1.5):
+            return False
+    return True
+
+
 def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, size: tuple[float, ...], skip: str = "",
                lateral: float = 0.0, accel: float = 2.0, margin: float = CLEARANCE_M, keep_gap: bool = False) -> bool:
     """Driving ``path`` from arc length ``s0`` at ``v0`` m/s, changing to ``v1`` at ``accel`` m/s^2 (shifted
@@ -384,10 +399,11 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
                 {"A": words, "d": distance_phrase(distance, rng)}))
             n = int(rng.integers(3, 6))
             asset = AssetIntent("static", "traffic cone", "orange", count=n, description=f"a row of {n} cones")
-            out.append(Draft("static_row", EditIntent(
-                "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "same")),
-                {"n": count_word(n, rng), "items": pick(rng, ("cones", "traffic cones", "orange cones")),
-                 "d": distance_phrase(distance, rng)}))
+            if _row_free(truth, distance, 0, n):
+                out.append(Draft("static_row", EditIntent(
+                    "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, "same")),
+                    {"n": count_word(n, rng), "items": pick(rng, ("cones", "traffic cones", "orange cones")),
+                     "d": distance_phrase(distance, rng)}))
         for side, name in ((1, "left"), (-1, "right")):
             if ego_pos.lane is None or not 0 <= ego_pos.lane - side < truth.layout.lanes_h:
                 continue
@@ -399,6 +415,8 @@ def plan_add_static(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
                     {"A": words, "d": distance_phrase(distance, rng), "side": name}))
                 n = int(rng.integers(3, 6))
                 asset = AssetIntent("static", "traffic cone", "orange", count=n, description=f"a row of {n} cones")
+                if not _row_free(truth, distance, side, n):
+                    continue
                 out.append(Draft("static_row_side", EditIntent(
                     "insert", asset=asset, placement=PlacementIntent("in_lane", EGO, distance, name)),
                     {"n": count_word(n, rng), "items": pick(rng, ("cones", "traffic cones", "orange cones")),

@@ -405,3 +405,18 @@ def test_a_row_shifted_for_room_keeps_to_the_road_or_to_the_asked_area(world) ->
     blocked = _with_box(_ego_only(world), "van", "vehicle", moved[1].xy, moved[1].heading, CAR)
     with pytest.raises(EditRefused, match="no room"):
         shift_row(row, 6.0, **{**kw, "occupied": blocked})
+
+
+def test_a_cone_in_front_of_a_queued_car_with_no_distance_said_may_stand_closer_than_usual(world) -> None:
+    """No distance said, a cone goes a usual gap in front of the anchor; when a car stands there (a queue), it
+    goes into the gap between the two, closer to the anchor, rather than being refused or put past the car."""
+    parked = _parked_anchor(world, 40.0)
+    cone = (0.4, 0.4, 0.7)
+    free = _place(world, Placement(relation="in_front_of"), "static", cone, anchor=parked, occupied=_ego_only(world))
+    gap = float(np.dot(free.xy - parked.xy, [np.cos(parked.heading), np.sin(parked.heading)])) - CAR[0] / 2
+    forward = np.array([np.cos(parked.heading), np.sin(parked.heading)])
+    queued_xy = parked.xy + forward * (CAR[0] + gap - 0.2)  # its rear bumper just past where the cone would go
+    occupied = _with_box(_ego_only(world), "queued", "vehicle", queued_xy, parked.heading, CAR)
+    placed = _place(world, Placement(relation="in_front_of"), "static", cone, anchor=parked, occupied=occupied)
+    ahead = float(np.dot(placed.xy - parked.xy, forward))
+    assert CAR[0] / 2 < ahead < float(np.dot(free.xy - parked.xy, forward)) and "nudged" in placed.note
