@@ -158,7 +158,7 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
 
 
 #: Times a program is re-applied with other assets when an inserted object does not read as the asked colour.
-LOOK_RETRIES = 2
+LOOK_RETRIES = 1
 
 
 def _run_with_room(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str]

@@ -2,9 +2,9 @@
 
 An asset keeps the light of the scene it was cut from: a white car whose rear was in shade there shows a
 grey rear wherever it is inserted, and "add a white car 20 m ahead" would put a silver one on the road.
-White, silver, grey and black differ only in lightness, so the fix is an exposure gain, not a recolour; a hue
-read as its lighter or darker neighbour (red as pink, dark blue as black) may be fixed the same way; a hue read
-as another hue (blue as purple) is not, and another asset is tried.
+White, silver, grey and black differ only in lightness, so the fix is an exposure gain, not a recolour. A hue
+is checked too but never exposure-matched: one that reads as another colour (blue as purple) is another asset's
+job.
 
 After the edited graph is built, every added node whose command asked a colour (a vehicle's or
 static object's body, a pedestrian's top) is rendered with the whole edited scene, occlusions included, at up
@@ -13,7 +13,7 @@ to ``LOOK_FRAMES`` frames where it exists, from the cameras its box (grown by ``
 that captions the scene for grounding) names its main colour from the crops with at least ``MIN_LOOK_PIXELS``
 of its pixels; it reads as asked when the track's colour is the asked one and the crops that are cover
 ``LOOK_SHARE`` of its pixels. Otherwise the crops are re-captioned under the gains of ``BRIGHTER_GAINS``
-(asked grey lighter) or ``DARKER_GAINS`` (darker; a hue: both), and the first gain under which they read as
+(asked grey lighter) or ``DARKER_GAINS`` (darker; greys only), and the first gain under which they read as
 asked becomes an exposure variant of the asset (``asset_colors.exposed``, id ``<asset>~exp<gain>``): the delta names the
 variant, so a stored edit rebuilds to the same pixels. The gain is verified on a render of the variant and
 raised along its ladder when it falls short (``VERIFY_ROUNDS`` renders at most). A node that still does not
@@ -173,7 +173,8 @@ def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]
     """``(colour the crops read as, gain)`` (module docstring): gain ``1.0`` when they already read as ``wanted``
     in ``LOOK_SHARE`` of their area, else the first gain on the ladder that makes them, else the gain under
     which the most area reads as ``wanted`` with the track reading so too, else ``1.0``. ``wanted`` and the
-    read colour must both be achromatic for a gain.
+    read colour must both be achromatic for a gain (a gain that darkens a blue reading partly black makes it
+    read black).
 
     Raises:
         ValueError: no crops.
@@ -181,16 +182,12 @@ def exposure_gain(crops: Sequence[ObjectCrop], wanted: str) -> tuple[str, float]
     if not crops:
         raise ValueError("exposure_gain needs at least one crop")
     seen, share, names = _read(crops, wanted)
-    if (seen == wanted and share >= LOOK_SHARE) or (wanted in ACHROMATIC_NAMES and seen not in ACHROMATIC_NAMES):
+    if (seen == wanted and share >= LOOK_SHARE) or seen not in ACHROMATIC_NAMES or wanted not in ACHROMATIC_NAMES:
         return seen, 1.0
-    ladder: tuple[float, ...]
-    if wanted in ACHROMATIC_NAMES:
-        # the track reads right but parts of it do not: lighter if most of the rest reads darker
-        off = _main_other(crops, names, wanted) if seen == wanted else seen
-        lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(off)
-        ladder = BRIGHTER_GAINS if lighter else DARKER_GAINS
-    else:  # a hue read as a lighter or darker neighbour (red as pink, dark blue as black): both ways
-        ladder = DARKER_GAINS + BRIGHTER_GAINS
+    # the track reads right but parts of it do not: lighter if most of the rest reads darker
+    off = _main_other(crops, names, wanted) if seen == wanted else seen
+    lighter = ACHROMATIC_NAMES.index(wanted) > ACHROMATIC_NAMES.index(off)
+    ladder = BRIGHTER_GAINS if lighter else DARKER_GAINS
     best = (share if seen == wanted else -1.0, 1.0)
     for gain in ladder:
         track, part, _ = _read(crops, wanted, gain)

@@ -70,7 +70,7 @@ WALK_PATH_TOL_M = 0.5
 #: ``PASSING_NEAR_M`` of it (metres, centres), as people do on a pavement.
 PASSING_ASIDE_M = 1.3
 PASSING_NEAR_M = 4.0
-#: The direction a path ends in is taken over its last this many metres (``_beyond_path_end``).
+#: The direction a path ends in is taken over its last this many metres (``_across_beyond_end``).
 END_DIRECTION_M = 1.0
 #: An inserted static object's box is within this share of its kind's catalogue box, per dimension.
 KIND_SIZE_TOL = 0.2
@@ -624,19 +624,20 @@ def _check_path_kept(before: AgentStates, after: AgentStates, object_id: str, m:
 
 
 def _path_kept(before: AgentStates, after: AgentStates, object_id: str, tol: float) -> tuple[float, bool]:
-    """``(largest distance of the agent's new positions from its logged path, m; whether it kept to it)``: within
-    ``tol``, except past the path's end (a faster agent runs on beyond it: only the part within it is comparable)
-    and, for a pedestrian, a step aside of at most :data:`PASSING_ASIDE_M` while passing another pedestrian."""
+    """``(largest distance of the agent's new positions from its logged path, m; whether it kept to it)``: every
+    position within ``tol`` of the path, or, past the path's end, of its straight continuation (a faster agent
+    runs on beyond it: only the part within it is comparable); a pedestrian may be up to
+    :data:`PASSING_ASIDE_M` off while passing another pedestrian."""
     i, j = before.index(object_id), after.index(object_id)
     path = before.xy[i, before.valid[i]]
     steps = np.flatnonzero(after.valid[j])
     xy = after.xy[j, steps]
     off = _path_distance(xy, path)
-    loose = off > tol
+    deviation = np.minimum(off, _across_beyond_end(path, xy))
+    allowed = np.full(len(steps), tol)
     if after.categories[j] == "pedestrian":
-        loose &= ~((off <= PASSING_ASIDE_M) & _passing_someone(after, j, steps))
-    kept = not loose.any() or _beyond_path_end(path, xy[loose], tol)
-    return float(off.max(initial=0.0)), kept
+        allowed[_passing_someone(after, j, steps)] = max(tol, PASSING_ASIDE_M)
+    return float(off.max(initial=0.0)), bool(np.all(deviation <= allowed))
 
 
 def _passing_someone(states: AgentStates, row: int, steps: np.ndarray) -> np.ndarray:
@@ -648,20 +649,21 @@ def _passing_someone(states: AgentStates, row: int, steps: np.ndarray) -> np.nda
     return ((gap <= PASSING_NEAR_M) & states.valid[others][:, steps]).any(axis=0)
 
 
-def _beyond_path_end(path: np.ndarray, xy: np.ndarray, tol: float) -> bool:
-    """Whether the points off ``path`` all lie past its end, continuing straight along its last heading (the
-    direction of its last ``END_DIRECTION_M``: a log that ends standing repeats its last point)."""
-    off = _path_distance(xy, path) > tol
+def _across_beyond_end(path: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """``[K]`` how far each point lies to the side of ``path`` 's straight continuation past its end, along its
+    last heading (the direction of its last ``END_DIRECTION_M``: a log that ends standing repeats its last
+    point); ``inf`` for points not past the end."""
+    out = np.full(len(xy), np.inf)
     end = path[-1]
     back = np.flatnonzero(np.linalg.norm(path - end, axis=1) >= END_DIRECTION_M)
     if not back.size:
-        return False
+        return out
     direction = end - path[back[-1]]
     direction = direction / float(np.linalg.norm(direction))
-    rel = xy[off] - end
-    along = rel @ direction
-    across = np.abs(rel[:, 0] * direction[1] - rel[:, 1] * direction[0])
-    return bool(np.all(along > 0) and np.all(across <= tol))
+    rel = xy - end
+    past = rel @ direction > 0
+    out[past] = np.abs(rel[past, 0] * direction[1] - rel[past, 1] * direction[0])
+    return out
 
 
 # ---------------------------------------------------------------------------------------------- entry point
