@@ -282,7 +282,7 @@ def insert(draft: Draft, command: EditCommand, index: int) -> CommandOutcome:
                               lanes=draft.ctx.lanes, map_ctx=draft.ctx.map_ctx, occupied=draft.states,
                               frame=int(draft.states.frame_idx[step]), reach=reach, category=asset.category)
         if draft.room_shift and movable(command):
-            row = shift_row(row, draft.room_shift * room_reach(placement.distance_m, NUDGE_M), spacing_m=gap,
+            row = shift_row(row, draft.room_shift * room_reach(placement.distance_m), spacing_m=gap,
                             size=asset.size, lanes=draft.ctx.lanes,
                             map_ctx=draft.ctx.map_ctx, occupied=draft.states,
                             frame=int(draft.states.frame_idx[step]), why=ROOM_NOTE,

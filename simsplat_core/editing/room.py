@@ -4,9 +4,9 @@ An inserted object placed exactly where the prompt says can leave the traffic no
 few metres in front of a faster one, a barrier inside a moving car's stopping distance, a pedestrian where a
 car turning across has already committed. ``editing.apply`` then tries the inserted rows a little further
 ahead or back along their lanes (shares :data:`ROOM_SHIFTS` of :func:`room_reach`: a fifth of an asked
-distance, at least 1.5 m, so that a said distance still reads as said; ``placement.NUDGE_M`` when none was
-said) and keeps the first spot where :func:`traffic_copes`; when none does, the spot as asked, whose failures
-the validation reports.
+distance, at least 1.5 m, so that a said distance still reads as said; 2 m when none was said) and keeps
+the first spot where :func:`traffic_copes`; when none does, the spot as asked, whose failures the validation
+reports.
 """
 
 from __future__ import annotations
@@ -31,11 +31,16 @@ ROOM_DISTANCE_SHARE = 0.2
 ROOM_MIN_M = 1.5
 
 
-def room_reach(distance_m: float | None, unsaid_m: float) -> float:
-    """How far (m) the room search may move an inserted row placed ``distance_m`` from its anchor (``unsaid_m``
-    when the prompt said no distance)."""
+#: ... and at most this far (m) when no distance was said ("next to the man", "behind the bus"): a step, not
+#: another spot.
+ROOM_UNSAID_M = 2.0
+
+
+def room_reach(distance_m: float | None) -> float:
+    """How far (m) the room search may move an inserted row placed ``distance_m`` from its anchor (``None``: the
+    prompt said no distance)."""
     if distance_m is None:
-        return unsaid_m
+        return ROOM_UNSAID_M
     return max(ROOM_MIN_M, ROOM_DISTANCE_SHARE * abs(distance_m))
 
 

@@ -22,7 +22,7 @@ from simsplat_core.editing.joining import JOIN_DECEL_MPS2
 from simsplat_core.editing.motion_glue import first_overlap, making_room, plan_inserted, plan_modified
 from simsplat_core.editing.motion_requests import FOLLOW_GAP_M, StartState
 from simsplat_core.editing.options import DEFAULT_OPTIONS
-from simsplat_core.editing.placement import NUDGE_M, PlacedPose, distance_slack
+from simsplat_core.editing.placement import PlacedPose, distance_slack
 from simsplat_core.editing.procedural_assets import procedural_asset
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.editing.room import room_reach
@@ -556,7 +556,7 @@ def test_an_insert_the_traffic_cannot_take_moves_within_its_slack(ctx, monkeypat
     assert "so that the traffic can react" in edited.outcomes[0].summary
     cone = edited.states.index("inserted_00")
     ahead = float(np.linalg.norm(edited.states.xy[cone, 0] - ctx.states.xy[e, 0]))
-    assert 0.1 < abs(ahead - 4.0) <= room_reach(4.0, NUDGE_M) + 0.1
+    assert 0.1 < abs(ahead - 4.0) <= room_reach(4.0) + 0.1
     monkeypatch.setattr(apply_module, "ROOM_SHIFTS", ())
     as_asked = apply_edit(ctx, program)
     assert collision_steps(as_asked.states, [as_asked.states.index("ego")]).static.any() or not \
