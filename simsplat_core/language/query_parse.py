@@ -207,11 +207,12 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     # crossing with a direction
     ("direction", 0, _ING_CROSS + _CROSS_OBJ + r" from " + _DIR + r" (?:to|towards|toward|over to|into) " + _DIR),
     ("direction", 0, _ING_CROSS + _CROSS_OBJ + r" " + _SIDE + r"[- ]to[- ]" + _SIDE),
-    ("direction", 0, _ING_CROSS + _CROSS_OBJ + r" (?:over )?(?:to|towards|toward|onto) " + _DIR),
+    ("direction", 0, _ING_CROSS + _CROSS_OBJ + r" (?:over )?(?:to|towards|toward|onto) " + _DIR + r"(?! of\b)"),
     ("direction", 0, r"from " + _DIR + r" (?:to|towards|toward|over to|into) " + _DIR),
     ("direction", 0, r"\b" + _SIDE + r"[- ]to[- ]" + _SIDE),
+    # ("not moving *to the left of the ego*": a place, not a direction)
     ("direction", 0, r"(?:walking|walks|moving|moves|heading|heads|going|goes|running|runs)(?: over)? "
-                     r"(?:to|towards|toward) " + _DIR),
+                     r"(?:to|towards|toward) " + _DIR + r"(?! of\b)"),
     # turns and lane changes (directional vehicle motion)
     ("motion", 0, r"(?:turning|turns|turn|making|makes|doing|does|taking|takes|hanging|hangs|swinging|swings"
                   r"|veering|veers|bearing|bears|about to turn)(?: a| an)? (?:to the )?"

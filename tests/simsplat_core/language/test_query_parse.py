@@ -180,6 +180,13 @@ def test_turn_direction_is_motion_and_side_is_location() -> None:
     assert parsed.sector == "on the right"
 
 
+def test_moving_to_the_left_of_something_is_a_place_not_a_direction() -> None:
+    parsed = parse_query("the grey vehicle not moving to the left of the ego car")
+    assert parsed.motion == "not moving" and parsed.crossing_direction is None
+    assert parsed.sector.startswith("to the left")
+    assert parse_query("the man walking to the left").crossing_direction == "right_to_left"
+
+
 def test_group_words_and_plurals() -> None:
     assert parse_query("all the white vans").group
     assert parse_query("each pedestrian standing still").group
