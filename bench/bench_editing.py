@@ -13,8 +13,8 @@ it is only read (the evaluation's tables go to ``--eval-out``, default a tempora
    cameras at 240x160), timed separately; ``--repeats`` runs, the median reported, and the first run of the
    prompt (its phrases not yet in the text encoder's cache) in full. Torch uses ``--threads`` threads (the
    target is <= 20 s on 2 cores).
-   Then the prompts of ``LOOK_PROMPTS`` (inserts in an achromatic colour, the ones the look check renders and,
-   at worst, re-applies with another asset: ``editing.look_check``) are timed the same way.
+   Then the prompts of ``LOOK_PROMPTS`` (inserts asked in a colour, which the look check renders and, at worst,
+   re-applies with another asset: ``editing.look_check``) are timed the same way.
 2. **The evaluation** (``tasks.editing_eval.evaluate_editing_run``): completion per (method, category),
    infeasible prompts refused, fidelity per category next to the unedited test PSNR, failures grouped by
    reason.
@@ -59,7 +59,8 @@ logger = logging.getLogger("bench.editing")
 
 #: Inserts asked in white / silver / gray / black: the look check renders the edited scene for them.
 LOOK_PROMPTS = ("put a white car in our lane 20 m ahead", "add a silver van 12 m ahead of us in our lane",
-                "add a black SUV in the left lane 15 m ahead", "place a white pickup 10 m ahead of us")
+                "add a black SUV in the left lane 15 m ahead", "place a white pickup 10 m ahead of us",
+                "add a blue hatchback in our lane 15 m ahead", "put a yellow van 20 m ahead in the left lane")
 
 
 def time_one_edit_per_category(store_root: str, seq_id: str, repeats: int) -> dict:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import difflib
 import logging
 import re
+from collections.abc import Sequence
 
 from pydantic import ValidationError
 
@@ -45,6 +46,20 @@ COMPLEMENT_PREPOSITIONS = ("before", "behind", "until", "till", "to", "into", "o
                            "over", "from", "in front of", "ahead of")
 PLACEMENT_PREPOSITIONS = (*COMPLEMENT_PREPOSITIONS, "next to", "beside", "left of", "right of", "to the left of",
                           "to the right of", "on", "in", "near", "alongside")
+#: Prepositions that place an object relative to the ego ("the bus *in front of us*").
+_EGO_RELATIVE = ("in front of", "ahead of", "behind", "to the left of", "to the right of", "left of", "right of",
+                 "next to", "beside", "alongside")
+
+
+def _ego_relative_length(tokens: Sequence[str], j: int) -> int:
+    """Length of an ego-relative location phrase at ``tokens[j]`` ("in front of me", "behind the ego car"), 0."""
+    k = chunks.match(tokens, j, _EGO_RELATIVE)
+    if not k:
+        return 0
+    ego = chunks.match(tokens, j + k, lex.EGO_WORDS)
+    return k + ego if ego else 0
+
+
 #: Words after a removed object that add nothing ("delete the bus from the scene").
 _REMOVE_TAIL = re.compile(r"(?:(?:out|away|off|completely|entirely|too|as well|also|now|for good|altogether"
                           r"|from|out of|off of|of|the|this|whole|scene|road|image|picture|video|frame|frames|world"
@@ -219,6 +234,13 @@ class PromptParser(PromptState):
                                      exclude=PLACEMENT_PREPOSITIONS if placing else COMPLEMENT_PREPOSITIONS)
         if not spans:
             return False
+        if not placing and (ego := _ego_relative_length(tokens, spans[-1][1])):
+            # "stop the bus *in front of us*": where the ego is describes the bus (no stop place), and so does a
+            # participle after it ("the pedestrian in front of me *crossing the street*")
+            end = spans[-1][1] + ego
+            if end < len(tokens) and chunks.is_participle(tokens[end]):
+                end = chunks.clause_tail(tokens, end + 1, relative=False)
+            spans[-1] = (spans[-1][0], end)
         j = spans[-1][1]
         if start == 1 and tokens[j : j + 1] and tokens[j] in lex.PARTICLES:  # "slow the bus down"
             particle, j = [tokens[j]], j + 1

@@ -232,11 +232,28 @@ def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, s
     gap = FOLLOW_GAP_M + VehicleMotionRequest.headway_s * max(v0, v1) if keep_gap else 0.0
     xy, heading = path.position(s + gap / 2.0), path.heading(s + gap / 2.0)
     xy = xy + lateral * np.stack([-np.sin(heading), np.cos(heading)], axis=1)
-    foot = (float(size[0]) + gap, float(size[1]))
+    return _runs_clear(truth, xy, heading, (float(size[0]) + gap, float(size[1])), skip, margin)
+
+
+def _runs_clear(truth: SceneTruth, xy: np.ndarray, heading: np.ndarray, foot: tuple[float, float], skip: str,
+                margin: float) -> bool:
+    """A box of ``foot`` at ``xy [T, 2]`` / ``heading [T]`` overlaps (grown by ``margin``) neither the ego nor any
+    agent but ``skip``, step by step over their logs."""
     others = [(truth.ego_xy, truth.ego_heading, EGO_SIZE)] + [
         (o.traj["xy"], o.traj["heading"], o.size) for o in truth.world.agents if o.object_id != skip]
     return not any(footprints_overlap(xy, heading, foot, oxy, oh, (float(osz[0]), float(osz[1])), margin).any()
                    for oxy, oh, osz in others)
+
+
+def _delay_clear(truth: SceneTruth, agent: Agent, delay: float) -> bool:
+    """Whether ``agent`` setting off ``delay`` seconds late (standing at its start, then driving its logged
+    path as logged) runs into nobody replaying the log: a car close behind it (the ego first) would run into it,
+    and an editor that keeps the traffic replaying its log rightly refuses that."""
+    t = truth.world.times
+    late = np.interp(np.maximum(t - delay, t[0]), t, agent.traj["s"])
+    path = agent.motion.path
+    return _runs_clear(truth, path.position(late), path.heading(late),
+                       (float(agent.size[0]), float(agent.size[1])), agent.object_id, 0.0)
 
 
 def _ego_lane_spot(truth: SceneTruth, distance: float, side: int = 0) -> tuple[np.ndarray, float] | None:
@@ -626,8 +643,9 @@ def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Gen
                              slot))
         if moving:
             delay = float(pick(rng, ("1", "1.5", "2")))
-            out.append(Draft("vehicle_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
-                             {**slot, "t": seconds_phrase(delay, rng)}))
+            if _delay_clear(truth, agent, delay):
+                out.append(Draft("vehicle_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
+                                 {**slot, "t": seconds_phrase(delay, rng)}))
         asset, words = _vehicle_asset(pools, rng, avoid=(agent.subtype, agent.appearance["color"]))
         out.append(Draft("vehicle_replace", EditIntent("replace", (oid,), asset=asset), {**slot, "A": words}))
     return out

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 from collections import Counter
 
 import numpy as np
 
 from simsplat_core.eval.editing.intents import EGO
-from simsplat_core.eval.editing.plans import _clear_run
+from simsplat_core.eval.editing.plans import _clear_run, _delay_clear
 from simsplat_core.eval.editing.prompts import CATEGORIES, INFEASIBLE, PromptConfig, build_prompt_set, quotas
 from simsplat_core.eval.editing.references import ABSENT_COLORS
 from simsplat_core.eval.editing.truth import world_of_log
@@ -169,3 +170,20 @@ def test_a_run_behind_a_leader_within_the_editors_following_gap_is_not_clear(tru
     s_behind = line.project(xy[0]) - float(leader.size[0]) - 2.0  # its front 2 m from the leader's rear
     assert _clear_run(truth, line, s_behind, v, v, tuple(leader.size), skip="ego", margin=0.0)
     assert not _clear_run(truth, line, s_behind, v, v, tuple(leader.size), skip="ego", margin=0.0, keep_gap=True)
+
+
+def test_a_delay_a_close_follower_replaying_its_log_would_run_into_is_not_asked(truths) -> None:
+    """A car followed closely along its own path (its follower replays the log: the benchmark's ego does) may not
+    be asked to set off 2 s late: the follower would run into it and the editor rightly refuses."""
+    truth = truths[0]
+    lead = next(a for a in truth.world.agents if a.category == "vehicle" and float(a.traj["speed"].min()) > 3.0)
+    t = truth.world.times
+    lag = (float(lead.size[0]) + 2.0) / float(np.mean(lead.traj["speed"]))  # 2 m behind its rear bumper
+    s_follow = np.interp(t - lag, t, lead.traj["s"], left=float(lead.traj["s"][0]) - lag * lead.traj["speed"][0])
+    follower = dataclasses.replace(lead, object_id="follower", traj={
+        **lead.traj, "xy": lead.motion.path.position(s_follow), "heading": lead.motion.path.heading(s_follow)})
+    crowded = dataclasses.replace(truth, world=dataclasses.replace(truth.world, agents=[*truth.world.agents,
+                                                                                         follower]))
+    assert not _delay_clear(crowded, lead, 2.0)
+    # set off on time, the follower 2 m behind is in nobody's way: only the delay makes the run unclear
+    assert _delay_clear(crowded, lead, 0.0) == _delay_clear(truth, lead, 0.0)
