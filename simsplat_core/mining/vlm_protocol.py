@@ -9,25 +9,34 @@ The loop asks a client three things:
    agents' trajectories and the validation facts: does it follow the prompt, how plausible is it (1..4),
    why, and which parameters to change for the next attempt (:class:`Judgement`).
 
-Implementations: the OpenAI-compatible HTTP client (``mining.openai_vlm``) and a rule-based offline stand-in.
+Implementations: the OpenAI-compatible HTTP client (``mining.openai_vlm``) and the rule-based offline client
+(``mining.rule_client``). Besides what a VLM reads (images and text), the requests carry optional structured
+facts -- :attr:`SceneSummary.facts`, :attr:`JudgeRequest.before` / ``failures`` / ``program`` /
+``command_targets`` / ``visible_pixels`` -- that the rule-based client checks and an HTTP client may ignore.
 Everything here is a frozen value: images are ``[H, W, 3]`` RGB arrays (uint8, or float in ``[0, 1]``).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Literal, Protocol, get_args, runtime_checkable
+from typing import TYPE_CHECKING, Literal, Protocol, get_args, runtime_checkable
 
 import numpy as np
 
-from simsplat_core.editing.commands import EditProgram
+from simsplat_core.editing.commands import EditProgram, program_to_json
+
+if TYPE_CHECKING:
+    from simsplat_core.mining.scene_facts import SceneFacts
 
 #: What a suggested change is about (the knobs the loop can turn between attempts).
 Parameter = Literal["asset", "speed", "start_time", "offset", "anchor", "other"]
 PARAMETERS: tuple[str, ...] = get_args(Parameter)
 #: Plausibility scale of :class:`Judgement`: 1 implausible .. 4 fully plausible.
 PLAUSIBILITY_MIN, PLAUSIBILITY_MAX = 1, 4
+#: What a validation failure is about (``scenario.metrics.AgentValidation``'s three checks).
+FailureKind = Literal["collision", "offroad", "kinematic"]
+FAILURE_KINDS: tuple[str, ...] = get_args(FailureKind)
 
 
 def _rgb(image: np.ndarray, what: str) -> np.ndarray:
@@ -46,10 +55,13 @@ class SceneSummary:
         seq_id: the sequence.
         lines: one fact per line, e.g. ``"car-3: a white van, 12 m ahead in the ego lane, stopped"``,
             ``"map: 4-way intersection 30 m ahead, crosswalk on the right"``.
+        facts: the same facts as values (``mining.scene_facts.summary`` fills both), for clients that reason on
+            them rather than on text; not part of :meth:`text`, equality or the repr.
     """
 
     seq_id: str
     lines: tuple[str, ...] = ()
+    facts: SceneFacts | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "lines", tuple(str(line) for line in self.lines))
@@ -93,6 +105,7 @@ class AgentTrajectory:
         source: ``"log"``, ``"edited"``, ``"inserted"`` or ``"refined"`` (the ``trajectories`` table's column).
         xy: ``[T, 2]`` world positions in metres, one row per step (NaN rows: the agent is absent then).
         is_target: the edit acted on this agent (else it is a surrounding agent).
+        heading: optional ``[T]`` yaw in radians (NaN where absent); without it, directions come from ``xy``.
     """
 
     object_id: str
@@ -100,12 +113,47 @@ class AgentTrajectory:
     source: str
     xy: np.ndarray
     is_target: bool = False
+    heading: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         xy = np.asarray(self.xy, dtype=np.float64)
         if xy.ndim != 2 or xy.shape[1] != 2:
             raise ValueError(f"AgentTrajectory.xy of {self.object_id} must be [T, 2], got shape {xy.shape}")
         object.__setattr__(self, "xy", xy)
+        if self.heading is not None:
+            heading = np.asarray(self.heading, dtype=np.float64)
+            if heading.shape != (len(xy),):
+                raise ValueError(f"AgentTrajectory.heading of {self.object_id} must be [{len(xy)}], "
+                                 f"got shape {heading.shape}")
+            object.__setattr__(self, "heading", heading)
+
+    @property
+    def present(self) -> np.ndarray:
+        """``[T]`` bool: steps where the agent exists (finite ``xy``)."""
+        return np.isfinite(self.xy).all(axis=1)
+
+
+@dataclass(frozen=True)
+class ValidationFailure:
+    """One failed validation check of an agent in the judged scenario (``scenario.metrics.AgentValidation``).
+
+    Attributes:
+        object_id: the failing agent.
+        kind: :data:`FailureKind`.
+        step: first failing step (``None``: not known).
+        other_id: for a collision, the agent it first collides with.
+        text: the validation's line for people.
+    """
+
+    object_id: str
+    kind: FailureKind
+    step: int | None = None
+    other_id: str | None = None
+    text: str = ""
+
+    def __post_init__(self) -> None:
+        if self.kind not in FAILURE_KINDS:
+            raise ValueError(f"ValidationFailure.kind must be one of {FAILURE_KINDS}, got {self.kind!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,7 +169,14 @@ class JudgeRequest:
         validation: facts from the validation metrics, one per line (``"no collision"``, ``"off-road: none"``).
         dt_s: seconds between trajectory steps.
         command_json: the executed :class:`EditProgram` as JSON ("" when not shown), so suggestions can refer
-            to its parameters.
+            to its parameters; filled from ``program`` when that is given and this is empty.
+        before: the log trajectories of the same agents (those the log has), on the same steps. This field and
+            the next four are structured facts for clients that check rather than look (optional;
+            ``mining.judge_input.judge_request_from_edit`` fills them from an edit).
+        failures: the validation's failures as values (``validation`` holds them as text).
+        program: the executed :class:`EditProgram`.
+        command_targets: per command of ``program``, the object ids it acted on (inserted, changed or removed).
+        visible_pixels: object id -> pixels it covers in ``renders`` (``None``: not measured).
     """
 
     prompt: str
@@ -131,6 +186,11 @@ class JudgeRequest:
     validation: tuple[str, ...] = ()
     dt_s: float = 0.1
     command_json: str = ""
+    before: Sequence[AgentTrajectory] = ()
+    failures: Sequence[ValidationFailure] = ()
+    program: EditProgram | None = None
+    command_targets: Sequence[tuple[str, ...]] = ()
+    visible_pixels: Mapping[str, int] | None = None
 
     def __post_init__(self) -> None:
         if not self.prompt.strip():
@@ -144,6 +204,25 @@ class JudgeRequest:
         object.__setattr__(self, "validation", tuple(str(v) for v in self.validation))
         if self.dt_s <= 0:
             raise ValueError(f"JudgeRequest.dt_s must be > 0, got {self.dt_s}")
+        object.__setattr__(self, "before", tuple(self.before))
+        object.__setattr__(self, "failures", tuple(self.failures))
+        targets = tuple(tuple(str(o) for o in ids) for ids in self.command_targets)
+        if targets and (self.program is None or len(targets) != len(self.program.commands)):
+            raise ValueError(f"JudgeRequest.command_targets needs one entry per command of program, got "
+                             f"{len(targets)} for {0 if self.program is None else len(self.program.commands)}")
+        object.__setattr__(self, "command_targets", targets)
+        if self.visible_pixels is not None:
+            object.__setattr__(self, "visible_pixels", {str(k): int(v) for k, v in self.visible_pixels.items()})
+        if self.program is not None and not self.command_json.strip():
+            object.__setattr__(self, "command_json", program_to_json(self.program))
+
+    def trajectory(self, object_id: str) -> AgentTrajectory | None:
+        """The judged trajectory of ``object_id`` (``None``: not given)."""
+        return next((t for t in self.trajectories if t.object_id == object_id), None)
+
+    def log_trajectory(self, object_id: str) -> AgentTrajectory | None:
+        """The log trajectory of ``object_id`` in ``before`` (``None``: not given, e.g. an inserted agent)."""
+        return next((t for t in self.before if t.object_id == object_id), None)
 
 
 @dataclass(frozen=True)
@@ -210,10 +289,12 @@ class VLMClient(Protocol):
 
 
 __all__ = [
+    "FAILURE_KINDS",
     "PARAMETERS",
     "PLAUSIBILITY_MAX",
     "PLAUSIBILITY_MIN",
     "AgentTrajectory",
+    "FailureKind",
     "JudgeRequest",
     "Judgement",
     "Parameter",
@@ -221,4 +302,5 @@ __all__ = [
     "ProposalRequest",
     "SceneSummary",
     "VLMClient",
+    "ValidationFailure",
 ]

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 from pydantic import ValidationError
 
+from simsplat_core.editing.commands import EditProgram
 from simsplat_core.mining import (
     PARAMETERS,
     AgentTrajectory,
@@ -16,6 +17,7 @@ from simsplat_core.mining import (
     ParameterChange,
     ProposalRequest,
     SceneSummary,
+    ValidationFailure,
 )
 from simsplat_core.mining.vlm_answers import (
     JudgementAnswer,
@@ -107,3 +109,21 @@ def test_request_texts_name_what_the_images_are() -> None:
     text = judge_text(JudgeRequest("Remove the bus.", [RGB, RGB], RGB))
     assert "2 camera renders of the edited scene, then the bird's-eye view" in text
     assert "Executed edit program" not in text and text.count("(none given)") == 2
+
+
+def test_the_structured_judge_facts_are_checked() -> None:
+    program = EditProgram.model_validate({"prompt": "remove the bus", "commands": [
+        {"op": "remove", "target": {"description": "the bus"}}]})
+    request = JudgeRequest("remove the bus", [RGB], RGB, program=program, command_targets=[("bus_1",)],
+                           visible_pixels={"bus_1": 12}, failures=[ValidationFailure("car_2", "offroad")])
+    assert request.command_targets == (("bus_1",),) and request.visible_pixels == {"bus_1": 12}
+    assert '"op": "remove"' in request.command_json and isinstance(request.failures, tuple)
+    assert request.trajectory("bus_1") is None and request.log_trajectory("bus_1") is None
+    with pytest.raises(ValueError, match="one entry per command"):
+        JudgeRequest("p", [RGB], RGB, program=program, command_targets=[("a",), ("b",)])
+    with pytest.raises(ValueError, match="kind must be one of"):
+        ValidationFailure("car_2", "late")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match=r"heading of car-1 must be \[3\]"):
+        AgentTrajectory("car-1", "vehicle", "log", np.zeros((3, 2)), heading=np.zeros(4))
+    xy = np.array([[0.0, 0.0], [np.nan, np.nan], [1.0, 0.0]])
+    assert AgentTrajectory("car-1", "vehicle", "log", xy).present.tolist() == [True, False, True]

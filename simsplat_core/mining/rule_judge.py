@@ -1,0 +1,416 @@
+"""The rule-based judge: explicit checks of an executed edit, and concrete parameter changes where one fails.
+
+    judgement = judge_edit(request)        # request: JudgeRequest, best from judge_input.judge_request_from_edit
+
+Checks, each a failure class (:data:`PENALTIES`):
+
+* ``grounding`` -- every command acted on something: a target of a modify / replace / remove is among the
+  trajectories (removed ones absent), an insert added an agent;
+* ``change`` -- what each command asks shows in the trajectories, against the log's (``request.before``) or,
+  for an inserted agent, against its own start: a speed ask moves the mean speed at least half-way to the asked
+  speed, a stop ends below :attr:`JudgeConfig.stop_mps`, braking lowers the end (or least) speed, a lane
+  change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked side, a turn changes its
+  heading by :attr:`JudgeConfig.turn_deg` the asked way, reversing moves it backwards, a later start keeps it
+  still until then, crossing moves a pedestrian off its log path, running raises its speed; anything else moves
+  the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone;
+* ``collision``, ``offroad``, ``kinematic`` -- the validation's failures (``request.failures``);
+* ``render`` -- no render is blank (constant) or mostly holes (near-black pixels);
+* ``visibility`` -- each present target covers at least :attr:`JudgeConfig.min_visible_pixels` pixels of the
+  renders (when ``request.visible_pixels`` is given).
+
+The prompt is followed when no ``grounding``, ``change``, ``render`` or ``visibility`` check fails;
+plausibility is 4 less the penalties of the failed classes (at least 1). Failed checks suggest parameter changes:
+a collision -- start 2 s later, a lower speed, the inserted object further away; off-road -- an offset back
+onto the road or another anchor; not visible -- a larger asset or a closer offset; a change too small -- a larger
+speed change (or an earlier start for manoeuvres that do not complete).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from simsplat_core.editing.commands import Behaviour, EditCommand
+from simsplat_core.mining.vlm_protocol import (
+    PLAUSIBILITY_MAX,
+    PLAUSIBILITY_MIN,
+    AgentTrajectory,
+    Judgement,
+    JudgeRequest,
+    ParameterChange,
+    ValidationFailure,
+)
+
+logger = logging.getLogger(__name__)
+
+#: Plausibility lost per failed check class.
+PENALTIES: dict[str, int] = {"grounding": 1, "change": 1, "collision": 2, "offroad": 2, "kinematic": 1,
+                             "render": 2, "visibility": 1}
+#: Check classes whose failure means the prompt is not followed.
+FOLLOW_CLASSES: frozenset[str] = frozenset({"grounding", "change", "render", "visibility"})
+
+
+@dataclass(frozen=True)
+class JudgeConfig:
+    """Thresholds of the checks (metres, seconds, m/s, degrees, pixels)."""
+
+    stop_mps: float = 0.5
+    changed_m: float = 0.3
+    lateral_m: float = 1.5
+    turn_deg: float = 40.0
+    moved_m: float = 1.0
+    still_m: float = 0.5
+    cross_m: float = 2.0
+    speed_share: float = 0.5
+    brake_mps: float = 1.0
+    tail_s: float = 0.3
+    min_visible_pixels: int = 30
+    blank_std: float = 2.0 / 255.0
+    dark_level: float = 0.02
+    hole_share: float = 0.6
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One failed check: its class (:data:`PENALTIES` key), why, and what to change."""
+
+    check: str
+    reason: str
+    suggestions: tuple[ParameterChange, ...] = field(default=())
+
+
+# ---------------------------------------------------------------------------------------------- motion
+@dataclass(frozen=True)
+class Motion:
+    """How an agent moves over its present steps (m, m/s, degrees; displacement in its start pose's frame)."""
+
+    present: bool
+    mean_speed: float = 0.0
+    start_speed: float = 0.0
+    end_speed: float = 0.0
+    min_speed: float = 0.0
+    max_speed: float = 0.0
+    net_m: float = 0.0
+    along_m: float = 0.0
+    lateral_m: float = 0.0
+    heading_change_deg: float = 0.0
+    start_heading: float = math.nan
+
+
+def _step_speeds(xy: np.ndarray, dt: float) -> np.ndarray:
+    return np.linalg.norm(np.diff(xy, axis=0), axis=1) / dt if len(xy) > 1 else np.zeros(0)
+
+
+def _directions(traj: AgentTrajectory, rows: np.ndarray) -> tuple[float, float]:
+    """Start and end heading (radians) over ``rows`` (present steps): the given headings, else the direction of
+    the first / last step that moves."""
+    if traj.heading is not None and np.isfinite(traj.heading[rows]).all():
+        h = np.unwrap(traj.heading[rows])
+        return float(h[0]), float(h[-1])
+    d = np.diff(traj.xy[rows], axis=0)
+    moving = np.flatnonzero(np.linalg.norm(d, axis=1) > 0.02)
+    if moving.size == 0:
+        return math.nan, math.nan
+    h = np.unwrap(np.arctan2(d[moving, 1], d[moving, 0]))
+    return float(h[0]), float(h[-1])
+
+
+def motion_of(traj: AgentTrajectory | None, dt: float, tail_s: float = 0.3) -> Motion:
+    """The :class:`Motion` of ``traj`` (``present=False`` when absent or ``None``)."""
+    if traj is None:
+        return Motion(False)
+    rows = np.flatnonzero(traj.present)
+    if rows.size == 0:
+        return Motion(False)
+    xy = traj.xy[rows]
+    speeds = _step_speeds(xy, dt)
+    tail = max(1, int(round(tail_s / dt)))
+    h0, h1 = _directions(traj, rows)
+    disp = xy[-1] - xy[0]
+    c, s = (math.cos(h0), math.sin(h0)) if math.isfinite(h0) else (math.nan, math.nan)
+    duration = (rows[-1] - rows[0]) * dt
+    return Motion(
+        present=True,
+        mean_speed=float(np.linalg.norm(np.diff(xy, axis=0), axis=1).sum() / duration) if duration > 0 else 0.0,
+        start_speed=float(speeds[:tail].mean()) if speeds.size else 0.0,
+        end_speed=float(speeds[-tail:].mean()) if speeds.size else 0.0,
+        min_speed=float(speeds.min()) if speeds.size else 0.0,
+        max_speed=float(speeds.max()) if speeds.size else 0.0,
+        net_m=float(np.linalg.norm(disp)),
+        along_m=float(c * disp[0] + s * disp[1]),
+        lateral_m=float(-s * disp[0] + c * disp[1]),
+        heading_change_deg=float(np.rad2deg(h1 - h0)) if math.isfinite(h0) else 0.0,
+        start_heading=h0)
+
+
+def deviation_m(after: AgentTrajectory, before: AgentTrajectory) -> float:
+    """Largest distance between the two paths at steps where both are present (``inf``: none in common)."""
+    n = min(len(after.xy), len(before.xy))
+    both = after.present[:n] & before.present[:n]
+    if not both.any():
+        return math.inf
+    return float(np.linalg.norm(after.xy[:n][both] - before.xy[:n][both], axis=1).max())
+
+
+def _along(traj: AgentTrajectory, heading: float) -> float:
+    """Net displacement of ``traj`` along ``heading`` (radians; ``nan`` when not finite)."""
+    rows = np.flatnonzero(traj.present)
+    if rows.size < 2 or not math.isfinite(heading):
+        return math.nan
+    disp = traj.xy[rows[-1]] - traj.xy[rows[0]]
+    return float(disp[0] * math.cos(heading) + disp[1] * math.sin(heading))
+
+
+def _moved_by(traj: AgentTrajectory, until_s: float, dt: float) -> float:
+    """How far the agent gets from its first present position within ``until_s`` seconds of the start."""
+    rows = np.flatnonzero(traj.present)
+    rows = rows[rows * dt <= until_s + 1e-9]
+    if rows.size < 2:
+        return 0.0
+    return float(np.linalg.norm(traj.xy[rows] - traj.xy[rows[0]], axis=1).max())
+
+
+# ---------------------------------------------------------------------------------------------- change checks
+def _speed_suggestion(target: float, reason: str) -> ParameterChange:
+    return ParameterChange("speed", f"{max(target, 0.0):.1f} m/s", reason)
+
+
+def _earlier(reason: str) -> ParameterChange:
+    return ParameterChange("start_time", "1 s earlier", reason)
+
+
+def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, before: AgentTrajectory | None,
+                     dt: float, cfg: JudgeConfig) -> list[Finding]:
+    """What ``behaviour`` asks that ``after`` does not show (against ``before``, or its own start)."""
+    a, b = motion_of(after, dt, cfg.tail_s), motion_of(before, dt, cfg.tail_s)
+    ref = b if b.present else None
+    out: list[Finding] = []
+
+    def fail(reason: str, *suggestions: ParameterChange) -> None:
+        out.append(Finding("change", f"{oid}: {reason}", suggestions))
+
+    if behaviour.speed is not None:
+        base = ref.mean_speed if ref is not None else a.start_speed
+        target = behaviour.speed.target_mps(base)
+        asked, got = target - base, a.mean_speed - base
+        if ref is None and behaviour.speed.mode == "absolute":
+            ok = abs(a.mean_speed - target) <= max(1.0, 0.3 * target) or a.max_speed >= 0.9 * target
+        else:
+            ok = abs(asked) < 0.3 or got / asked >= cfg.speed_share
+        if not ok:
+            fail(f"mean speed {a.mean_speed:.1f} m/s, asked {target:.1f} m/s",
+                 _speed_suggestion(target + 0.5 * asked, "the asked speed change does not show: ask for a larger one"))
+    if behaviour.longitudinal == "accelerate":
+        base_end = ref.end_speed if ref is not None else a.start_speed
+        if a.end_speed < base_end + cfg.brake_mps * 0.5 and (ref is None or a.mean_speed < ref.mean_speed + 0.5):
+            fail(f"does not speed up (ends at {a.end_speed:.1f} m/s)",
+                 _speed_suggestion(base_end + 3.0, "speeding up does not show: ask for a higher speed"))
+    if behaviour.longitudinal in ("decelerate", "brake_hard") and behaviour.stop is None:
+        base_end = ref.end_speed if ref is not None else a.start_speed
+        base_min = ref.min_speed if ref is not None else a.start_speed
+        if a.end_speed > base_end - cfg.brake_mps and a.min_speed > base_min - cfg.brake_mps:
+            fail(f"does not brake (ends at {a.end_speed:.1f} m/s)",
+                 _speed_suggestion(0.5 * base_end, "braking does not show: ask for a lower speed"))
+    if behaviour.stop is not None and a.end_speed > cfg.stop_mps:
+        fail(f"does not stop (ends at {a.end_speed:.1f} m/s)", _earlier("the stop does not complete in the log"))
+    if behaviour.reverse:
+        along = _along(after, a.start_heading if after.heading is not None else b.start_heading)
+        backwards = along < -cfg.moved_m if math.isfinite(along) else a.net_m >= cfg.moved_m
+        if not backwards:
+            fail(f"does not reverse (moves {along:+.1f} m along its heading)",
+                 _speed_suggestion(2.0, "reversing does not show: back up at this speed"))
+    if behaviour.lane_change is not None:
+        sign = 1.0 if behaviour.lane_change == "left" else -1.0
+        shift = a.lateral_m - (ref.lateral_m if ref is not None else 0.0)
+        if not math.isfinite(shift) or sign * shift < cfg.lateral_m:
+            fail(f"does not change lanes to the {behaviour.lane_change} (shifted {shift:+.1f} m sideways)",
+                 _earlier("the lane change does not complete in the log"))
+    if behaviour.turn in ("left", "right"):
+        sign = 1.0 if behaviour.turn == "left" else -1.0
+        if sign * a.heading_change_deg < cfg.turn_deg:
+            fail(f"does not turn {behaviour.turn} (heading changes {a.heading_change_deg:+.0f} deg)",
+                 _earlier("the turn does not complete in the log"))
+    if behaviour.start_time_s is not None and _moved_by(after, behaviour.start_time_s - dt, dt) > cfg.still_m:
+        fail(f"moves before {behaviour.start_time_s:.1f} s",
+             ParameterChange("start_time", f"{behaviour.start_time_s:.1f} s", "hold it still until then"))
+    if behaviour.delay_s is not None and before is not None:
+        window = behaviour.delay_s - dt
+        if _moved_by(before, window, dt) > cfg.moved_m and _moved_by(after, window, dt) > cfg.still_m:
+            fail(f"does not start {behaviour.delay_s:.1f} s later",
+                 ParameterChange("start_time", f"{behaviour.delay_s + 1.0:.0f} s later", "the delay does not show"))
+    if behaviour.cross_street:
+        moved = deviation_m(after, before) if before is not None else a.net_m
+        if moved < cfg.cross_m or a.net_m < cfg.cross_m:
+            fail(f"does not cross the street (moves {a.net_m:.1f} m)",
+                 _earlier("the crossing does not show in the log"))
+    if behaviour.gait == "run":
+        want = max(2.0, 1.3 * ref.mean_speed) if ref is not None else 2.0
+        if a.mean_speed < want:
+            fail(f"does not run (mean speed {a.mean_speed:.1f} m/s)", _speed_suggestion(want + 1.0, "run faster"))
+    if before is not None and not out and deviation_m(after, before) < cfg.changed_m:
+        fail("its trajectory is the log's", _speed_suggestion(max(ref.mean_speed if ref else 0.0, 1.0) * 1.5,
+                                                              "the change is too small to show: ask for a larger one"))
+    return out
+
+
+def _command_findings(index: int, command: EditCommand, ids: tuple[str, ...], request: JudgeRequest,
+                      cfg: JudgeConfig) -> tuple[list[Finding], list[str]]:
+    """Findings of one command and the reasons it passed."""
+    what = command.note or command.op
+    if command.op == "remove":
+        if not ids:
+            return [Finding("grounding", f"command {index} ({what}): no target was removed",
+                            (ParameterChange("anchor", "a description naming the object", "nothing was found"),))], []
+        left = [o for o in ids if motion_of(request.trajectory(o), request.dt_s).present]
+        if left:
+            return [Finding("change", f"{', '.join(left)} still in the scene after removal",
+                            (ParameterChange("other", "remove the object's whole track", "it is still there"),))], []
+        return [], [f"removed {', '.join(ids)}"]
+    present = [o for o in ids if motion_of(request.trajectory(o), request.dt_s).present]
+    if not present:
+        kind = "nothing was inserted" if command.op == "insert" else "the target is not in the scenario"
+        change = (ParameterChange("offset", "another spot nearby", kind) if command.op == "insert"
+                  else ParameterChange("anchor", "a description naming the object", kind))
+        return [Finding("grounding", f"command {index} ({what}): {kind}", (change,))], []
+    findings: list[Finding] = []
+    for oid in present:
+        after = request.trajectory(oid)
+        assert after is not None  # present
+        if command.behaviour is not None:
+            findings += _change_findings(oid, command.behaviour, after, request.log_trajectory(oid), request.dt_s,
+                                         cfg)
+        elif command.op == "modify":  # a move (placement only)
+            before = request.log_trajectory(oid)
+            if before is not None and deviation_m(after, before) < cfg.changed_m:
+                findings.append(Finding("change", f"{oid}: not moved",
+                                        (ParameterChange("offset", "2 m further", "the move is too small to show"),)))
+    return findings, [] if findings else [f"{command.op} {', '.join(present)}: requested change present"]
+
+
+def _targets(request: JudgeRequest, commands: list[EditCommand]) -> list[tuple[str, ...]]:
+    """Object ids per command: ``request.command_targets``, else every target trajectory for each command."""
+    if request.command_targets:
+        return list(request.command_targets)
+    targets = tuple(t.object_id for t in request.trajectories if t.is_target)
+    return [targets] * len(commands)
+
+
+def _generic_findings(request: JudgeRequest, cfg: JudgeConfig) -> tuple[list[Finding], list[str]]:
+    """Without a program: some target exists and differs from its log (or is new, or is gone)."""
+    targets = [t for t in request.trajectories if t.is_target]
+    if not targets:
+        return [Finding("grounding", "no target trajectory given",
+                        (ParameterChange("anchor", "a description naming the object", "nothing was edited"),))], []
+    for t in targets:
+        before = request.log_trajectory(t.object_id)
+        after_present = t.present.any()
+        if before is None or not after_present or deviation_m(t, before) >= cfg.changed_m:
+            return [], [f"{t.object_id} changed"]
+    return [Finding("change", "no target differs from the log",
+                    (_speed_suggestion(3.0, "the change is too small to show: ask for a larger one"),))], []
+
+
+# ---------------------------------------------------------------------------------------------- validation
+def _validation_findings(failures: Iterable[ValidationFailure], request: JudgeRequest) -> list[Finding]:
+    out = []
+    for f in failures:
+        traj = request.trajectory(f.object_id)
+        source = traj.source if traj is not None else ""
+        speed = motion_of(traj, request.dt_s).mean_speed
+        text = f.text or f"{f.object_id}: {f.kind}"
+        if f.kind == "collision":
+            other = f.other_id or "another agent"
+            changes = [ParameterChange("start_time", "2 s later", f"{f.object_id} meets {other}")]
+            if speed > 0.5:
+                changes.append(ParameterChange("speed", f"{0.7 * speed:.1f} m/s", f"slower, to keep clear of {other}"))
+            if source in ("inserted", "refined", ""):
+                changes.append(ParameterChange("offset", "5 m further away", f"place it clear of {other}"))
+            out.append(Finding("collision", text, tuple(changes)))
+        elif f.kind == "offroad":
+            out.append(Finding("offroad", text, (
+                ParameterChange("offset", "1 m back towards the lane centre", "it leaves the drivable area"),
+                ParameterChange("anchor", "an object on the road, or the ego lane", "place it on the road"))))
+        else:
+            out.append(Finding("kinematic", text, (
+                ParameterChange("speed", f"{max(0.7 * speed, 1.0):.1f} m/s", "a gentler motion"),)))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- renders
+def render_problem(image: np.ndarray, cfg: JudgeConfig) -> str | None:
+    """``"blank"`` (constant), ``"holes"`` (mostly near-black) or ``None`` for an ``[H, W, 3]`` image."""
+    rgb = np.asarray(image)
+    rgb = rgb.astype(np.float64) / 255.0 if rgb.dtype == np.uint8 else rgb.astype(np.float64)
+    if float(rgb.std()) < cfg.blank_std:
+        return "blank"
+    if float((rgb.max(axis=-1) < cfg.dark_level).mean()) > cfg.hole_share:
+        return "holes"
+    return None
+
+
+def _render_findings(request: JudgeRequest, targets: Iterable[str], cfg: JudgeConfig) -> list[Finding]:
+    out = []
+    problems = [(i, p) for i, p in ((i, render_problem(r, cfg)) for i, r in enumerate(request.renders)) if p]
+    if problems:
+        listed = ", ".join(f"render {i} {p}" for i, p in problems)
+        out.append(Finding("render", f"degenerate renders: {listed}",
+                           (ParameterChange("other", "render again from the stored scene", "the views show nothing"),)))
+    if request.visible_pixels is not None:
+        unseen = [o for o in dict.fromkeys(targets) if motion_of(request.trajectory(o), request.dt_s).present
+                  and request.visible_pixels.get(o, 0) < cfg.min_visible_pixels]
+        if unseen:
+            shown = ", ".join(f"{o} ({request.visible_pixels.get(o, 0)} px)" for o in unseen)
+            out.append(Finding("visibility", f"not visible in the renders: {shown}", (
+                ParameterChange("asset", "a larger object", "the target covers too few pixels"),
+                ParameterChange("offset", "10 m closer to the ego", "bring it into the cameras' view"))))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------- verdict
+def _unique(changes: Iterable[ParameterChange]) -> tuple[ParameterChange, ...]:
+    seen: dict[tuple[str, str], ParameterChange] = {}
+    for c in changes:
+        seen.setdefault((c.parameter, c.value), c)
+    return tuple(seen.values())
+
+
+def judge_edit(request: JudgeRequest, config: JudgeConfig | None = None) -> Judgement:
+    """The verdict on an executed edit from explicit checks (module docstring)."""
+    cfg = config or JudgeConfig()
+    findings: list[Finding] = []
+    passed: list[str] = []
+    if request.program is not None:
+        commands = list(request.program.commands)
+        targets = _targets(request, commands)
+        for index, (command, ids) in enumerate(zip(commands, targets)):
+            found, ok = _command_findings(index, command, ids, request, cfg)
+            findings += found
+            passed += ok
+        all_targets = [o for ids in targets for o in ids]
+    else:
+        found, ok = _generic_findings(request, cfg)
+        findings += found
+        passed += ok
+        all_targets = [t.object_id for t in request.trajectories if t.is_target]
+    findings += _validation_findings(request.failures, request)
+    findings += _render_findings(request, all_targets, cfg)
+    failed = {f.check for f in findings}
+    follows = not (failed & FOLLOW_CLASSES)
+    plausibility = max(PLAUSIBILITY_MIN, PLAUSIBILITY_MAX - sum(PENALTIES[c] for c in failed))
+    if not failed & {"collision", "offroad", "kinematic"}:
+        passed.append("no collision, off-road or infeasible motion")
+    if "render" not in failed:
+        passed.append("renders not degenerate")
+    reasons = tuple(f.reason for f in findings) + tuple(passed)
+    logger.debug("judged %r: follows=%s plausibility=%d failed=%s", request.prompt, follows, plausibility,
+                 sorted(failed))
+    return Judgement(follows_prompt=follows, plausibility=plausibility, reasons=reasons or ("all checks passed",),
+                     suggestions=_unique(c for f in findings for c in f.suggestions))
+
+
+__all__ = ["FOLLOW_CLASSES", "PENALTIES", "Finding", "JudgeConfig", "Motion", "deviation_m", "judge_edit",
+           "motion_of", "render_problem"]
