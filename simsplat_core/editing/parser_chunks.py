@@ -175,6 +175,12 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
     return _post_modifiers(tokens, j, mode, frozenset(exclude))
 
 
+def post_modifiers_end(tokens: Sequence[str], j: int, exclude: Iterable[str] = ()) -> int:
+    """End of the phrases from ``tokens[j]`` on that still describe the noun before them (target mode: "in the
+    crosswalk", "crossing the street", "that is parked"), prepositions in ``exclude`` not taken."""
+    return _post_modifiers(tokens, j, "target", frozenset(exclude))
+
+
 def _post_modifiers(tokens: Sequence[str], j: int, mode: str, exclude: frozenset[str]) -> int:
     n = len(tokens)
     preps = APPEARANCE_PREPOSITIONS if mode == "asset" else NP_PREPOSITIONS

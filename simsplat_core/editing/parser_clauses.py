@@ -235,12 +235,9 @@ class PromptParser(PromptState):
         if not spans:
             return False
         if not placing and (ego := _ego_relative_length(tokens, spans[-1][1])):
-            # "stop the bus *in front of us*": where the ego is describes the bus (no stop place), and so does a
-            # participle after it ("the pedestrian in front of me *crossing the street*")
-            end = spans[-1][1] + ego
-            if end < len(tokens) and chunks.is_participle(tokens[end]):
-                end = chunks.clause_tail(tokens, end + 1, relative=False)
-            spans[-1] = (spans[-1][0], end)
+            # "stop the bus *in front of us*": where the ego is describes the bus (no stop place), and so does what
+            # follows it ("the pedestrian in front of me *crossing the street*", "... *in the crosswalk*")
+            spans[-1] = (spans[-1][0], chunks.post_modifiers_end(tokens, spans[-1][1] + ego, COMPLEMENT_PREPOSITIONS))
         j = spans[-1][1]
         if start == 1 and tokens[j : j + 1] and tokens[j] in lex.PARTICLES:  # "slow the bus down"
             particle, j = [tokens[j]], j + 1
