@@ -437,6 +437,95 @@ def _print_edit(result, graph) -> None:
                   soft_wrap=True)
 
 
+@app.command()
+def mine(
+    store: Annotated[str, typer.Option(help="Artifact store root with aligned scenes and an asset bank "
+                                       "(`simsplat assets build`).")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence to mine (repeatable; default: every aligned log).")
+                   ] = None,
+    per_sequence: Annotated[int, typer.Option(min=1, help="Accepted scenarios wanted per sequence.")] = 3,
+    max_attempts: Annotated[int, typer.Option(min=1, help="Attempts per proposal (the first plus adjusted "
+                                              "retries).")] = 3,
+    vlm: Annotated[str, typer.Option(help="VLM client: rule (built-in, offline) or openai (SIMSPLAT_VLM_URL, "
+                                     "SIMSPLAT_VLM_MODEL, SIMSPLAT_VLM_API_KEY).")] = "rule",
+    seed: Annotated[int, typer.Option(help="Seed of the mining loop (and of the rule-based client).")] = 0,
+    run_id: Annotated[str | None, typer.Option(help="Run the scenarios belong to: edits/<run_id>/ (default: a new "
+                                               "mine-<time> id).")] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout: the accepted scenarios, "
+                                          "per-sequence summaries and totals.")] = False,
+) -> None:
+    """Mine scenarios automatically: a VLM (or the rule-based stand-in) proposes edits from the rendered scene, the
+    editor executes them, the VLM judges the result, parameters are adjusted and retried; accepted scenarios are
+    stored as edits under STORE/edits/<run_id>/<seq>/<edit_id>/, every attempt as a row of the run's edits table."""
+    from flows.progress import StepBars
+    from simsplat_core.vlm.openai_chat import OpenAIChatConfig, VLMError
+    from storage import ArtifactStore
+    from storage.assets import list_asset_banks
+    from storage.runs import new_run_id
+    from tasks.mine import VLM_KINDS, mine_sequence_task
+
+    if vlm not in VLM_KINDS:
+        raise typer.BadParameter(f"unknown VLM client {vlm!r}; choose one of {list(VLM_KINDS)}", param_hint="--vlm")
+    if vlm == "openai":
+        try:
+            OpenAIChatConfig.from_env()
+        except VLMError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--vlm") from exc
+    seq_ids = _aligned_sequences(store, seq)
+    artifacts = ArtifactStore(store)
+    if not list_asset_banks(artifacts):
+        raise typer.BadParameter(f"no asset bank in {artifacts.uri('assets')} (run `simsplat assets build --store "
+                                 f"{store}` first)", param_hint="--store")
+    run_id = run_id or new_run_id("mine")
+    summaries = []
+    try:
+        with StepBars(headline=""):
+            for seq_id in seq_ids:
+                summaries.append(mine_sequence_task.fn(store, seq_id, run_id, per_sequence=per_sequence,
+                                                       max_attempts=max_attempts, vlm=vlm, seed=seed))
+    except (FileNotFoundError, VLMError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    data = _mining_as_dict(run_id, summaries)
+    if as_json:
+        typer.echo(json.dumps(data, allow_nan=False))
+        return
+    _print_mining(data)
+
+
+def _mining_as_dict(run_id: str, summaries) -> dict:
+    """``simsplat mine --json``: ``run_id``, ``edits_table``, ``scenarios`` (the accepted ones), ``sequences``
+    (per-sequence summaries) and ``totals``."""
+    from dataclasses import asdict
+
+    sequences = [{k: v for k, v in asdict(s).items() if k != "scenarios"} for s in summaries]
+    for entry in sequences:
+        entry["seconds"] = {k: round(v, 3) for k, v in entry["seconds"].items()}
+    categories: dict[str, int] = {}
+    for s in summaries:
+        for category, n in s.per_category.items():
+            categories[category] = categories.get(category, 0) + n
+    attempts = sum(s.attempts for s in summaries)
+    accepted = sum(s.accepted for s in summaries)
+    return {"run_id": run_id, "edits_table": summaries[0].edits_table if summaries else None,
+            "scenarios": [asdict(sc) for s in summaries for sc in s.scenarios], "sequences": sequences,
+            "totals": {"sequences": len(summaries), "attempts": attempts, "accepted": accepted,
+                       "per_category": dict(sorted(categories.items()))}}
+
+
+def _print_mining(data: dict) -> None:
+    table = Table(title=f"Scenarios mined (run {data['run_id']})")
+    for col in ("sequence", "prompt", "category", "attempts", "plausibility", "edit dir"):
+        table.add_column(col)
+    for sc in data["scenarios"]:
+        plaus = "" if sc["plausibility"] is None else str(sc["plausibility"])
+        table.add_row(sc["seq_id"], sc["prompt"], sc["category"], str(sc["attempts"]), plaus, sc["edit_dir"])
+    console.print(table)
+    totals = data["totals"]
+    per = ", ".join(f"{k} {v}" for k, v in totals["per_category"].items()) or "none"
+    console.print(f"{totals['accepted']} accepted of {totals['attempts']} attempt(s) in {totals['sequences']} "
+                  f"sequence(s) ({per}); every attempt: {data['edits_table']}", markup=False, soft_wrap=True)
+
+
 @eval_app.command("grounding")
 def eval_grounding(
     store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs and aligned scenes.")],

@@ -32,7 +32,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import logging
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any
@@ -51,6 +51,7 @@ from storage.exr import render_channels, write_exr
 from storage.markers import mark_done, read_marker
 from storage.schemas import (
     EDIT_POSE_TRACKS_SCHEMA,
+    EDITS_MINING_COLUMNS,
     EDITS_SCHEMA,
     TRAJECTORIES_SCHEMA,
     arrow_to_vectors,
@@ -101,6 +102,8 @@ class EditRecord:
         command_json: the program as JSON (``""`` when the prompt did not parse).
         status: one of :data:`EDIT_STATUSES`.
         failure_reason: ``"<reason>: <message>"`` (``""`` when it succeeded).
+        mining: the mining columns of a mined attempt (``storage.schemas.EDITS_MINING_COLUMNS``: name -> value,
+            ``export`` among them); empty for a plain edit (stored as nulls, ``export`` false).
     """
 
     run_id: str
@@ -111,40 +114,75 @@ class EditRecord:
     status: str
     failure_reason: str = ""
     attempt: int = 0
+    mining: Mapping[str, Any] = dataclasses.field(default_factory=dict, hash=False)
 
     def __post_init__(self) -> None:
         if self.status not in EDIT_STATUSES:
             raise ValueError(f"EditRecord.status must be one of {list(EDIT_STATUSES)}, got {self.status!r}")
         if (self.status == "succeeded") == bool(self.failure_reason):
             raise ValueError("EditRecord.failure_reason must be empty exactly when the status is 'succeeded'")
+        unknown = sorted(set(self.mining) - set(EDITS_MINING_COLUMNS))
+        if unknown:
+            raise ValueError(f"EditRecord.mining: unknown column(s) {unknown}; known: {list(EDITS_MINING_COLUMNS)}")
+
+    @property
+    def export(self) -> bool:
+        """Marked for export (an accepted mined scenario)."""
+        return bool(self.mining.get("export"))
 
 
 _RECORD_FIELDS = ("run_id", "seq_id", "edit_id", "attempt", "prompt", "command_json", "status", "failure_reason")
 
 
+def _record_of(row: dict[str, Any]) -> EditRecord:
+    mining = {k: row[k] for k in EDITS_MINING_COLUMNS if row.get(k) is not None}
+    return EditRecord(**{k: row[k] for k in _RECORD_FIELDS}, mining=mining)
+
+
+def _row_of(record: EditRecord) -> dict[str, Any]:
+    mining = {k: record.mining.get(k) for k in EDITS_MINING_COLUMNS}
+    mining["export"] = record.export
+    return {**{k: getattr(record, k) for k in _RECORD_FIELDS}, **mining}
+
+
 def read_edit_records(store: ArtifactStore, run_id: str) -> list[EditRecord]:
-    """Every row of ``edits/<run_id>/edits.parquet`` in append order (``[]`` when there is none)."""
+    """Every row of ``edits/<run_id>/edits.parquet`` in append order (``[]`` when there is none). Version-1
+    tables (before the mining columns) read with empty ``mining``."""
     rel = edits_table_relpath(run_id)
     if not store.exists(rel):
         return []
-    table = store.read_table(rel, EDITS_SCHEMA)
-    return [EditRecord(**{k: row[k] for k in _RECORD_FIELDS}) for row in table.to_pylist()]
+    return [_record_of(row) for row in store.read_table(rel, EDITS_SCHEMA).to_pylist()]
+
+
+def append_edit_records(store: ArtifactStore, records: Sequence[EditRecord]) -> list[EditRecord]:
+    """Append ``records`` (all of one run) to the run's edits table in one atomic rewrite under the store's lock;
+    returns them numbered (``attempt``: 1 + the rows of the same sequence and edit id before)."""
+    if not records:
+        return []
+    run_ids = {r.run_id for r in records}
+    if len(run_ids) != 1:
+        raise ValueError(f"append_edit_records: records of several runs {sorted(run_ids)}")
+    run_id = records[0].run_id
+    rel = edits_table_relpath(run_id)
+    numbered: list[EditRecord] = []
+    with store.exclusive(rel):
+        rows = read_edit_records(store, run_id)
+        for record in records:
+            attempt = 1 + sum(r.edit_id == record.edit_id and r.seq_id == record.seq_id for r in rows)
+            record = dataclasses.replace(record, attempt=attempt)
+            rows.append(record)
+            numbered.append(record)
+        table = pa.Table.from_pylist([_row_of(r) for r in rows], schema=EDITS_SCHEMA)
+        store.write_table(rel, table, EDITS_SCHEMA)
+    for record in numbered:
+        logger.info("edits %s: %s %s attempt %d (%s)", record.run_id, record.seq_id, record.edit_id,
+                    record.attempt, record.status)
+    return numbered
 
 
 def append_edit_record(store: ArtifactStore, record: EditRecord) -> EditRecord:
-    """Append ``record`` to its run's edits table (read, add, rewrite atomically under the store's lock);
-    returns it numbered (``attempt``)."""
-    rel = edits_table_relpath(record.run_id)
-    with store.exclusive(rel):
-        rows = read_edit_records(store, record.run_id)
-        attempt = 1 + sum(r.edit_id == record.edit_id and r.seq_id == record.seq_id for r in rows)
-        record = dataclasses.replace(record, attempt=attempt)
-        rows.append(record)
-        columns = {name: [getattr(r, name) for r in rows] for name in _RECORD_FIELDS}
-        store.write_table(rel, pa.table(columns, schema=EDITS_SCHEMA), EDITS_SCHEMA)
-    logger.info("edits %s: %s %s attempt %d (%s)", record.run_id, record.seq_id, record.edit_id, attempt,
-                record.status)
-    return record
+    """Append ``record`` to its run's edits table (:func:`append_edit_records`); returns it numbered."""
+    return append_edit_records(store, [record])[0]
 
 
 def record_failure(store: ArtifactStore, record: EditRecord, program: EditProgram | None = None) -> EditRecord:
@@ -369,12 +407,13 @@ class EditWriter:
 
 
 @contextmanager
-def staged_edit(store: ArtifactStore, record: EditRecord, key: str, info: dict[str, Any] | None = None
-                ) -> Iterator[EditWriter]:
+def staged_edit(store: ArtifactStore, record: EditRecord, key: str, info: dict[str, Any] | None = None, *,
+                append: bool = True) -> Iterator[EditWriter]:
     """Write one edit atomically: yields an :class:`EditWriter` on a staged directory; when the block succeeds
     the directory (with ``_SUCCESS.json``: ``key``, byte counts, ``info``) replaces
-    ``edits/<run>/<seq>/<edit>`` and ``record`` (status ``"succeeded"``) is appended to the edits table. When
-    the block raises nothing is written."""
+    ``edits/<run>/<seq>/<edit>`` and ``record`` (status ``"succeeded"``) is appended to the edits table (unless
+    ``append`` is false: the caller appends it, e.g. with the other attempts of a mining run). When the block
+    raises nothing is written."""
     if record.status != "succeeded":
         raise ValueError(f"staged_edit: the record's status is {record.status!r}, not 'succeeded'")
     rel = edit_dir(record.run_id, record.seq_id, record.edit_id)
@@ -385,7 +424,8 @@ def staged_edit(store: ArtifactStore, record: EditRecord, key: str, info: dict[s
         mark_done(store, tmp, key, {"run_id": record.run_id, "seq_id": record.seq_id, "edit_id": record.edit_id,
                                     "bytes": {**sizes, "total": sum(sizes.values())}, "renders": writer.renders,
                                     **dict(info or {})})
-    append_edit_record(store, record)
+    if append:
+        append_edit_record(store, record)
 
 
 def read_edit_manifest(store: ArtifactStore, run_id: str, seq_id: str, edit_id: str) -> dict[str, Any] | None:

@@ -13,7 +13,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from storage.errors import CorruptArtifactError
-from storage.schemas import schema_from_metadata, schema_name, validate_table
+from storage.schemas import fill_added_columns, schema_from_metadata, schema_name, validate_table
 
 logger = logging.getLogger(__name__)
 
@@ -54,5 +54,6 @@ def read_parquet(source_file: pa.NativeFile, schema: pa.Schema | str, source: st
     if isinstance(schema, str):
         schema = schema_from_metadata(schema, table.schema.metadata, source)
     validate_table(table, schema, source)
+    table = fill_added_columns(table, schema)
     logger.debug("read %s (%s, %d rows)", source, schema_name(schema), table.num_rows)
     return table.select(schema.names).cast(schema)

@@ -20,7 +20,9 @@ Type decisions:
   non-rigid node's Gaussians at one frame (one file per node, ``node_poses.deform_uri`` points at it).
   The asset bank stores a deformable asset's offsets the same way (``assets.deform_uri``).
 * Strings are never null: "absent" is the empty string (``image_uri``, ``deform_uri``,
-  ``failure_reason``, ``caption``). Every column is non-nullable.
+  ``failure_reason``, ``caption``). Every column is non-nullable, except columns added to a table in a later
+  version (e.g. the ``edits`` table's mining columns): they are nullable, and a file of an older version that
+  lacks them is read with them all null.
 """
 
 from __future__ import annotations
@@ -42,10 +44,11 @@ def vec(width: int) -> pa.DataType:
     return pa.list_(pa.float32(), width)
 
 
-def _schema(name: str, version: int, fields: list[tuple[str, pa.DataType]], **dims: int) -> pa.Schema:
+def _schema(name: str, version: int, fields: list[tuple[str, pa.DataType]], *, nullable: tuple[str, ...] = (),
+            **dims: int) -> pa.Schema:
     metadata = {SCHEMA_NAME_KEY: name, SCHEMA_VERSION_KEY: str(version)}
     metadata.update({key: str(value) for key, value in dims.items()})
-    return pa.schema([pa.field(n, t, nullable=False) for n, t in fields], metadata=metadata)
+    return pa.schema([pa.field(n, t, nullable=n in nullable) for n, t in fields], metadata=metadata)
 
 
 # ----------------------------------------------------------------------------- log tables
@@ -228,9 +231,15 @@ ASSETS_SCHEMA = _schema(
 )
 
 # ----------------------------------------------------------------------------- run tables
+#: Mining columns of the ``edits`` table (version 2; null in rows of ``simsplat edit`` and in version-1 files).
+EDITS_MINING_COLUMNS: tuple[str, ...] = (
+    "mining_status", "scenario", "source", "category", "follows_prompt", "plausibility", "adjustment", "export",
+    "client", "seconds_propose", "seconds_command", "seconds_edit", "seconds_render", "seconds_judge",
+)
+
 EDITS_SCHEMA = _schema(
     "edits",
-    1,
+    2,  # 2: mining columns (nullable)
     [
         ("run_id", pa.string()),
         ("seq_id", pa.string()),
@@ -240,7 +249,22 @@ EDITS_SCHEMA = _schema(
         ("command_json", pa.string()),
         ("status", pa.string()),
         ("failure_reason", pa.string()),  # "" when the attempt succeeded
+        ("mining_status", pa.string()),  # "accepted" | "rejected" | "refused" | "failed" (mining.attempts)
+        ("scenario", pa.int32()),  # index of the mined proposal in its sequence
+        ("source", pa.string()),  # "seed" | "client"
+        ("category", pa.string()),  # one of the six edit categories ("" when unknown)
+        ("follows_prompt", pa.bool_()),  # the judge's answers (null when not judged)
+        ("plausibility", pa.int32()),
+        ("adjustment", pa.string()),  # what changed from the previous attempt
+        ("export", pa.bool_()),  # an accepted scenario marked for export (false for a plain `simsplat edit`)
+        ("client", pa.string()),  # the VLM client's name
+        ("seconds_propose", pa.float64()),
+        ("seconds_command", pa.float64()),
+        ("seconds_edit", pa.float64()),
+        ("seconds_render", pa.float64()),
+        ("seconds_judge", pa.float64()),
     ],
+    nullable=EDITS_MINING_COLUMNS,
 )
 
 TRAJECTORIES_SCHEMA = _schema(
@@ -385,8 +409,11 @@ def validate_table(table: pa.Table, schema: pa.Schema, source: str, *, require_m
     """
     problems = _metadata_problems(_meta(table.schema.metadata), _meta(schema.metadata), require_metadata)
     actual_names = set(table.schema.names)
+    older = _older_version(table.schema, schema)
     for field in schema:
         if field.name not in actual_names:
+            if field.nullable and older:  # added in a later version: read as nulls (fill_added_columns)
+                continue
             problems.append(f"column {field.name!r} is missing (expected {field.type})")
             continue
         actual = table.schema.field(field.name).type
@@ -402,6 +429,23 @@ def validate_table(table: pa.Table, schema: pa.Schema, source: str, *, require_m
     if problems:
         name = _meta(schema.metadata).get(SCHEMA_NAME_KEY, "?")
         raise SchemaError(f"{source}: does not match schema {name!r}: " + "; ".join(problems))
+
+
+def _older_version(actual: pa.Schema, expected: pa.Schema) -> bool:
+    """The table's ``schema_version`` is older than ``expected``'s (False when either has none)."""
+    try:
+        return int(_meta(actual.metadata)[SCHEMA_VERSION_KEY]) < schema_version(expected)
+    except (KeyError, ValueError):
+        return False
+
+
+def fill_added_columns(table: pa.Table, schema: pa.Schema) -> pa.Table:
+    """``table`` with every nullable column of ``schema`` it lacks appended as nulls (a file written before the
+    column was added; :func:`validate_table` accepts it only then)."""
+    for field in schema:
+        if field.name not in table.schema.names and field.nullable:
+            table = table.append_column(field, pa.nulls(table.num_rows, field.type))
+    return table
 
 
 def _metadata_problems(actual: dict[str, str], expected: dict[str, str], required: bool) -> list[str]:
@@ -465,7 +509,8 @@ def json_schema(schema: pa.Schema) -> dict:
         "description": f"one row of table {meta.get(SCHEMA_NAME_KEY, '')!r}, schema_version "
         f"{meta.get(SCHEMA_VERSION_KEY, '?')}",
         "type": "object",
-        "properties": {field.name: _json_type(field.type) for field in schema},
+        "properties": {field.name: _json_type(field.type) if not field.nullable
+                       else {"anyOf": [_json_type(field.type), {"type": "null"}]} for field in schema},
         "required": [field.name for field in schema if not field.nullable],
         "additionalProperties": False,
     }

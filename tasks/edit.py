@@ -336,9 +336,11 @@ def _before_after(log: SceneLog, edited: EditedScene, language: LanguageScene, s
 
 
 def write_edit(store: ArtifactStore, record: EditRecord, key: str, loaded: LoadedEdit, program: EditProgram,
-               edited: EditedScene, seconds: dict[str, float], progress: Progress | None = None) -> dict[str, int]:
-    """Render and write the edit directory atomically (``storage.edits.staged_edit``); returns bytes per part.
-    Adds ``render`` (rasterizing, edited and original) and ``write`` (encoding, pictures, files) to ``seconds``."""
+               edited: EditedScene, seconds: dict[str, float], progress: Progress | None = None, *,
+               append: bool = True) -> dict[str, int]:
+    """Render and write the edit directory atomically (``storage.edits.staged_edit``; ``append``: also append
+    ``record`` to the edits table); returns bytes per part. Adds ``render`` (rasterizing, edited and original) and
+    ``write`` (encoding, pictures, files) to ``seconds``."""
     ctx = loaded.ctx
     log = ctx.log
     frames = sorted({img.frame_idx for img in log.images})
@@ -354,7 +356,7 @@ def write_edit(store: ArtifactStore, record: EditRecord, key: str, loaded: Loade
             "prompt": record.prompt}
     render_s = 0.0
     t = time.perf_counter()
-    with staged_edit(store, record, key, info) as writer:
+    with staged_edit(store, record, key, info, append=append) as writer:
         writer.command(program)
         writer.trajectories(record.edit_id, after)
         writer.delta(edited.delta, DeltaBase(log.seq_id, loaded.scene_hash, loaded.bank_hash,

@@ -102,3 +102,18 @@ class StepProgress:
         except Exception:  # the API may be unreachable; progress must never break the work
             self._artifact_failed = True
             logger.warning("could not publish Prefect progress for %s", self.label, exc_info=True)
+
+
+def publish_table(rows: list[dict[str, Any]], key: str, description: str) -> bool:
+    """Publish ``rows`` as a Prefect table artifact named ``key`` (lowercase letters, digits and dashes) when
+    inside a task or flow run; returns whether it was published. Never raises (logged and ignored)."""
+    try:
+        if not _in_prefect_run():
+            return False
+        from prefect.artifacts import create_table_artifact
+
+        create_table_artifact(rows, key=key, description=description)
+        return True
+    except Exception:  # the API may be unreachable; publishing must never break the work
+        logger.warning("could not publish the Prefect table %s", key, exc_info=True)
+        return False

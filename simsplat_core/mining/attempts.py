@@ -34,9 +34,12 @@ STAGES: tuple[str, ...] = ("propose", "command", "edit", "render", "judge")
 #: ``edits.status`` of each attempt status (the table knows ``succeeded`` / ``refused`` / ``failed``; a rejected
 #: attempt ran but is not kept: ``failed``, its ``failure_reason`` starting with ``rejected:``).
 TABLE_STATUS: dict[str, str] = {"accepted": "succeeded", "rejected": "failed", "refused": "refused", "failed": "failed"}
-#: Columns of the ``edits`` table (``storage.schemas.EDITS_SCHEMA``), in its order.
+#: Columns of the ``edits`` table (``storage.schemas.EDITS_SCHEMA``, version 2), in its order: the edit's, then
+#: the mining columns (:func:`attempt_row`'s extras).
 EDITS_COLUMNS: tuple[str, ...] = ("run_id", "seq_id", "edit_id", "attempt", "prompt", "command_json", "status",
-                                  "failure_reason")
+                                  "failure_reason", "mining_status", "scenario", "source", "category",
+                                  "follows_prompt", "plausibility", "adjustment", "export", "client",
+                                  *(f"seconds_{stage}" for stage in STAGES))
 
 
 def scenario_key(seq_id: str, seed: int, scenario: int, prompt: str) -> str:
@@ -131,8 +134,9 @@ class MiningResult:
 
 
 def attempt_row(record: AttemptRecord, run_id: str, client: str = "") -> dict[str, Any]:
-    """``record`` as one row: the ``edits`` table's columns (:data:`EDITS_COLUMNS`; ``status`` mapped by
-    :data:`TABLE_STATUS`) and the mining extras ``mining_status``, ``scenario``, ``source``, ``category``,
+    """``record`` as one row of the ``edits`` table (:data:`EDITS_COLUMNS`; ``status`` mapped by
+    :data:`TABLE_STATUS`, the attempt's own status in ``mining_status``): the edit's columns and the mining ones
+    ``mining_status``, ``scenario``, ``source``, ``category``,
     ``follows_prompt``, ``plausibility``, ``adjustment``, ``export``, ``client`` and ``seconds_<stage>``."""
     row: dict[str, Any] = {
         "run_id": run_id, "seq_id": record.seq_id, "edit_id": record.edit_id, "attempt": record.attempt,

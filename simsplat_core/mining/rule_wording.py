@@ -51,8 +51,8 @@ CONTEXT_PHRASES: dict[str, tuple[str, ...]] = {n: _relative_phrases(voc.LOCATION
                                                for n in voc.LOCATION_CONTEXT.names}
 #: Motion class -> adjectives before the noun ("the parked van") and phrases after it ("turning left"). Classes
 #: whose words read as an edit ("slowing down", "changing lanes") are never said.
-MOTION_BEFORE: dict[str, tuple[str, ...]] = {voc.PARKED: ("parked",), voc.STOPPED: ("stopped",),
-                                             voc.STANDING: ("standing",), voc.WALKING_ALONG: ("walking",)}
+MOTION_BEFORE: dict[str, tuple[str, ...]] = {voc.PARKED: (voc.PARKED,), voc.STOPPED: (voc.STOPPED,),
+                                             voc.STANDING: (voc.STANDING,), voc.WALKING_ALONG: ("walking",)}
 MOTION_AFTER: dict[str, tuple[str, ...]] = {
     voc.TURNING_LEFT: ("turning left",), voc.TURNING_RIGHT: ("turning right",),
     voc.GOING_STRAIGHT: ("going straight", "driving straight"),

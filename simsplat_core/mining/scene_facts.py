@@ -450,7 +450,7 @@ def agent_line(a: AgentFacts) -> str:
     """``"veh_02: a white van, 33 m ahead and 11 m to the left, in an oncoming lane, moving at 6.2 m/s
     (stopping)"``."""
     what = a.caption or f"a {a.category}"
-    state = f"moving at {a.speed_mps:.1f} m/s" if a.moving else ("standing" if a.kind != "static" else "static")
+    state = f"moving at {a.speed_mps:.1f} m/s" if a.moving else (voc.STANDING if a.kind != "static" else "static")
     motion = f" ({a.motion.replace('_', ' ')})" if a.motion else ""
     extra = []
     if a.lane_change_sides:

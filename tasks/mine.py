@@ -1,0 +1,204 @@
+"""Mine one stored sequence for scenarios and store them (what ``simsplat mine`` runs per sequence).
+
+Thin: load the sequence's edit context (``tasks.edit.load_edit_context``), build the VLM client (the rule-based
+one of the seed, or the OpenAI-compatible one from ``SIMSPLAT_VLM_URL`` / ``SIMSPLAT_VLM_MODEL`` /
+``SIMSPLAT_VLM_API_KEY``), call ``simsplat_core.mining.mine_sequence``, then store:
+
+* every accepted scenario as an edit directory ``edits/<run_id>/<seq_id>/<edit_id>/``, exactly as ``simsplat edit``
+  writes one (``tasks.edit.write_edit``; a scenario already stored under the same key is not re-rendered);
+* one row per attempt in the run's ``edits`` table, all rows of the sequence appended in one atomic rewrite
+  (``storage.edits.append_edit_records``), with the mining columns (``mining_status``, ``category``,
+  ``plausibility``, ``export``, stage seconds, ...).
+
+Inside a Prefect run it publishes a progress artifact (accepted / wanted) while mining and a table artifact of the
+accepted scenarios at the end; called as ``mine_sequence_task.fn(...)`` it is a plain function.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import re
+import time
+from collections import Counter
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from prefect import task
+from prefect.cache_policies import NO_CACHE
+
+from simsplat_core.editing.commands import program_from_json
+from simsplat_core.mining.attempts import EDITS_COLUMNS, AttemptRecord, attempt_rows
+from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequence
+from simsplat_core.mining.vlm_protocol import VLMClient
+from storage import ArtifactStore
+from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
+from tasks.edit import LoadedEdit, edit_key, load_edit_context, write_edit
+from tasks.progress import StepProgress, publish_table
+
+logger = logging.getLogger(__name__)
+
+#: ``--vlm`` choices.
+VLM_KINDS: tuple[str, ...] = ("rule", "openai")
+_EDIT_COLUMNS = EDITS_COLUMNS[:8]  # the edit's own columns; the rest are the mining columns
+
+
+@dataclass(frozen=True)
+class MinedScenario:
+    """One accepted (exported) scenario: where it is stored and how it was found.
+
+    Attributes:
+        attempts: the attempt of its scenario that was accepted (1 = as first proposed).
+        plausibility: the judge's plausibility (``None`` when not judged).
+        edit_dir: URI of the stored edit directory.
+    """
+
+    seq_id: str
+    edit_id: str
+    prompt: str
+    category: str
+    attempts: int
+    plausibility: int | None
+    edit_dir: str
+
+
+@dataclass(frozen=True)
+class MiningSummary:
+    """What :func:`mine_sequence_task` did in one sequence.
+
+    Attributes:
+        attempts: attempts made (rows appended); accepted: scenarios accepted and stored.
+        statuses: attempts per mining status (accepted / rejected / refused / failed).
+        per_category: accepted scenarios per edit category.
+        seconds: per stage (``load``, ``propose``, ``command``, ``edit``, ``render``, ``judge``, ``write``,
+            ``total``).
+        edits_table: URI of the run's edits table.
+        scenarios: the accepted scenarios, in order.
+    """
+
+    seq_id: str
+    run_id: str
+    client: str
+    attempts: int
+    accepted: int
+    statuses: dict[str, int] = field(default_factory=dict)
+    per_category: dict[str, int] = field(default_factory=dict)
+    seconds: dict[str, float] = field(default_factory=dict)
+    edits_table: str = ""
+    scenarios: tuple[MinedScenario, ...] = ()
+
+
+def make_client(vlm: str, loaded: LoadedEdit, config: MiningConfig) -> VLMClient:
+    """The mining client: ``"rule"`` (the rule-based client of ``config.seed``) or ``"openai"`` (from the
+    environment; the key is never logged).
+
+    Raises:
+        ValueError: an unknown ``vlm``; VLMError: ``"openai"`` without an endpoint configured.
+    """
+    if vlm == "rule":
+        return default_client(loaded.ctx, config)
+    if vlm == "openai":
+        from simsplat_core.mining.openai_vlm import OpenAIVLMClient
+        from simsplat_core.vlm.openai_chat import OpenAIChatClient, OpenAIChatConfig
+
+        return OpenAIVLMClient(OpenAIChatClient(OpenAIChatConfig.from_env()))
+    raise ValueError(f"unknown VLM client {vlm!r}; choose one of {list(VLM_KINDS)}")
+
+
+def _edit_record(row: dict[str, Any]) -> EditRecord:
+    """An attempt row (``mining.attempts.attempt_row``) as an :class:`EditRecord` (numbered when appended)."""
+    edit = {k: row[k] for k in _EDIT_COLUMNS if k != "attempt"}
+    return EditRecord(**edit, mining={k: row[k] for k in EDITS_COLUMNS[8:]})
+
+
+def _unstored(record: EditRecord, exc: Exception) -> EditRecord:
+    """The row of an accepted attempt whose edit could not be stored: failed, not exported."""
+    return dataclasses.replace(record, status="failed", failure_reason=f"error: {type(exc).__name__}: {exc}",
+                               mining={**record.mining, "mining_status": "failed", "export": False})
+
+
+def _store_accepted(store: ArtifactStore, loaded: LoadedEdit, config: MiningConfig, attempt: AttemptRecord,
+                    record: EditRecord, seconds: dict[str, float]) -> str:
+    """Write the edit directory of an accepted attempt (unless stored under the same key); returns its URI."""
+    assert attempt.edited is not None
+    program = program_from_json(attempt.program_json, source=f"mined scenario {attempt.edit_id}")
+    key = edit_key(loaded, attempt.prompt, program, config.options)
+    rel = edit_dir(record.run_id, record.seq_id, record.edit_id)
+    manifest = read_edit_manifest(store, record.run_id, record.seq_id, record.edit_id)
+    if manifest is not None and manifest.get("key") == key:
+        logger.info("%s: scenario %s already stored, skipping", record.seq_id, record.edit_id)
+        return store.uri(rel)
+    timing: dict[str, float] = {}
+    write_edit(store, record, key, loaded, program, attempt.edited, timing, append=False)
+    seconds["write"] = seconds.get("write", 0.0) + sum(timing.values())
+    return store.uri(rel)
+
+
+def _artifact_key(seq_id: str) -> str:
+    return "mining-" + (re.sub(r"[^a-z0-9-]+", "-", seq_id.lower()).strip("-") or "sequence")
+
+
+@task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
+def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,
+                       vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str] = (),
+                       client: VLMClient | None = None) -> MiningSummary:
+    """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
+    under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client
+    with another judge configuration).
+
+    Raises:
+        FileNotFoundError: the store lacks the sequence's log, language scene, or an asset bank (naming the store
+            and what to run).
+        VLMError: ``vlm="openai"`` without an endpoint configured.
+    """
+    started = time.perf_counter()
+    store = ArtifactStore(store_root)
+    loaded = load_edit_context(store, seq_id)
+    if not loaded.bank_hash:
+        raise FileNotFoundError(f"{store.uri('assets')}: no asset bank to mine {seq_id!r} with "
+                                "(run `simsplat assets build` first)")
+    config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed)
+    client = client if client is not None else make_client(vlm, loaded, config)
+    logger.info("%s: mining %d scenario(s) with %s (max %d attempts each, seed %d)", seq_id, per_sequence,
+                client.name, max_attempts, seed)
+    step = StepProgress(f"mine {seq_id}", headline="")
+    result = mine_sequence(loaded.ctx, client, config, seed_prompts=tuple(seed_prompts),
+                           progress=lambda accepted, wanted: step(accepted, wanted))
+    seconds = {"load": loaded.seconds, **{k: float(v) for k, v in result.seconds.items()}, "write": 0.0}
+
+    records: list[EditRecord] = []
+    scenarios: list[MinedScenario] = []
+    error: Exception | None = None
+    for attempt, row in zip(result.records, attempt_rows(result, run_id)):
+        record = _edit_record(row)
+        if attempt.status == "accepted":
+            if error is None:
+                try:
+                    uri = _store_accepted(store, loaded, config, attempt, record, seconds)
+                    scenarios.append(MinedScenario(seq_id, attempt.edit_id, attempt.prompt, attempt.category,
+                                                   attempt.attempt, attempt.plausibility, uri))
+                except Exception as exc:  # recorded as failed with the other attempts' rows, then raised
+                    error = exc
+            if error is not None:  # this one or an earlier accepted one could not be stored
+                record = _unstored(record, error)
+        records.append(record)
+    append_edit_records(store, records)
+    if error is not None:
+        raise error
+    step(per_sequence, per_sequence)  # the last report: done, whatever was accepted
+    seconds["total"] = time.perf_counter() - started
+
+    table = [{"prompt": s.prompt, "category": s.category, "attempts": s.attempts, "plausibility": s.plausibility,
+              "edit_dir": s.edit_dir} for s in scenarios]
+    publish_table(table, _artifact_key(seq_id), f"Scenarios mined in {seq_id} (run {run_id}, {client.name})")
+    summary = MiningSummary(
+        seq_id=seq_id, run_id=run_id, client=client.name, attempts=len(result.records), accepted=len(scenarios),
+        statuses=dict(Counter(r.status for r in result.records)),
+        per_category=dict(Counter(s.category for s in scenarios)), seconds=seconds,
+        edits_table=store.uri(edits_table_relpath(run_id)), scenarios=tuple(scenarios))
+    logger.info("%s: %d attempt(s), %d accepted (%s)", seq_id, summary.attempts, summary.accepted, summary.statuses)
+    return summary
+
+
+__all__ = ["VLM_KINDS", "MinedScenario", "MiningSummary", "make_client", "mine_sequence_task"]
