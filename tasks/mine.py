@@ -34,6 +34,7 @@ from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequenc
 from simsplat_core.mining.vlm_protocol import VLMClient
 from storage import ArtifactStore
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
+from storage.schemas import EDITS_MINING_COLUMNS
 from tasks.edit import LoadedEdit, edit_key, load_edit_context, write_edit
 from tasks.progress import StepProgress, publish_table
 
@@ -41,7 +42,6 @@ logger = logging.getLogger(__name__)
 
 #: ``--vlm`` choices.
 VLM_KINDS: tuple[str, ...] = ("rule", "openai")
-_EDIT_COLUMNS = EDITS_COLUMNS[:8]  # the edit's own columns; the rest are the mining columns
 
 
 @dataclass(frozen=True)
@@ -108,8 +108,8 @@ def make_client(vlm: str, loaded: LoadedEdit, config: MiningConfig) -> VLMClient
 
 def _edit_record(row: dict[str, Any]) -> EditRecord:
     """An attempt row (``mining.attempts.attempt_row``) as an :class:`EditRecord` (numbered when appended)."""
-    edit = {k: row[k] for k in _EDIT_COLUMNS if k != "attempt"}
-    return EditRecord(**edit, mining={k: row[k] for k in EDITS_COLUMNS[8:]})
+    edit = {k: row[k] for k in EDITS_COLUMNS if k not in EDITS_MINING_COLUMNS and k != "attempt"}
+    return EditRecord(**edit, mining={k: row[k] for k in EDITS_MINING_COLUMNS})
 
 
 def _unstored(record: EditRecord, exc: Exception) -> EditRecord:

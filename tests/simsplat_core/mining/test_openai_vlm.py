@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -21,9 +20,10 @@ from simsplat_core.mining import (
     VLMClient,
 )
 from simsplat_core.mining.vlm_prompts import COMMAND_TOOL, JUDGE_TOOL, PROPOSE_TOOL
-from simsplat_core.vlm import ENV_API_KEY, OpenAIChatClient, OpenAIChatConfig, VLMError
+from simsplat_core.vlm import ENV_API_KEY, VLMError
 from tests.simsplat_core.vlm.chat_server import (
     ChatServer,
+    chat_client,
     images_of,
     sequence,
     slow,
@@ -50,22 +50,8 @@ def _image(rgb: tuple[int, int, int], shape: tuple[int, int] = (8, 12)) -> np.nd
     return np.broadcast_to(np.array(rgb, np.uint8), (*shape, 3)).copy()
 
 
-@pytest.fixture(scope="module")
-def module_server() -> Iterator[ChatServer]:
-    srv = ChatServer().start()
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture()
-def server(module_server: ChatServer) -> ChatServer:
-    return module_server.reset()
-
-
 def _vlm(server: ChatServer, sleeps: list[float] | None = None, **kw: Any) -> OpenAIVLMClient:
-    kw.setdefault("backoff_s", 0.0)
-    config = OpenAIChatConfig(base_url=server.base_url, model="test-vlm", **kw)
-    return OpenAIVLMClient(OpenAIChatClient(config, sleep=sleeps.append if sleeps is not None else lambda s: None))
+    return OpenAIVLMClient(chat_client(server, sleeps, **kw))
 
 
 def _judge_request() -> JudgeRequest:

@@ -24,6 +24,8 @@ from typing import Any
 import cv2
 import numpy as np
 
+from simsplat_core.vlm import OpenAIChatClient, OpenAIChatConfig
+
 Reply = Callable[[dict[str, Any]], tuple[Any, ...]]
 
 
@@ -182,3 +184,11 @@ class ChatServer:
     def stop(self) -> None:
         self._httpd.shutdown()
         self._httpd.server_close()
+
+
+
+def chat_client(server: ChatServer, sleeps: list[float] | None = None, **kw: Any) -> OpenAIChatClient:
+    """A client of ``server`` with no back-off wait (``sleeps`` records the back-off it would have slept)."""
+    kw.setdefault("backoff_s", 0.0)
+    config = OpenAIChatConfig(base_url=server.base_url, model="test-vlm", **kw)
+    return OpenAIChatClient(config, sleep=sleeps.append if sleeps is not None else lambda s: None)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
@@ -24,6 +23,7 @@ from simsplat_core.vlm import (
 )
 from tests.simsplat_core.vlm.chat_server import (
     ChatServer,
+    chat_client,
     sequence,
     slow,
     status_reply,
@@ -47,22 +47,6 @@ GOOD = {"colour": "red", "wheels": 4}
 GOOD_REPORT = CarReport(colour="red", wheels=4)
 
 
-@pytest.fixture(scope="module")
-def module_server() -> Iterator[ChatServer]:
-    srv = ChatServer().start()
-    yield srv
-    srv.stop()
-
-
-@pytest.fixture()
-def server(module_server: ChatServer) -> ChatServer:
-    return module_server.reset()
-
-
-def _client(server: ChatServer, sleeps: list[float] | None = None, **kw: Any) -> OpenAIChatClient:
-    kw.setdefault("backoff_s", 0.0)
-    config = OpenAIChatConfig(base_url=server.base_url, model="test-vlm", **kw)
-    return OpenAIChatClient(config, sleep=sleeps.append if sleeps is not None else lambda s: None)
 
 
 def _call(client: OpenAIChatClient) -> CarReport:
@@ -72,7 +56,7 @@ def _call(client: OpenAIChatClient) -> CarReport:
 
 def test_a_good_answer_is_validated_and_the_request_forces_the_tool(server: ChatServer) -> None:
     server.reply = tool_reply(TOOL, GOOD)
-    report = _client(server).call_tool([user_message("Describe the car.")], TOOL, "Report the car.",
+    report = chat_client(server).call_tool([user_message("Describe the car.")], TOOL, "Report the car.",
                                        CarReport.model_json_schema(), CarReport.model_validate, max_tokens=99)
     assert report == CarReport(colour="red", wheels=4)
     (req,) = server.requests
@@ -86,13 +70,13 @@ def test_a_good_answer_is_validated_and_the_request_forces_the_tool(server: Chat
 
 def test_a_json_object_in_the_content_is_accepted_from_servers_without_tool_calling(server: ChatServer) -> None:
     server.reply = text_reply('```json\n{"colour": "blue", "wheels": 6}\n```')
-    assert _call(_client(server)) == CarReport(colour="blue", wheels=6)
+    assert _call(chat_client(server)) == CarReport(colour="blue", wheels=6)
 
 
 def test_malformed_json_is_retried_and_the_model_is_told_what_was_wrong(server: ChatServer) -> None:
     server.reply = sequence(tool_reply(TOOL, '{"colour": "red", "wheels": 4'), tool_reply(TOOL, GOOD))
     sleeps: list[float] = []
-    report = _call(_client(server, sleeps, backoff_s=0.25, max_retries=2))
+    report = _call(chat_client(server, sleeps, backoff_s=0.25, max_retries=2))
     assert report.colour == "red"
     assert len(server.requests) == 2 and sleeps == [0.25]
     first, second = (r["body"]["messages"] for r in server.requests)
@@ -105,7 +89,7 @@ def test_malformed_json_is_retried_and_the_model_is_told_what_was_wrong(server: 
 def test_schema_violations_are_retried_then_fail_naming_the_field(server: ChatServer) -> None:
     server.reply = tool_reply(TOOL, {"colour": "red", "wheels": 40})
     with pytest.raises(VLMError) as err:
-        _call(_client(server, max_retries=2))
+        _call(chat_client(server, max_retries=2))
     message = str(err.value)
     assert server.base_url in message and f"tool {TOOL}" in message and "after 3 attempt(s)" in message
     assert "wheels" in message and "less than or equal to 18" in message
@@ -116,13 +100,13 @@ def test_schema_violations_are_retried_then_fail_naming_the_field(server: ChatSe
 
 def test_invalid_then_valid_returns_the_valid_answer(server: ChatServer) -> None:
     server.reply = sequence(tool_reply(TOOL, {"colour": "red", "wheels": 4, "doors": 2}), tool_reply(TOOL, GOOD))
-    assert _call(_client(server, max_retries=1)) == GOOD_REPORT
+    assert _call(chat_client(server, max_retries=1)) == GOOD_REPORT
     assert "doors" in texts_of(server.requests[1]["body"], role="user")[-1]
 
 
 def test_no_tool_call_and_the_wrong_tool_are_malformed_answers(server: ChatServer) -> None:
     server.reply = sequence(text_reply("It is a red car."), tool_reply("other_tool", GOOD), tool_reply(TOOL, GOOD))
-    assert _call(_client(server, max_retries=2)) == GOOD_REPORT
+    assert _call(chat_client(server, max_retries=2)) == GOOD_REPORT
     turns = texts_of(server.requests[2]["body"], role="user")
     assert "no JSON object" in turns[1] and "called other_tool instead of report_car" in turns[2]
 
@@ -131,7 +115,7 @@ def test_server_errors_are_retried_with_back_off_and_retry_after(server: ChatSer
     server.reply = sequence(status_reply(429, "slow down"), status_reply(429, "slow down", {"Retry-After": "7"}),
                             status_reply(503, "busy", {"Retry-After": "9"}), tool_reply(TOOL, GOOD))
     sleeps: list[float] = []
-    assert _call(_client(server, sleeps, backoff_s=0.5, max_retries=3)) == GOOD_REPORT
+    assert _call(chat_client(server, sleeps, backoff_s=0.5, max_retries=3)) == GOOD_REPORT
     assert len(server.requests) == 4
     assert sleeps == [0.5, 7.0, 2.0]  # doubling back-off, stretched by a 429's Retry-After (not a 503's)
 
@@ -139,34 +123,34 @@ def test_server_errors_are_retried_with_back_off_and_retry_after(server: ChatSer
 def test_retry_after_is_capped(server: ChatServer) -> None:
     server.reply = sequence(status_reply(429, "later", {"Retry-After": "86400"}), tool_reply(TOOL, GOOD))
     sleeps: list[float] = []
-    _call(_client(server, sleeps, backoff_s=0.1, max_retries=1))
+    _call(chat_client(server, sleeps, backoff_s=0.1, max_retries=1))
     assert sleeps == [MAX_RETRY_AFTER_S]
 
 
 def test_persistent_server_errors_fail_after_max_retries_plus_one_requests(server: ChatServer) -> None:
     server.reply = status_reply(500, "boom")
     with pytest.raises(VLMError, match=r"HTTP 500 after 3 attempt\(s\): boom"):
-        _call(_client(server, max_retries=2))
+        _call(chat_client(server, max_retries=2))
     assert len(server.requests) == 3
 
 
 def test_client_errors_are_not_retried(server: ChatServer) -> None:
     server.reply = status_reply(400, "tools are not supported by this model")
     with pytest.raises(VLMError, match="HTTP 400 after 1 attempt"):
-        _call(_client(server, max_retries=3))
+        _call(chat_client(server, max_retries=3))
     assert len(server.requests) == 1
 
 
 def test_a_slow_server_times_out_and_is_retried(server: ChatServer) -> None:
     server.reply = sequence(slow(0.5, tool_reply(TOOL, GOOD)), tool_reply(TOOL, GOOD))
-    assert _call(_client(server, max_retries=1, timeout_s=0.2)) == GOOD_REPORT
+    assert _call(chat_client(server, max_retries=1, timeout_s=0.2)) == GOOD_REPORT
     assert len(server.requests) == 2
 
 
 def test_a_server_slower_than_the_timeout_fails_after_the_retries(server: ChatServer) -> None:
     server.reply = slow(0.5, tool_reply(TOOL, GOOD))
     with pytest.raises(VLMError, match=r"request failed after 2 attempt\(s\): ReadTimeout"):
-        _call(_client(server, max_retries=1, timeout_s=0.2))
+        _call(chat_client(server, max_retries=1, timeout_s=0.2))
     assert len(server.requests) == 2
 
 
@@ -183,7 +167,7 @@ def test_concurrency_is_limited_per_client_across_threads() -> None:
             return tool_reply(TOOL, GOOD)(body)
 
         server.reply = held
-        client = _client(server, max_concurrency=2)
+        client = chat_client(server, max_concurrency=2)
         results: list[CarReport] = []
         threads = [threading.Thread(target=lambda: results.append(_call(client))) for _ in range(6)]
         for t in threads:
@@ -203,7 +187,7 @@ def test_the_key_is_sent_but_never_logged_or_shown(server: ChatServer, monkeypat
     server.reply = sequence(status_reply(503, f"overloaded, key {SECRET}"),
                             tool_reply(TOOL, {"colour": SECRET, "wheels": 99}),
                             status_reply(401, f"invalid api key {SECRET}"))
-    client = _client(server, max_retries=2)
+    client = chat_client(server, max_retries=2)
     with caplog.at_level(logging.DEBUG), pytest.raises(VLMError) as err:
         _call(client)
     assert all(r["headers"]["Authorization"] == f"Bearer {SECRET}" for r in server.requests)
@@ -217,13 +201,13 @@ def test_the_key_is_masked_in_a_final_tool_error(server: ChatServer, monkeypatch
     monkeypatch.setenv(ENV_API_KEY, SECRET)
     server.reply = tool_reply(TOOL, f'{{"colour": "{SECRET}", "wheels": 99')
     with pytest.raises(VLMError) as err:
-        _call(_client(server, max_retries=0))
+        _call(chat_client(server, max_retries=0))
     assert "not valid JSON" in str(err.value) and SECRET not in str(err.value)
 
 
 def test_complete_still_reads_text_answers(server: ChatServer) -> None:
     server.reply = sequence(status_reply(502, "gateway"), text_reply(" a white van "))
-    assert _client(server, max_retries=1).complete([user_message("x")]) == "a white van"
+    assert chat_client(server, max_retries=1).complete([user_message("x")]) == "a white van"
     assert "tools" not in server.requests[-1]["body"]
 
 
