@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -34,7 +35,14 @@ from simsplat_core.world.agents import Agent, EgoPlan, populate, sample_ego_plan
 from simsplat_core.world.captions import compose_caption, describe_appearance, describe_track
 from simsplat_core.world.config import WORLD_VERSION, WorldConfig, default_seq_id
 from simsplat_core.world.mesh import Mesh
-from simsplat_core.world.render import DrawList, Lighting, camera_intrinsics, camera_to_ego, render_view
+from simsplat_core.world.render import (
+    DrawList,
+    Lighting,
+    camera_intrinsics,
+    camera_to_ego,
+    render_view,
+    silhouette_view,
+)
 from simsplat_core.world.road import RoadLayout, sample_layout
 from simsplat_core.world.scenery import build_scenery
 
@@ -85,6 +93,16 @@ class World:
         """All triangles of ``frame`` (agents with their instance ids, scenery with 0)."""
         items = [(self.scenery, 0)] + [(a.world_mesh(frame), k + 1) for k, a in enumerate(self.agents)]
         return DrawList.build(items, self.lighting)
+
+    def silhouette_pixels(self, frame: int, instance_ids: Sequence[int]) -> dict[str, np.ndarray]:
+        """Per camera name, ``[N]`` int pixels each of ``instance_ids`` would cover at ``frame`` with nothing in
+        front of it (``render.silhouette_view``; compare with ``render``'s instance map to tell how much of an
+        object is hidden)."""
+        draw = self.draw_list(frame)
+        cfg = self.config
+        return {name: np.asarray([int(silhouette_view(draw, int(i), K, c2w, cfg.width, cfg.height).sum())
+                                  for i in instance_ids], dtype=np.int64)
+                for name, K, c2w in self.camera_poses(frame)}
 
     def shadows(self, frame: int) -> list[np.ndarray]:
         """Contact-shadow footprints of vehicles and pedestrians at ``frame``."""

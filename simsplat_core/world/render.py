@@ -94,6 +94,46 @@ class DrawList:
         return DrawList(merged.tris, merged.tex, lighting.shade(merged), mat, inst)
 
 
+def _draw_triangles(draw: DrawList, K: np.ndarray, cam_to_world: np.ndarray, noise_amp: float, seed: int,
+                    color: np.ndarray, depth: np.ndarray, inst: np.ndarray) -> None:
+    """Z-test ``draw``'s triangles into ``color [H, W, 3]``, ``depth [H, W]`` and ``inst [H, W]`` in place."""
+    if not len(draw.tris):
+        return
+    world_to_cam = invert_transform(cam_to_world)
+    tri_cam = draw.tris @ world_to_cam[:3, :3].T + world_to_cam[:3, 3]
+    rasterize_triangles(
+        np.ascontiguousarray(tri_cam),
+        np.ascontiguousarray(draw.tex),
+        np.ascontiguousarray(draw.color),
+        np.ascontiguousarray(draw.material),
+        np.ascontiguousarray(draw.instance),
+        float(K[0, 0]),
+        float(K[1, 1]),
+        float(K[0, 2]),
+        float(K[1, 2]),
+        NEAR,
+        float(noise_amp),
+        int(seed),
+        color,
+        depth,
+        inst,
+    )
+
+
+def silhouette_view(draw: DrawList, instance_id: int, K: np.ndarray, cam_to_world: np.ndarray, width: int,
+                    height: int) -> np.ndarray:
+    """``[H, W]`` bool: the pixels instance ``instance_id`` would cover with nothing in front of it (its own
+    triangles only, clipped to the image); the unoccluded silhouette that ``render_view``'s instance map cuts
+    down where other instances or scenery are nearer."""
+    keep = draw.instance == instance_id
+    alone = DrawList(draw.tris[keep], draw.tex[keep], draw.color[keep], draw.material[keep], draw.instance[keep])
+    color = np.zeros((height, width, 3), dtype=np.float32)
+    depth = np.full((height, width), np.inf, dtype=np.float32)
+    inst = np.zeros((height, width), dtype=np.int32)
+    _draw_triangles(alone, K, cam_to_world, 0.0, 0, color, depth, inst)
+    return inst == instance_id
+
+
 def render_view(
     layout: RoadLayout,
     draw: DrawList,
@@ -119,25 +159,6 @@ def render_view(
     depth = np.ascontiguousarray(depth)
     background_depth = depth.copy()
     inst = np.zeros((height, width), dtype=np.int32)
-    if len(draw.tris):
-        world_to_cam = invert_transform(cam_to_world)
-        tri_cam = draw.tris @ world_to_cam[:3, :3].T + world_to_cam[:3, 3]
-        rasterize_triangles(
-            np.ascontiguousarray(tri_cam),
-            np.ascontiguousarray(draw.tex),
-            np.ascontiguousarray(draw.color),
-            np.ascontiguousarray(draw.material),
-            np.ascontiguousarray(draw.instance),
-            float(K[0, 0]),
-            float(K[1, 1]),
-            float(K[0, 2]),
-            float(K[1, 2]),
-            NEAR,
-            float(noise_amp),
-            int(seed),
-            color,
-            depth,
-            inst,
-        )
+    _draw_triangles(draw, K, cam_to_world, noise_amp, seed, color, depth, inst)
     ground &= depth == background_depth
     return color, depth, inst, ground

@@ -141,6 +141,17 @@ class WorldViews:
                               np.stack([renders[c][5] for c in self.cameras]).astype(np.int32))
         return self._cache[f]
 
+    def silhouettes(self, frames: Sequence[int], object_ids: Sequence[str]) -> dict[str, np.ndarray]:
+        """Per object id, ``[F, C]`` pixels its unoccluded silhouette covers in ``views(frames)``
+        (``World.silhouette_pixels``)."""
+        ids = [self.world.instance[o] for o in object_ids]
+        counts = []
+        for f in frames:
+            per_camera = self.world.world.silhouette_pixels(int(f), ids)
+            counts.append(np.stack([per_camera[c] for c in self.cameras]))  # [C, N]
+        stacked = np.stack(counts) if counts else np.zeros((0, len(self.cameras), len(ids)), np.int64)
+        return {o: stacked[:, :, k] for k, o in enumerate(object_ids)}
+
     def views(self, frames: Sequence[int]) -> ViewSet:
         pairs = [self.frame(int(f)) for f in frames]
         return ViewSet(tuple(int(f) for f in frames), self.cameras, np.stack([p[0] for p in pairs]),
@@ -291,13 +302,15 @@ def evaluate_prompt(scene: EvalScene, prompt: EditPrompt, method: Method, config
     world = edit_world(truth.world, obs.before, obs.after, obs.looks, sources)
     views = WorldViews(world, truth.log.cameras)
     frames = pick_frames(scene, obs, views, config)
+    changes = state_changes(obs.before, obs.after)
+    shown = [o for o in (*changes.added, *changes.moved, *changes.redrawn) if o in world.instance]
     evidence = PixelEvidence(gaussian_views(edited.graph, truth.log, frames), views.views(frames),
                              log_views(truth.log, frames), dict(world.instance),
                              {o: f.instance_id for o, f in truth.facts.items()}, world.native,
-                             reference_captions(truth, prompt, obs, frames, sources))
+                             reference_captions(truth, prompt, obs, frames, sources),
+                             views.silhouettes(frames, shown))
     pixels = check_pixels(prompt.intent, obs, evidence)
     fidelity: FidelityScore | None = None
-    changes = state_changes(obs.before, obs.after)
     if all(o in world.native for o in (*changes.added, *changes.redrawn)):
         test = truth.test_frames
         fidelity = edit_fidelity(evidence.edited.take(test), evidence.world_edited.take(test),

@@ -179,6 +179,9 @@ class PixelEvidence:
             (an object without one, e.g. a procedural asset the world cannot build, is drawn by a stand-in).
         reference_captions: per inserted / replacing object, the captioner's caption of the world's own
             rendering of an object with the *asked* colours at the same place (``pixels.check_appearance``).
+        world_silhouette: per inserted / moved / redrawn object, ``[F, C]`` pixels it would cover in
+            ``world_edited``'s views with nothing in front of it (``World.silhouette_pixels``); with its pixels in
+            ``world_edited`` this tells how much of it the world shows (``pixels.expected_views``).
     """
 
     edited: ViewSet
@@ -188,6 +191,7 @@ class PixelEvidence:
     original_instance: dict[str, int]
     native: frozenset[str] = frozenset()
     reference_captions: dict[str, AppearanceCaption] = field(default_factory=dict)
+    world_silhouette: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 __all__ = ["CHANGE_TOL", "AssetLook", "EditObservation", "PixelEvidence", "StateChanges", "ViewSet",

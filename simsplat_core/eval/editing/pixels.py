@@ -5,7 +5,9 @@ renders with node ids, the world's own rendering of the same edit with instance 
 of the unedited scene, at the same frames and cameras.
 
 * **visible**: an inserted, moved or redrawn object should be seen where the world's rendering of the
-  edit shows it unoccluded (at least ``MIN_VIEW_PIXELS`` pixels of its instance in a view); there the
+  edit shows it mostly unoccluded (at least ``MIN_VIEW_PIXELS`` pixels of its instance in a view, and at
+  least ``MIN_UNOCCLUDED`` of the pixels its silhouette would cover with nothing in front of it: a sliver
+  past a nearer car is a place where the reconstructed neighbour's extent decides, not the edit); there the
   rendered node must cover at least ``MIN_COVER`` of those pixels, in at least ``MIN_VIEW_SHARE`` of the
   views. An object the world does not show in the checked frames (out of view, hidden behind others) has
   nothing to check in pixels (its place is checked on the trajectories).
@@ -36,6 +38,8 @@ from simsplat_core.language.appearance.subtypes import STATIC_SUBTYPES, VEHICLE_
 
 #: A view shows an object when it has at least this many of its pixels.
 MIN_VIEW_PIXELS = 40
+#: ... and at least this share of its unoccluded silhouette (``PixelEvidence.world_silhouette``).
+MIN_UNOCCLUDED = 0.5
 #: The rendered node must cover this share of the world's pixels of the object in a view.
 MIN_COVER = 0.3
 #: ... in this share of the views that show it.
@@ -47,12 +51,17 @@ CHECKABLE_SUBTYPES: frozenset[str] = frozenset(VEHICLE_SUBTYPES) | frozenset(STA
 
 
 def expected_views(evidence: PixelEvidence, object_id: str) -> list[tuple[int, int]]:
-    """``(frame row, camera)`` where the world's rendering of the edit shows ``object_id``."""
+    """``(frame row, camera)`` where the world's rendering of the edit shows ``object_id``, mostly unoccluded
+    when its silhouette is known."""
     inst = evidence.world_instance.get(object_id)
     if inst is None:
         return []
     counts = (evidence.world_edited.ids == inst).sum(axis=(2, 3))  # [F, C]
-    return [(int(f), int(c)) for f, c in zip(*np.nonzero(counts >= MIN_VIEW_PIXELS))]
+    shown = counts >= MIN_VIEW_PIXELS
+    silhouette = evidence.world_silhouette.get(object_id)
+    if silhouette is not None:
+        shown &= counts >= MIN_UNOCCLUDED * silhouette
+    return [(int(f), int(c)) for f, c in zip(*np.nonzero(shown))]
 
 
 def check_visible(evidence: PixelEvidence, object_id: str, node_id: int, v: Verdict) -> bool:
@@ -63,7 +72,7 @@ def check_visible(evidence: PixelEvidence, object_id: str, node_id: int, v: Verd
     """
     views = expected_views(evidence, object_id)
     if not views:
-        v.note(f"{object_id} out of sight in the checked frames")
+        v.note(f"{object_id} not mostly in sight in the checked frames (out of view or hidden)")
         return False
     inst = evidence.world_instance[object_id]
     covered = []
@@ -138,7 +147,7 @@ def check_removed(evidence: PixelEvidence, object_id: str, node_id: int, v: Verd
     counts = (orig.ids == inst).sum(axis=(2, 3))
     views = [(int(f), int(c)) for f, c in zip(*np.nonzero(counts >= MIN_VIEW_PIXELS))]
     if not views:
-        v.note(f"{object_id} out of sight in the checked frames")
+        v.note(f"{object_id} not mostly in sight in the checked frames (out of view or hidden)")
         return
     left = int(sum(int((evidence.edited.ids[f, c] == node_id).sum()) for f, c in views))
     v.require(left == 0, f"{left} pixels of removed node {node_id} still rendered")
@@ -178,5 +187,6 @@ def check_pixels(intent: EditIntent, obs: EditObservation, evidence: PixelEviden
     return v.result()
 
 
-__all__ = ["CHECKABLE_SUBTYPES", "MIN_CAPTION_PIXELS", "MIN_COVER", "MIN_VIEW_PIXELS", "MIN_VIEW_SHARE",
-           "check_appearance", "check_pixels", "check_removed", "check_visible", "expected_views", "object_crops"]
+__all__ = ["CHECKABLE_SUBTYPES", "MIN_CAPTION_PIXELS", "MIN_COVER", "MIN_UNOCCLUDED", "MIN_VIEW_PIXELS",
+           "MIN_VIEW_SHARE", "check_appearance", "check_pixels", "check_removed", "check_visible", "expected_views",
+           "object_crops"]

@@ -41,7 +41,20 @@ def test_visible_needs_the_node_where_the_world_shows_the_object() -> None:
     v = Verdict()  # the world does not show it (hidden / out of view): nothing to check in pixels
     hidden = PixelEvidence(_views(grey, _box(42, -1)), _views(grey, np.zeros((H, W))), world, {"new_0": 7}, {})
     assert not check_visible(hidden, "new_0", 42, v)
-    assert v.result().passed and "out of sight" in v.result().reason
+    assert v.result().passed and "not mostly in sight" in v.result().reason
+
+
+def test_a_sliver_of_an_object_mostly_hidden_behind_another_is_not_a_view_to_check() -> None:
+    grey = np.full((H, W, 3), 0.5)
+    world = _views(grey, _box(7, 0))  # 100 pixels of the object in sight
+    undrawn = PixelEvidence(_views(grey, np.full((H, W), -1)), world, world, {"new_0": 7}, {},
+                            world_silhouette={"new_0": np.array([[150]])})
+    v = Verdict()  # two thirds of it in sight: checked, and not drawn
+    assert check_visible(undrawn, "new_0", 42, v) and not v.result().passed
+    v = Verdict()  # a third of it in sight, the rest behind a nearer object: not checked in pixels
+    mostly_hidden = dataclasses.replace(undrawn, world_silhouette={"new_0": np.array([[300]])})
+    assert not check_visible(mostly_hidden, "new_0", 42, v)
+    assert v.result().passed and "not mostly in sight" in v.result().reason
 
 
 def test_removed_region_must_look_like_the_scene_without_it() -> None:

@@ -56,6 +56,18 @@ def test_inserting_a_native_car_makes_pixels_of_its_instance(scene) -> None:
     inst = edited.instance["new_0"]
     pixels = [int((r[5] == inst).sum()) for r in edited.render(0)]
     assert pixels[truth.log.cameras.index("front")] > 300
+    alone = edited.world.silhouette_pixels(0, [inst])  # nothing in front of it: its silhouette is what shows
+    assert [int(alone[c][0]) for c in truth.log.cameras] == pixels
+    # a second car parked right in front of it (from the ego) hides most of it; its silhouette is unchanged
+    nearer = truth.ego_xy[0] + 8.0 * np.array([np.cos(h), np.sin(h)])
+    blocked = after.with_agent("new_1", "vehicle", "inserted", xy=np.tile(nearer, (n, 1)), heading=np.full(n, h),
+                               speed=np.zeros(n), valid=np.ones(n, bool), size=(4.6, 1.8, 1.45), node_id=98)
+    look = AssetLook("vehicle", "sedan", "yellow", (4.6, 1.8, 1.45))
+    hidden = edit_world(truth.world, before, blocked, {"new_0": look, "new_1": look})
+    front = truth.log.cameras.index("front")
+    seen = int((hidden.render(0)[front][5] == hidden.instance["new_0"]).sum())
+    whole = int(hidden.world.silhouette_pixels(0, [hidden.instance["new_0"]])["front"][0])
+    assert whole == pixels[front] and seen < 0.5 * whole
     # procedural kinds are native (their own meshes); an unknown kind is drawn by a stand-in and reported
     for subtype, native in (("barrel", True), ("mailbox", False)):
         static = after.with_agent("new_0", "static", "inserted", xy=np.tile(xy, (n, 1)), heading=np.full(n, h),
