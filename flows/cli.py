@@ -35,6 +35,8 @@ app.add_typer(assets_app, name="assets")
 console = Console()
 logger = logging.getLogger("flows.cli")
 
+VLMOption = Annotated[str, typer.Option(help="VLM client of the mining loop: rule (built-in, offline) or openai "
+                                        "(SIMSPLAT_VLM_URL, SIMSPLAT_VLM_MODEL, SIMSPLAT_VLM_API_KEY).")]
 RunnerOption = Annotated[RunnerKind, typer.Option(help="Where per-sequence tasks run: a local Ray cluster or threads.")]
 WorkersOption = Annotated[int | None, typer.Option(help="Parallel workers (default: all CPUs).")]
 IterationsOption = Annotated[int | None, typer.Option(min=1, help="Reconstruction iterations per sequence "
@@ -146,15 +148,21 @@ def run(
     iterations: IterationsOption = None,
     align: Annotated[bool, typer.Option(help="Run the language-alignment stage after reconstruction.")] = True,
     captioner: CaptionerOption = "builtin",
+    mine: Annotated[int, typer.Option(min=0, help="After alignment, mine this many accepted scenarios per sequence "
+                                      "with a reconstructed scene (0: no mining; the asset bank is built first "
+                                      "when missing).")] = 0,
+    vlm: VLMOption = "rule",
 ) -> None:
     """Run the main job over every log in the store (ingested real logs included), after generating
     --sequences synthetic ones: one reconstructed scene per log with camera images, then language
     alignment (motion aligner trained on every log + one queryable language scene per log; a log without
-    images is aligned from its tracks and map) and the grounding benchmark on the synthetic logs."""
-    from flows.pipeline import main_flow, reconstruction_config
+    images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K,
+    scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/)."""
+    from flows.pipeline import MiningPlan, main_flow, reconstruction_config
     from storage import ArtifactStore, list_logs
 
     alignment = _alignment_config(captioner)
+    _check_vlm(vlm)
     if sequences == 0 and not list_logs(ArtifactStore(store)):
         raise typer.BadParameter(
             f"no driving log in {store}/logs: pass --sequences N to generate synthetic ones, "
@@ -163,7 +171,7 @@ def run(
         )
     result = _run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                        config=_world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
-                       alignment=alignment, align=align)
+                       alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None)
     _print_logs(result.logs)
     _print_stages(result.stages)
     if result.scenes:
@@ -172,6 +180,8 @@ def run(
         _print_language(result.aligner, result.language)
     if result.grounding is not None:
         _print_grounding(result.grounding)
+    if result.mining:
+        _print_mining(_mining_as_dict(result.run_id, result.mining))
     console.print(f"Artifacts under [bold]{store}[/bold]: logs/<seq_id>/ (Parquet tables, EXR images), "
                   "scenes/<seq_id>/<scene_hash>/ (Gaussians, nodes, poses, metrics, test renders), "
                   "alignment/<model_hash>/ (motion aligner, language scenes).")
@@ -437,6 +447,20 @@ def _print_edit(result, graph) -> None:
                   soft_wrap=True)
 
 
+def _check_vlm(vlm: str) -> None:
+    """``--vlm`` names a known client, and ``openai`` has its endpoint configured (else a BadParameter)."""
+    from simsplat_core.vlm.openai_chat import OpenAIChatConfig, VLMError
+    from tasks.mine import VLM_KINDS
+
+    if vlm not in VLM_KINDS:
+        raise typer.BadParameter(f"unknown VLM client {vlm!r}; choose one of {list(VLM_KINDS)}", param_hint="--vlm")
+    if vlm == "openai":
+        try:
+            OpenAIChatConfig.from_env()
+        except VLMError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--vlm") from exc
+
+
 @app.command()
 def mine(
     store: Annotated[str, typer.Option(help="Artifact store root with aligned scenes and an asset bank "
@@ -446,8 +470,7 @@ def mine(
     per_sequence: Annotated[int, typer.Option(min=1, help="Accepted scenarios wanted per sequence.")] = 3,
     max_attempts: Annotated[int, typer.Option(min=1, help="Attempts per proposal (the first plus adjusted "
                                               "retries).")] = 3,
-    vlm: Annotated[str, typer.Option(help="VLM client: rule (built-in, offline) or openai (SIMSPLAT_VLM_URL, "
-                                     "SIMSPLAT_VLM_MODEL, SIMSPLAT_VLM_API_KEY).")] = "rule",
+    vlm: VLMOption = "rule",
     seed: Annotated[int, typer.Option(help="Seed of the mining loop (and of the rule-based client).")] = 0,
     run_id: Annotated[str | None, typer.Option(help="Run the scenarios belong to: edits/<run_id>/ (default: a new "
                                                "mine-<time> id).")] = None,
@@ -458,19 +481,13 @@ def mine(
     editor executes them, the VLM judges the result, parameters are adjusted and retried; accepted scenarios are
     stored as edits under STORE/edits/<run_id>/<seq>/<edit_id>/, every attempt as a row of the run's edits table."""
     from flows.progress import StepBars
-    from simsplat_core.vlm.openai_chat import OpenAIChatConfig, VLMError
+    from simsplat_core.vlm.openai_chat import VLMError
     from storage import ArtifactStore
     from storage.assets import list_asset_banks
     from storage.runs import new_run_id
-    from tasks.mine import VLM_KINDS, mine_sequence_task
+    from tasks.mine import mine_sequence_task
 
-    if vlm not in VLM_KINDS:
-        raise typer.BadParameter(f"unknown VLM client {vlm!r}; choose one of {list(VLM_KINDS)}", param_hint="--vlm")
-    if vlm == "openai":
-        try:
-            OpenAIChatConfig.from_env()
-        except VLMError as exc:
-            raise typer.BadParameter(str(exc), param_hint="--vlm") from exc
+    _check_vlm(vlm)
     seq_ids = _aligned_sequences(store, seq)
     artifacts = ArtifactStore(store)
     if not list_asset_banks(artifacts):

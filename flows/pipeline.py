@@ -22,8 +22,10 @@ from simsplat_core.world import WorldConfig
 from storage import ArtifactStore, list_scenes
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
+from tasks.assets import BuiltBank, build_asset_bank
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
+from tasks.mine import MiningSummary, mine_sequence_task
 from tasks.reconstruct import StoredScene, reconstruct_scene
 from tasks.stages import STAGES, LogStages, decide_stages, plan_stages, resolve_seq_ids
 
@@ -188,6 +190,52 @@ def align_scenes(store_root: str, targets: list[tuple[str, str | None]], trainin
     return aligner, aligned
 
 
+@dataclass(frozen=True)
+class MiningPlan:
+    """Mining settings of a flow run.
+
+    Attributes:
+        per_sequence: accepted scenarios wanted per sequence (K).
+        max_attempts: attempts per proposal (the first plus adjusted retries).
+        vlm: client, ``"rule"`` (built-in, offline) or ``"openai"`` (from the environment).
+        seed: the rule-based client's seed (scenarios are deterministic per seed).
+    """
+
+    per_sequence: int = 3
+    max_attempts: int = 3
+    vlm: str = "rule"
+    seed: int = 0
+
+
+def minable(language: list[StoredLanguageScene]) -> list[str]:
+    """Sequences the loop can mine: aligned from a reconstructed scene (an image-less log has nothing to render)."""
+    return [s.seq_id for s in language if s.scene_hash]
+
+
+def _publish_mining_table(summaries: list[MiningSummary]) -> None:
+    rows = [{"seq_id": s.seq_id, "prompt": sc.prompt, "category": sc.category, "attempts": sc.attempts,
+             "plausibility": sc.plausibility, "edit_dir": sc.edit_dir} for s in summaries for sc in s.scenarios]
+    accepted = sum(s.accepted for s in summaries)
+    attempts = sum(s.attempts for s in summaries)
+    create_table_artifact(rows, key="mined-scenarios", description=f"Mined scenarios: {accepted} accepted in "
+                          f"{attempts} attempts over {len(summaries)} sequence(s)")
+
+
+def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan) -> list[MiningSummary]:
+    """Build the asset bank when the store has none for its scenes (one task; a stored bank is reused), then fan
+    out one mining task per sequence, each with its share of the cores; publish the accepted scenarios' table."""
+    bank: BuiltBank = build_asset_bank.submit(store_root).result()
+    logger.info("asset bank %s: %d assets%s", bank.bank_hash[:12], bank.assets, " (stored)" if bank.skipped else "")
+    threads = task_cpu_share(len(seq_ids))
+    with reserving_cpus(threads):
+        futures = [mine_sequence_task.submit(store_root, seq_id, run_id, per_sequence=plan.per_sequence,
+                                             max_attempts=plan.max_attempts, vlm=plan.vlm, seed=plan.seed,
+                                             threads=threads) for seq_id in seq_ids]
+    summaries = _gather(futures, "mine", label=lambda s: s.seq_id)
+    _publish_mining_table(summaries)
+    return summaries
+
+
 @flow(name="simsplat-generate-world")
 def generate_world_flow(store_root: str, seeds: list[int], config: WorldConfig) -> list[StoredLog]:
     """Generate one synthetic sequence per seed into the store, in parallel."""
@@ -215,6 +263,7 @@ class MainResult:
     grounding: GroundingEvaluation | None = None
     run_id: str = ""
     stages: list[LogStages] = dataclasses.field(default_factory=list)
+    mining: list[MiningSummary] = dataclasses.field(default_factory=list)
 
 
 def _summary_markdown(result: MainResult) -> str:
@@ -239,6 +288,9 @@ def _summary_markdown(result: MainResult) -> str:
             f"| {m.get('psnr_test_dynamic', float('nan')):.2f} | {int(m.get('num_gaussians', 0))} "
             f"| {scene.seconds:.1f} |"
         )
+    for summary in result.mining:
+        lines.append(f"\nMined {summary.seq_id}: {summary.accepted} scenario(s) accepted in {summary.attempts} "
+                     f"attempt(s) ({summary.client}; {summary.seconds.get('total', 0.0):.0f} s)")
     return "\n".join(lines)
 
 
@@ -253,11 +305,13 @@ def main_flow(
     aligner: MotionAlignerConfig | None = None,
     evaluate: bool = True,
     run_id: str | None = None,
+    mining: MiningPlan | None = None,
 ) -> MainResult:
     """The main job over every log in the store: ``seeds`` synthetic logs generated first (none: only the
     stored ones, ingested real logs included), one reconstructed scene per log with camera images, language
     alignment (aligner trained on every stored log, one language scene per log: image-less logs get motion
-    and location language from their tracks and map), the grounding benchmark on the synthetic logs, a summary.
+    and location language from their tracks and map), the grounding benchmark on the synthetic logs, scenario
+    mining when asked (``mining``), a summary.
 
     Args:
         seeds: synthetic sequences to generate into the store first (may be empty).
@@ -267,7 +321,9 @@ def main_flow(
         aligner: motion/location aligner training settings (default ``MotionAlignerConfig()``).
         evaluate: after alignment, run the grounding benchmark on the synthetic logs and write its
             tables under ``runs/<run_id>/tables/``.
-        run_id: names the run directory (default: ``main-<UTC time>``).
+        run_id: names the run directory (default: ``main-<UTC time>``); mined scenarios go to ``edits/<run_id>/``.
+        mining: after alignment, mine every sequence with a reconstructed scene for scenarios (asset bank built
+            first when missing; ``None``: no mining).
 
     Raises:
         ValueError: the store holds no log and ``seeds`` is empty.
@@ -286,7 +342,10 @@ def main_flow(
         if evaluate and evaluated:
             grounding = evaluate_grounding_run.submit(store_root, evaluated, store_root, run_dir(run_id)).result()
             _publish_grounding_table(grounding)
-    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans)
+    mined: list[MiningSummary] = []
+    if mining is not None and minable(language):
+        mined = mine_scenarios(store_root, minable(language), run_id, mining)
+    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans, mined)
     create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
     return result
 

@@ -28,6 +28,7 @@ from typing import Any
 from prefect import task
 from prefect.cache_policies import NO_CACHE
 
+from simsplat_core.compute_threads import set_compute_threads
 from simsplat_core.editing.commands import program_from_json
 from simsplat_core.mining.attempts import EDITS_COLUMNS, AttemptRecord, attempt_rows
 from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequence
@@ -142,10 +143,11 @@ def _artifact_key(seq_id: str) -> str:
 @task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str] = (),
-                       client: VLMClient | None = None) -> MiningSummary:
+                       client: VLMClient | None = None, threads: int = 0) -> MiningSummary:
     """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
     under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client
-    with another judge configuration).
+    with another judge configuration); ``threads``: torch/numba threads for this task (0 = leave the process
+    setting).
 
     Raises:
         FileNotFoundError: the store lacks the sequence's log, language scene, or an asset bank (naming the store
@@ -153,6 +155,8 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
         VLMError: ``vlm="openai"`` without an endpoint configured.
     """
     started = time.perf_counter()
+    if threads:
+        set_compute_threads(threads)
     store = ArtifactStore(store_root)
     loaded = load_edit_context(store, seq_id)
     if not loaded.bank_hash:

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import pytest
 
-from flows.pipeline import main_flow, reconstruction_config
+from flows.pipeline import MiningPlan, main_flow, reconstruction_config
 from flows.runtime import RunnerKind, make_task_runner
 from simsplat_core.language.motion_training import MotionAlignerConfig
 from simsplat_core.language.scene_builder import AlignmentConfig
 from simsplat_core.world import WorldConfig
 from storage import ArtifactStore, list_logs, list_scenes, read_scene, read_scene_log
+from storage.assets import list_asset_banks
+from storage.edits import read_edit_records
 from storage.language_scenes import list_language_scenes, read_language_scene
 from tests.flows.test_cli import _tree_digest
 
@@ -67,6 +69,17 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
     assert all(s.skipped for s in second.logs + second.scenes + second.language) and second.aligner.skipped
     assert [s.metrics for s in second.scenes] == [s.metrics for s in first.scenes]
     assert _tree_digest(tmp_path) == digest
+
+    # mining: the asset bank is built first, then one mining task per aligned sequence; every attempt is a row of
+    # the run's edits table, stored logs and scenes are reused
+    mined = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
+                 mining=MiningPlan(per_sequence=1, max_attempts=1), run_id="mined", **ALIGN)
+    assert all(s.skipped for s in mined.logs + mined.scenes + mined.language)
+    assert list_asset_banks(store) and [m.seq_id for m in mined.mining] == ["synth-000001", "synth-000002"]
+    rows = read_edit_records(store, "mined")
+    assert len(rows) == sum(m.attempts for m in mined.mining) >= 2
+    assert {r.seq_id for r in rows} == {"synth-000001", "synth-000002"}
+    assert sum(r.export for r in rows) == sum(m.accepted for m in mined.mining)
 
     changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
     third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20),
