@@ -7,6 +7,8 @@ STORE ?= artifacts/demo
 # Reconstruction iterations per sequence for `make demo` (empty: the ReconstructionConfig default, 900;
 # about 10 minutes for the two demo sequences on 2 cores). `make demo ITERATIONS=200` is a quick look.
 ITERATIONS ?=
+# Scenarios the mining loop accepts per demo sequence (rule-based client; 0: no mining).
+MINE ?= 2
 # torch is pinned to 2.13.0. PyPI's Linux wheel of it bundles CUDA (several GB); on a machine without a GPU
 # pass PyTorch's CPU wheel index to get the CPU build: make test TORCH_INDEX=https://download.pytorch.org/whl/cpu
 TORCH_INDEX ?=
@@ -24,14 +26,13 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/simsplat run --store $(STORE) --sequences 2 $(if $(ITERATIONS),--iterations $(ITERATIONS))
+	$(VENV)/bin/simsplat run --store $(STORE) --sequences 2 --mine $(MINE) $(if $(ITERATIONS),--iterations $(ITERATIONS))
 	$(VENV)/bin/simsplat inspect $(STORE)/logs/synth-000000 --sheet $(STORE)/contact_sheet.png --frame 20
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --out $(STORE)/render_frame20.png
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --shift-left 1 \
 		--out $(STORE)/novel_view_frame20_left1m.png
 	$(VENV)/bin/simsplat query --store $(STORE) --seq synth-000000 "the red car turning right" \
 		--out $(STORE)/query_red_car_turning_right.png
-	$(VENV)/bin/simsplat assets build --store $(STORE)
 	$(VENV)/bin/simsplat edit --store $(STORE) --seq synth-000000 \
 		"remove the white van and make the red car stop before the crosswalk"
 	$(VENV)/bin/simsplat edit --store $(STORE) --seq synth-000000 "add a yellow taxi in our lane 15 m ahead"
