@@ -113,7 +113,11 @@ def appearance_fit(clause: AgentClause, of: ObjectFrames, node: NodeLanguage | N
         return 0.0
     if of.kind not in clause.kinds:
         return 0.0
-    return 1.0 if node is None else float(attribute_fit(clause.parsed, node, config.query))
+    if node is None or node.caption is None:
+        # an aligned log's object without a caption (never seen well enough) cannot show a named colour or subtype
+        named = clause.parsed.named_colors or clause.parsed.subtype not in (None, "car")
+        return config.query.missing_appearance if named and node is not None else 1.0
+    return float(attribute_fit(clause.parsed, node, config.query))
 
 
 def _pair_geometry(a: ObjectFrames, b: ObjectFrames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
