@@ -145,8 +145,8 @@ def search_store(store_root: str, text: str, *, seq_ids: list[str] | None = None
 
 
 def search_as_dict(found: StoreSearch) -> dict[str, Any]:
-    """``simsplat search --json``: ``query``, ``clauses``, ``hits`` (``seq_id``, ``object_ids``, ``window`` [start, end],
-    ``score``, ``picture`` or ``None``, ``picture_kind``), ``message``, ``seconds``."""
+    """``simsplat search --json``: ``query``, ``clauses``, ``hits`` (``seq_id``, ``object_ids``, ``window``
+    [start, end], ``score``, ``picture`` or ``None``, ``picture_kind``), ``message``, ``seconds``."""
     return {
         "query": found.query.text,
         "clauses": [c.text for c in found.query.clauses],

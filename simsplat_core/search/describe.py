@@ -51,10 +51,15 @@ _RELATION_RX = re.compile(
 _REL_NAME = {"following": FOLLOWING, "follows": FOLLOWING, "follow": FOLLOWING, "tailing": FOLLOWING,
              "tails": FOLLOWING, "behind": FOLLOWING, "ahead of": LEADING, "in front of": LEADING,
              "next to": BESIDE, "beside": BESIDE, "alongside": BESIDE}
-_EGO_LANE_RX = re.compile(r"(?:the )?(?:ego|our|my)(?: vehicle's| car's)? lane (?:is |being )?(?P<verb>blocked|obstructed)"
+_EGO_LANE_RX = re.compile(r"(?:the )?(?:ego|our|my)(?: vehicle's| car's)? lane (?:is |being )?"
+                          r"(?P<verb>blocked|obstructed)"
                           r" by (?P<obj>.+)")
 _IN_EGO_LANE_RX = re.compile(r"(?P<verb>blocking|obstructing|in|sitting in|standing in|stopped in) "
                              r"(?:the )?(?:ego|our|my)(?: vehicle's| car's)? lane")
+#: Short words people type for agents that the grounding lexicon does not list.
+ALIASES = {"ped": "pedestrian", "peds": "pedestrians", "pedestrian's": "pedestrian", "ppl": "people",
+           "veh": "vehicle", "vehs": "vehicles"}
+_ALIAS_RX = re.compile(r"(?<![\w-])(" + "|".join(map(re.escape, ALIASES)) + r")(?![\w-])")
 _SUBJECT_CROSSING_RX = re.compile(r"^((?:a|an|the|one|some|any) )?pedestrian(s?) crossing(?![\w-])")
 #: Place words no map of this project has (a clause naming one holds nowhere).
 UNKNOWN_PLACES = ("highway", "motorway", "freeway", "expressway", "tunnel", "bridge", "roundabout", "toll",
@@ -198,5 +203,5 @@ def parse_description(text: str) -> SearchQuery:
     """
     if not text or not text.strip():
         raise ValueError("empty search description")
-    norm = normalise(text)
+    norm = _ALIAS_RX.sub(lambda m: ALIASES[m.group(1)], normalise(text))
     return SearchQuery(text, tuple(parse_clause(part) for part in split_clauses(norm)))

@@ -101,7 +101,8 @@ def _motion_ok(clause: AgentClause, of: ObjectFrames) -> np.ndarray:
         names |= set(CROSSING_CLASSES)
     ok = np.array([m in names for m in of.motion], dtype=bool)
     if clause.crossing_direction and of.kind == voc.PEDESTRIAN:
-        wanted = voc.CROSSING_LEFT_TO_RIGHT if clause.crossing_direction == "left_to_right" else voc.CROSSING_RIGHT_TO_LEFT
+        left_to_right = clause.crossing_direction == "left_to_right"
+        wanted = voc.CROSSING_LEFT_TO_RIGHT if left_to_right else voc.CROSSING_RIGHT_TO_LEFT
         ok &= of.motion == wanted
     return ok
 
@@ -121,7 +122,7 @@ def appearance_fit(clause: AgentClause, of: ObjectFrames, node: NodeLanguage | N
 
 
 def _pair_geometry(a: ObjectFrames, b: ObjectFrames) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(along, lateral, heading difference deg)`` ``[F]`` of ``b`` in the frame of ``a`` (``nan`` where either is absent)."""
+    """``(along, lateral, heading difference deg)`` ``[F]`` of ``b`` in the frame of ``a`` (``nan``: either absent)."""
     d = b.xy - a.xy
     c, s = np.cos(a.heading), np.sin(a.heading)
     along = d[:, 0] * c + d[:, 1] * s
@@ -138,7 +139,8 @@ def _related(a: ObjectFrames, b: ObjectFrames, relation: str, config: SearchConf
     along, lateral, dh = _pair_geometry(a, b)
     with np.errstate(invalid="ignore"):
         if relation == FOLLOWING:
-            ok = (along > 0) & (along < config.follow_m) & (np.abs(lateral) < config.lane_half_m) & (dh < config.follow_deg)
+            ok = (along > 0) & (along < config.follow_m) & (np.abs(lateral) < config.lane_half_m)
+            ok &= dh < config.follow_deg
             ok &= (a.speed > 0.5) & (b.speed > 0.5)
         elif relation == BESIDE:
             ok = (np.abs(along) < config.beside_ahead_m) & (np.abs(lateral) < config.beside_m)
@@ -230,11 +232,11 @@ def search_log(seq_id: str, objects: Mapping[str, ObjectFrames], num_frames: int
         for i, oid in enumerate(ct.object_ids):
             for w in frame_windows(ct.truth[i], min_frames=cfg.min_frames, max_gap=cfg.max_gap):
                 partner = _most_common(ct.partner[i][w[0]: w[1] + 1])
-                ids = (oid, partner) if partner else (oid,)
-                hits.append(SearchHit(seq_id, ids, w, _score([float(ct.fit[i])], w, cfg)))
+                ids_w = (oid, partner) if partner else (oid,)
+                hits.append(SearchHit(seq_id, ids_w, w, _score([float(ct.fit[i])], w, cfg)))
     else:
         for w in frame_windows(holds, min_frames=cfg.min_frames, max_gap=cfg.max_gap):
-            ids: list[str] = []
+            ids = []
             fits: list[float] = []
             for ct in truths:
                 counts = ct.truth[:, w[0]: w[1] + 1].sum(axis=1)

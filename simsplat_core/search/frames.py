@@ -132,4 +132,5 @@ def log_frames(log: SceneLog, half_window_s: float = 1.0) -> dict[str, ObjectFra
     """``object_id -> ObjectFrames`` of every movable object of ``log`` with at least two boxes."""
     map_context = MapContext.from_features(log.map_features) if log.map_features else None
     trajs = log_trajectories(log, map_context, min_frames=2)
-    return {oid: object_frames(t, log.num_frames, log.ego_poses, map_context, half_window_s) for oid, t in trajs.items()}
+    return {oid: object_frames(t, log.num_frames, log.ego_poses, map_context, half_window_s)
+            for oid, t in trajs.items()}

@@ -21,7 +21,7 @@ STILL_VEHICLE = (voc.PARKED, voc.STOPPED, "stop")
 
 @dataclass(frozen=True)
 class QueryCase:
-    """One query: the text, its ground-truth agents (all must hold in a frame) and whether it is meant to hold nowhere."""
+    """One query: the text, its ground-truth agents (all must hold in a frame), whether it should hold nowhere."""
 
     text: str
     truth: tuple[AgentSpec, ...]
