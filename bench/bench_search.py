@@ -12,7 +12,7 @@ import statistics
 import sys
 import time
 
-from simsplat_core.eval.search.queries import QUERIES
+from simsplat_core.eval.search.queries import ALL_QUERIES
 from tasks.search import load_store, search_logs
 
 logger = logging.getLogger("bench_search")
@@ -23,7 +23,7 @@ def main(stores: list[str]) -> None:
     items = [item for root in stores for item in load_store(root)]
     load_s = time.perf_counter() - t0
     times = []
-    for case in QUERIES:
+    for case in ALL_QUERIES:
         t = time.perf_counter()
         search_logs(items, case.text)
         times.append(time.perf_counter() - t)

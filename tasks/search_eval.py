@@ -1,7 +1,7 @@
 """The search evaluation (issue 12): RefAV's scenario-mining metrics of ``simsplat search`` on synthetic logs.
 
 Over every log of the given stores (several stores: two logs a store are too few for a log-level figure), each
-query of ``simsplat_core.eval.search.queries.QUERIES`` is answered by the search (``tasks.search.search_logs``;
+query of ``simsplat_core.eval.search.queries.ALL_QUERIES`` is answered by the search (``tasks.search.search_logs``;
 no pictures) and compared with the ground truth that the synthetic world scripted
 (``simsplat_core.eval.search.truth``): per (log, frame) predicted = a hit window covers the frame; per log
 predicted = any hit. Writes ``OUT/tables/search.parquet`` (``storage.schemas.search_table_schema``) and
@@ -19,7 +19,7 @@ import numpy as np
 import pyarrow as pa
 
 from simsplat_core.eval.search.metrics import log_ba, timestamp_ba
-from simsplat_core.eval.search.queries import QUERIES, QueryCase
+from simsplat_core.eval.search.queries import ALL_QUERIES, QueryCase
 from simsplat_core.eval.search.truth import WorldAgents, query_truth
 from simsplat_core.eval.tables import markdown
 from simsplat_core.search.windows import covered
@@ -34,7 +34,7 @@ def _nullable(value: float) -> float | None:
     return None if math.isnan(value) else round(value, 6)
 
 
-def evaluate_queries(items: list[SearchableLog], queries: tuple[QueryCase, ...] = QUERIES) -> list[dict[str, Any]]:
+def evaluate_queries(items: list[SearchableLog], queries: tuple[QueryCase, ...] = ALL_QUERIES) -> list[dict[str, Any]]:
     """One row per query (``search_table_schema`` columns) over prepared synthetic logs."""
     worlds = [WorldAgents.from_log(i.log) for i in items]
     rows = []
@@ -72,7 +72,7 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, float | int]:
             "seconds_mean": mean("seconds", rows)}
 
 
-def evaluate_search(stores: list[str], out_root: str, *, queries: tuple[QueryCase, ...] = QUERIES,
+def evaluate_search(stores: list[str], out_root: str, *, queries: tuple[QueryCase, ...] = ALL_QUERIES,
                     out_relpath: str = "tables") -> dict[str, Any]:
     """Evaluate the search over every log of ``stores``; write ``OUT/<out_relpath>/search.{parquet,md}``.
 

@@ -19,14 +19,25 @@ Rules (on ``query_parse.normalise``d text):
 4. Each clause is then a grounding query (``query_parse.parse_query``): category, subtype, colours, motion
    phrase, sector and context phrases; the motion phrase names motion classes through the query lexicon
    (``query_lexicon.MOTION_KEYWORDS``), the location phrases the sector / context classes.
-5. **Places the maps do not have** ("highway", "motorway", "tunnel", "roundabout", ...) are kept in
+5. **The ego as a subject.** A clause whose subject is the ego ("we turn left", "as our car slows down",
+   "when the ego is stopped at the intersection") is ``AgentClause.is_ego``: only the ego's own per-frame
+   motion and map context answer it. Relations may name the ego as their object: "a car following us"
+   (``related`` is an ego clause), "beside us"; "in front of us" / "behind us" stay sectors.
+   "<A> cutting in front of us" / "cutting in ahead of ego" / "pulling into our lane" is a cut-in
+   (``AgentClause.cut_in``): a lane change ahead of the ego that closes in on its path.
+6. **Counts.** "two pedestrians", "a pair of cars", "three vehicles": ``AgentClause.count`` distinct objects must
+   hold at once; "together" / "side by side" also asks them to be within ``SearchConfig.together_m``.
+   "a group of" / "several" / "some" + plural mean two or more.
+7. **Question and request wording** ("where does a truck turn left?", "any cars reversing", "are there
+   pedestrians crossing", "find / show me ...") is dropped before parsing.
+8. **Places the maps do not have** ("highway", "motorway", "tunnel", "roundabout", ...) are kept in
    ``AgentClause.unknown_places``: such a clause holds nowhere, and the message says why.
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from simsplat_core.language.query_lexicon import CONTEXT_KEYWORDS, MOTION_KEYWORDS, PEDESTRIAN_MERGED, SECTOR_KEYWORDS
 from simsplat_core.language.query_parse import NOUNS, ParsedQuery, normalise, parse_query
@@ -49,7 +60,7 @@ _RELATION_RX = re.compile(
     r" (?P<obj>(?:the|a|an|another|some|other) (?:(?!while|whilst|as|when|and)[\w-]+ ){0,3}?(?:" + _NOUN_ALT + r"))"
     r"(?![\w-])")
 _REL_NAME = {"following": FOLLOWING, "follows": FOLLOWING, "follow": FOLLOWING, "tailing": FOLLOWING,
-             "tails": FOLLOWING, "behind": FOLLOWING, "ahead of": LEADING, "in front of": LEADING,
+             "tails": FOLLOWING, "leading": LEADING, "leads": LEADING, "behind": FOLLOWING, "ahead of": LEADING, "in front of": LEADING,
              "next to": BESIDE, "beside": BESIDE, "alongside": BESIDE}
 _EGO_LANE_RX = re.compile(r"(?:the )?(?:ego|our|my)(?: vehicle's| car's)? lane (?:is |being )?"
                           r"(?P<verb>blocked|obstructed)"
@@ -60,6 +71,32 @@ _IN_EGO_LANE_RX = re.compile(r"(?P<verb>blocking|obstructing|in|sitting in|stand
 ALIASES = {"ped": "pedestrian", "peds": "pedestrians", "pedestrian's": "pedestrian", "ppl": "people",
            "veh": "vehicle", "vehs": "vehicles"}
 _ALIAS_RX = re.compile(r"(?<![\w-])(" + "|".join(map(re.escape, ALIASES)) + r")(?![\w-])")
+#: The ego as a clause's subject (after an optional leading conjunction), with its verb's copula.
+_EGO_SUBJECT_RX = re.compile(
+    r"^(?:(?:while|whilst|as|when|and|with) )?(?:we(?:'re| are| were)?|i(?:'m| am)?|ego(?: is)?|"
+    r"the ego(?: vehicle| car)?(?: is)?|(?:our|my) (?:own )?(?:car|vehicle)(?: is)?|"
+    r"the (?:self-driving|autonomous) (?:car|vehicle)(?: is)?)(?![\w'-])(?! lane\b) ?")
+_EGO_OBJECT = r"us|me|ego|the ego(?: vehicle| car)?|our (?:car|vehicle)|my (?:car|vehicle)"
+#: Relations whose object is the ego ("a car following us"); "in front of us" / "behind us" stay sectors.
+_EGO_RELATION_RX = re.compile(
+    r"(?<![\w-])(?P<rel>following|follows|follow|tailing|tails|leading|leads|next to|beside|alongside) "
+    r"(?:" + _EGO_OBJECT + r")(?![\w-])")
+_CUT_IN_RX = re.compile(
+    r"(?<![\w-])(?:cut|cuts|cutting|pull|pulls|pulling|merg\w*|swerv\w*)(?: in| into)?"
+    r" (?:in front of|ahead of|into|in) (?:" + _EGO_OBJECT + r"|(?:our|my|the ego's?) lane)(?![\w-])")
+_LEADING_CONJUNCTION_RX = re.compile(r"^(?:while|whilst|as|when|and|with|at the same time as) ")
+#: Question and request wording dropped before parsing (rule 7).
+_REQUEST_RX = re.compile(
+    r"^(?:(?:please )?(?:find|show|show me|search for|look for|list|get|give me)(?: all| every| me)? |"
+    r"(?:where|when) (?:does|do|did|is|are|was|were) |(?:is|are) there (?:any )?|any |"
+    r"(?:do|does|did) (?:we|you) see (?:any )?)")
+_COUNT_WORDS = {"two": 2, "a pair of": 2, "a couple of": 2, "both": 2, "three": 3, "four": 4, "five": 5,
+                "a group of": 2, "several": 2, "multiple": 2}
+_COUNT_RX = re.compile(r"^(?P<n>" + "|".join(map(re.escape, sorted(_COUNT_WORDS, key=len, reverse=True)))
+                       + r") ")
+_TOGETHER_RX = re.compile(r"(?<![\w-])(?:together|side by side|in a group|as a group|next to each other)(?![\w-])")
+#: Motion classes another one implies (a halt is a slow-down).
+IMPLIED_MOTIONS = {voc.SLOWING_DOWN: (voc.STOPPING,)}
 _SUBJECT_CROSSING_RX = re.compile(r"^((?:a|an|the|one|some|any) )?pedestrian(s?) crossing(?![\w-])")
 #: Place words no map of this project has (a clause naming one holds nowhere).
 UNKNOWN_PLACES = ("highway", "motorway", "freeway", "expressway", "tunnel", "bridge", "roundabout", "toll",
@@ -82,6 +119,9 @@ class AgentClause:
         relation: ``FOLLOWING`` / ``LEADING`` / ``BESIDE`` to ``related`` (``""``: none).
         related: the other agent of the relation.
         unknown_places: place words no map has ("highway").
+        is_ego: the subject is the ego itself.
+        cut_in: the subject cuts in ahead of the ego (module docstring, rule 5).
+        count: how many distinct objects must hold at once (rule 6); ``together``: within reach of each other.
     """
 
     text: str
@@ -94,6 +134,10 @@ class AgentClause:
     relation: str = ""
     related: AgentClause | None = None
     unknown_places: tuple[str, ...] = ()
+    is_ego: bool = False
+    cut_in: bool = False
+    count: int = 1
+    together: bool = False
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -115,7 +159,8 @@ class SearchQuery:
 
 
 def _has_agent(text: str) -> bool:
-    return bool(_NOUN_RX.search(_EGO_RX.sub(" ", text)))
+    """An agent noun of its own, or the ego as the subject ("we turn left")."""
+    return bool(_NOUN_RX.search(_EGO_RX.sub(" ", text))) or bool(_EGO_SUBJECT_RX.match(text.strip()))
 
 
 def split_clauses(norm: str) -> list[str]:
@@ -149,6 +194,7 @@ def motion_classes(parsed: ParsedQuery, kinds: tuple[str, ...]) -> tuple[str, ..
     hits = [c for rx, named in MOTION_KEYWORDS if re.search(rx, parsed.motion) for c in named if c in allowed]
     if voc.CROSSING in hits:
         hits = [c for c in hits if c != voc.WALKING_ALONG]  # "walking across" is a crossing
+    hits += [c for h in hits for c in IMPLIED_MOTIONS.get(h, ()) if c in allowed]
     return tuple(dict.fromkeys(hits))
 
 
@@ -163,7 +209,23 @@ def location_classes(parsed: ParsedQuery) -> tuple[tuple[str, ...], tuple[str, .
 
 def parse_clause(text: str) -> AgentClause:
     """One agent clause, with its relation object or ego-lane phrase if any (module docstring, rules 2-5)."""
-    text = text.strip()
+    text = _LEADING_CONJUNCTION_RX.sub("", text.strip())
+    ego = _EGO_SUBJECT_RX.match(text)
+    if ego:  # "we turn left": the ego is the subject; parse the rest as a car's clause
+        text = "a vehicle " + text[ego.end():]
+    count, together = 1, False
+    n = _COUNT_RX.match(text)
+    if n:
+        count = _COUNT_WORDS[n.group("n")]
+        text = "a " + text[n.end():]
+    elif re.match(r"(?:some|many|the) [\w-]+s(?![\w'-])", text) and re.search(r"\btogether\b|\bgroup\b", text):
+        count = 2
+    if _TOGETHER_RX.search(text):
+        together = count > 1
+        text = _TOGETHER_RX.sub(" ", text).strip()
+    cut = _CUT_IN_RX.search(text)
+    if cut:
+        text = (text[: cut.start()] + " " + text[cut.end():]).strip()
     in_ego_lane = False
     related: AgentClause | None = None
     relation = ""
@@ -176,8 +238,13 @@ def parse_clause(text: str) -> AgentClause:
         in_ego_lane = True
         blocked = blocked or m2.group("verb") in ("blocking", "obstructing")
         text = (text[: m2.start()] + " " + text[m2.end():]).strip()
+    ego_rel = _EGO_RELATION_RX.search(text)
     rel = _RELATION_RX.search(text)
-    if rel and not _EGO_RX.fullmatch(rel.group("obj").split(" ", 1)[-1]):
+    if ego_rel:  # "a car following us": the related agent is the ego
+        relation = _REL_NAME[ego_rel.group("rel")]
+        related = replace(parse_clause("a vehicle"), text="ego", is_ego=True)
+        text = (text[: ego_rel.start()] + " " + text[ego_rel.end():]).strip()
+    elif rel and not _EGO_RX.fullmatch(rel.group("obj").split(" ", 1)[-1]):
         relation = _REL_NAME[rel.group("rel")]
         related = parse_clause(re.sub(r"^(?:another|other|some) ", "a ", rel.group("obj")))
         text = (text[: rel.start()] + " " + text[rel.end():]).strip()
@@ -189,10 +256,13 @@ def parse_clause(text: str) -> AgentClause:
     motions = motion_classes(parsed, kinds_clause.kinds)
     if blocked and not motions:
         motions = (voc.STOPPED, voc.PARKED)
+    if cut:
+        motions = (voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT)
     sectors, contexts = location_classes(parsed)
     return AgentClause(text=text, parsed=parsed, motions=motions, crossing_direction=parsed.crossing_direction,
                        sectors=sectors, contexts=contexts, in_ego_lane=in_ego_lane, relation=relation,
-                       related=related, unknown_places=unknown)
+                       related=related, unknown_places=unknown, is_ego=bool(ego), cut_in=bool(cut), count=count,
+                       together=together)
 
 
 def parse_description(text: str) -> SearchQuery:
@@ -203,5 +273,5 @@ def parse_description(text: str) -> SearchQuery:
     """
     if not text or not text.strip():
         raise ValueError("empty search description")
-    norm = _ALIAS_RX.sub(lambda m: ALIASES[m.group(1)], normalise(text))
+    norm = _REQUEST_RX.sub("", _ALIAS_RX.sub(lambda m: ALIASES[m.group(1)], normalise(text)))
     return SearchQuery(text, tuple(parse_clause(part) for part in split_clauses(norm)))

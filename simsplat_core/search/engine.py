@@ -8,14 +8,24 @@ A clause holds for object ``o`` at frame ``f`` when (``describe`` names the part
 * its window motion class at ``f`` is one the clause names (the crossing classes count as "crossing"; a
   named crossing direction must be the labelled one), its sector at ``f`` one named, every named map
   context holds at ``f``;
-* "in the ego lane": ``0 < x < ego_lane_ahead_m`` and ``|y| < ego_lane_half_m`` in the ego frame;
+* appearance: a named colour must be the caption's colour (``SearchConfig.query`` counts a neighbour colour,
+  "blue" for "purple", as a mismatch: the grounding engine may let the nearest colour win among one scene's
+  candidates, a search over many logs must not);
+* "in the ego lane": ``0 < along < ego_lane_ahead_m`` and ``|offset| < ego_lane_half_m`` against the ego's own
+  path ahead (``frames.EgoPath``: the lane bends with the ego through a turn);
+* a cut-in: a lane-change class, ``0 < along < cut_in_ahead_m``, ``|offset| < cut_in_half_m`` and the offset
+  closing in (``|offset|`` shrinking by more than ``cut_in_closing_mps``);
+* the ego as the subject: only the ego's own facts (``frames.EGO_ID``) answer the clause; other clauses never
+  pick the ego;
+* a count (``AgentClause.count``): that many distinct objects hold at once (``together``: each within
+  ``together_m`` of another of them);
 * a relation holds with some other object for which the related clause holds at ``f``: *following* = the
   other is ahead within ``follow_m`` along ``o``'s heading, within ``lane_half_m`` sideways, heading within
   ``follow_deg``; *leading* the same the other way round; *beside* = within ``beside_m`` sideways and
   ``beside_ahead_m`` along.
 
-The description holds at frame ``f`` when every clause holds for some object. Hits are windows of
-``windows.frame_windows`` (per object for one-clause descriptions, per log otherwise); score = mean
+The description holds at frame ``f`` when every clause holds for some object (``count`` objects). Hits are
+windows of ``windows.frame_windows`` (per object for one-clause, one-object descriptions, per log otherwise); score = mean
 appearance fit of the hit's objects times ``0.5 + 0.5 * min(1, frames / full_window_frames)``.
 """
 
@@ -34,7 +44,7 @@ from simsplat_core.language.query_scoring import attribute_fit
 from simsplat_core.language.scene_language import NodeLanguage
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.search.describe import BESIDE, FOLLOWING, LEADING, AgentClause, SearchQuery, parse_description
-from simsplat_core.search.frames import ObjectFrames
+from simsplat_core.search.frames import EGO_ID, ObjectFrames
 from simsplat_core.search.windows import frame_windows
 
 logger = logging.getLogger(__name__)
@@ -47,6 +57,10 @@ class SearchConfig:
     min_appearance: float = 0.35
     ego_lane_ahead_m: float = 40.0
     ego_lane_half_m: float = 1.8
+    cut_in_ahead_m: float = 30.0
+    cut_in_half_m: float = 4.5
+    cut_in_closing_mps: float = 0.3
+    together_m: float = 3.0
     follow_m: float = 30.0
     lane_half_m: float = 2.0
     follow_deg: float = 30.0
@@ -55,7 +69,7 @@ class SearchConfig:
     min_frames: int = 3
     max_gap: int = 2
     full_window_frames: int = 20
-    query: QueryConfig = field(default_factory=QueryConfig)
+    query: QueryConfig = field(default_factory=lambda: QueryConfig(color_similar=QueryConfig().color_mismatch))
 
 
 @dataclass(frozen=True)
@@ -108,7 +122,9 @@ def _motion_ok(clause: AgentClause, of: ObjectFrames) -> np.ndarray:
 
 
 def appearance_fit(clause: AgentClause, of: ObjectFrames, node: NodeLanguage | None, config: SearchConfig) -> float:
-    """How far the object looks like the subject (0: wrong category)."""
+    """How far the object looks like the subject (0: wrong category); the ego is the ego clauses' subject only."""
+    if clause.is_ego or of.object_id == EGO_ID:
+        return float(clause.is_ego and of.object_id == EGO_ID)
     cats = clause.parsed.categories
     if cats and of.category not in cats:
         return 0.0
@@ -149,6 +165,32 @@ def _related(a: ObjectFrames, b: ObjectFrames, relation: str, config: SearchConf
     return both & np.nan_to_num(ok).astype(bool)
 
 
+def _cutting_in(of: ObjectFrames, num_frames: int, config: SearchConfig) -> np.ndarray:
+    """``[F]`` bool: ahead of the ego near its path with the sideways offset closing in (module docstring)."""
+    gap = np.abs(of.lane_offset)
+    closing = np.zeros(num_frames, dtype=bool)
+    rows = np.flatnonzero(of.present)
+    if len(rows) > 2:
+        rate = np.gradient(gap[rows], rows) / of.frame_s  # m/s
+        closing[rows] = rate < -config.cut_in_closing_mps
+    with np.errstate(invalid="ignore"):
+        near = (of.lane_along > 0) & (of.lane_along < config.cut_in_ahead_m) & (gap < config.cut_in_half_m)
+    return near & closing
+
+
+def _count_holds(ct: ClauseTruth, objects: Mapping[str, ObjectFrames], clause: AgentClause,
+                 config: SearchConfig) -> np.ndarray:
+    """``[F]`` bool: at least ``clause.count`` objects hold the clause (``together``: each near another)."""
+    truth = ct.truth
+    if clause.together and len(ct.object_ids) > 1:
+        xy = np.stack([objects[o].xy for o in ct.object_ids])  # [O, F, 2]
+        d = np.linalg.norm(xy[:, None] - xy[None], axis=-1)  # [O, O, F]
+        near = np.nan_to_num(d < config.together_m) & truth[:, None] & truth[None]
+        near[np.arange(len(truth)), np.arange(len(truth))] = False
+        truth = truth & near.any(axis=1)
+    return truth.sum(axis=0) >= clause.count
+
+
 @dataclass(frozen=True)
 class ClauseTruth:
     """A clause evaluated over a log: ``truth`` ``[O, F]`` per object, the objects' appearance fits ``[O]``, and per
@@ -172,6 +214,8 @@ def clause_truth(clause: AgentClause, objects: Mapping[str, ObjectFrames], num_f
     rel = clause_truth(clause.related, objects, num_frames, nodes, config) if clause.related is not None else None
     for i, oid in enumerate(ids):
         of = objects[oid]
+        if (oid == EGO_ID) != clause.is_ego:
+            continue
         fit[i] = appearance_fit(clause, of, (nodes or {}).get(oid), config)
         if fit[i] < config.min_appearance:
             continue
@@ -182,8 +226,10 @@ def clause_truth(clause: AgentClause, objects: Mapping[str, ObjectFrames], num_f
             ok &= of.context(ctx)
         if clause.in_ego_lane:
             with np.errstate(invalid="ignore"):
-                ok &= np.nan_to_num((of.xy_ego[:, 0] > 0) & (of.xy_ego[:, 0] < config.ego_lane_ahead_m)
-                                    & (np.abs(of.xy_ego[:, 1]) < config.ego_lane_half_m)).astype(bool)
+                ok &= (of.lane_along > 0) & (of.lane_along < config.ego_lane_ahead_m) \
+                    & (np.abs(of.lane_offset) < config.ego_lane_half_m)
+        if clause.cut_in:
+            ok &= _cutting_in(of, num_frames, config)
         if rel is not None:
             with_partner = np.zeros(num_frames, dtype=bool)
             for j, other in enumerate(rel.object_ids):
@@ -209,6 +255,9 @@ def _score(fits: list[float], window: tuple[int, int], config: SearchConfig) -> 
 
 def _no_hit_message(seq_id: str, query: SearchQuery, truths: list[ClauseTruth]) -> str:
     for clause, ct in zip(query.clauses, truths):
+        if clause.count > 1 and ct.truth.any():
+            together = " together" if clause.together else ""
+            return f"{seq_id}: never {clause.count} objects{together} match {clause.text!r} in the same frames"
         if clause.unknown_places:
             return f"{seq_id}: the map has no {' or '.join(clause.unknown_places)} ({clause.text!r} holds nowhere)"
         if not ct.truth.any():
@@ -224,10 +273,10 @@ def search_log(seq_id: str, objects: Mapping[str, ObjectFrames], num_frames: int
     q = parse_description(query) if isinstance(query, str) else query
     truths = [clause_truth(c, objects, num_frames, nodes, cfg) for c in q.clauses]
     holds = np.ones(num_frames, dtype=bool)
-    for ct in truths:
-        holds &= ct.truth.any(axis=0) if len(ct.object_ids) else np.zeros(num_frames, dtype=bool)
+    for clause, ct in zip(q.clauses, truths):
+        holds &= _count_holds(ct, objects, clause, cfg) if len(ct.object_ids) else np.zeros(num_frames, dtype=bool)
     hits: list[SearchHit] = []
-    if len(truths) == 1:
+    if len(truths) == 1 and q.clauses[0].count == 1:
         ct = truths[0]
         for i, oid in enumerate(ct.object_ids):
             for w in frame_windows(ct.truth[i], min_frames=cfg.min_frames, max_gap=cfg.max_gap):
@@ -238,15 +287,15 @@ def search_log(seq_id: str, objects: Mapping[str, ObjectFrames], num_frames: int
         for w in frame_windows(holds, min_frames=cfg.min_frames, max_gap=cfg.max_gap):
             ids = []
             fits: list[float] = []
-            for ct in truths:
+            for clause, ct in zip(q.clauses, truths):
                 counts = ct.truth[:, w[0]: w[1] + 1].sum(axis=1)
-                best = int(np.argmax(counts))
-                if counts[best] > 0 and ct.object_ids[best] not in ids:
-                    ids.append(ct.object_ids[best])
-                    fits.append(float(ct.fit[best]))
-                    partner = _most_common(ct.partner[best][w[0]: w[1] + 1])
-                    if partner and partner not in ids:
-                        ids.append(partner)
+                for best in np.argsort(-counts, kind="stable")[: clause.count]:
+                    if counts[best] > 0 and ct.object_ids[best] not in ids:
+                        ids.append(ct.object_ids[best])
+                        fits.append(float(ct.fit[best]))
+                        partner = _most_common(ct.partner[best][w[0]: w[1] + 1])
+                        if partner and partner not in ids:
+                            ids.append(partner)
             hits.append(SearchHit(seq_id, tuple(ids), w, _score(fits or [0.0], w, cfg)))
     hits.sort(key=lambda h: (-h.score, h.window[0], h.object_ids))
     message = "" if hits else _no_hit_message(seq_id, q, truths)

@@ -15,6 +15,8 @@ from simsplat_core.eval.search.truth import AgentSpec
 from simsplat_core.scenario import vocabulary as voc
 
 CAR = ("sedan", "hatchback", "SUV")
+EGO = ("ego",)
+TRUCK = ("truck", "pickup truck")
 PED = ("pedestrian",)
 STILL_VEHICLE = (voc.PARKED, voc.STOPPED, "stop")
 
@@ -62,7 +64,10 @@ QUERIES: tuple[QueryCase, ...] = (
     QueryCase("a car behind our car", (_v(subtypes=CAR, sector="behind"),)),
     QueryCase("a car following another car", (_v(subtypes=CAR, phase="move", following=_v(subtypes=CAR)),)),
     QueryCase("a vehicle following the bus", (_v(phase="move", following=_v(subtypes=("bus",))),)),
-    QueryCase("a stopped vehicle blocking our lane", (_v(behaviors=STILL_VEHICLE, phase="still", in_ego_lane=True),)),
+    # the synthetic ego never drives up to a standing vehicle in its route: a negative (a straight box ahead of a
+    # turning ego swept over oncoming parked cars for 2 frames in 2 logs before the ego lane followed the route)
+    QueryCase("a stopped vehicle blocking our lane", (_v(behaviors=STILL_VEHICLE, phase="still", in_ego_lane=True),),
+              negative=True),
     QueryCase("the ego lane blocked by a parked truck", (_v(subtypes=("truck", "pickup truck"),
                                                             behaviors=STILL_VEHICLE, phase="still",
                                                             in_ego_lane=True),)),
@@ -89,3 +94,50 @@ QUERIES: tuple[QueryCase, ...] = (
               (_v(subtypes=("bus",), behaviors=("reverse",)), _p(behaviors=(voc.STANDING,))), negative=True),
     QueryCase("a truck in a roundabout", (_v(subtypes=("truck",), place="roundabout"),), negative=True),
 )
+
+#: The ego as a subject and relations to the ego (the synthetic ego drives its route at a constant speed).
+EGO_QUERIES: tuple[QueryCase, ...] = (
+    QueryCase("while we turn left", (AgentSpec(categories=EGO, behaviors=("turn_left",), phase="turn"),)),
+    QueryCase("a car turning right while we turn left",
+              (_v(subtypes=CAR, behaviors=("turn_right",), phase="turn"),
+               AgentSpec(categories=EGO, behaviors=("turn_left",), phase="turn"))),
+    QueryCase("pedestrians crossing in front of us as our car turns right",
+              (_p(behaviors=(voc.CROSSING,), phase="cross", sector="front"),
+               AgentSpec(categories=EGO, behaviors=("turn_right",), phase="turn"))),
+    QueryCase("a car following us", (_v(subtypes=CAR, phase="move", following=AgentSpec(categories=EGO)),)),
+    QueryCase("a vehicle cutting in front of us", (_v(behaviors=("lane_change_left", "lane_change_right"),
+                                                      phase="lane_change", cut_in=True),)),
+    QueryCase("a pedestrian crossing in front of the ego",
+              (_p(behaviors=(voc.CROSSING,), phase="cross", sector="front"),)),
+    QueryCase("as our car slows down", (AgentSpec(categories=EGO, behaviors=("slow_down", "stop"),
+                                                  phase="decelerate"),), negative=True),
+    QueryCase("when the ego is stopped at the intersection",
+              (AgentSpec(categories=EGO, phase="still", place="junction"),), negative=True),
+)
+
+#: Wording users type: terse lower case, questions, requests, plurals and counts, synonyms.
+WORDING_QUERIES: tuple[QueryCase, ...] = (
+    QueryCase("ped crossing ahead", (_p(behaviors=(voc.CROSSING,), phase="cross", sector="front"),)),
+    QueryCase("suv turning right", (_v(subtypes=("SUV",), behaviors=("turn_right",), phase="turn"),)),
+    QueryCase("person walking on the sidewalk", (_p(behaviors=("walking",)),)),
+    QueryCase("vehicle slowing down while a ped crosses",
+              (_v(behaviors=("slow_down", "stop"), phase="decelerate"), _p(behaviors=(voc.CROSSING,), phase="cross"))),
+    QueryCase("Where does a pickup turn right?", (_v(subtypes=("pickup truck",), behaviors=("turn_right",),
+                                                     phase="turn"),)),
+    QueryCase("where does a truck turn left?", (_v(subtypes=TRUCK, behaviors=("turn_left",), phase="turn"),),
+              negative=True),
+    QueryCase("any cars reversing", (_v(subtypes=CAR, behaviors=("reverse",)),), negative=True),
+    QueryCase("show me cars stopped at the intersection",
+              (_v(subtypes=CAR, behaviors=STILL_VEHICLE, phase="still", place="junction"),)),
+    QueryCase("are there any vans parked?", (_v(subtypes=("van",), behaviors=(voc.PARKED,)),)),
+    QueryCase("a lorry braking to a stop", (_v(subtypes=TRUCK, behaviors=("stop",), phase="decelerate"),)),
+    QueryCase("a silver car", (_v(subtypes=CAR, colors=("silver",)),)),
+    QueryCase("black SUV", (_v(subtypes=("SUV",), colors=("black",)),)),
+    QueryCase("two pedestrians walking together", (_p(behaviors=("walking",), count=2, together=True),)),
+    QueryCase("a pair of cars turning right", (_v(subtypes=CAR, behaviors=("turn_right",), phase="turn", count=2),)),
+    QueryCase("cyclist", (AgentSpec(categories=("cyclist",)),), negative=True),
+    QueryCase("a bus on the motorway", (_v(subtypes=("bus",), place="motorway"),), negative=True),
+)
+
+#: Every query of the evaluation.
+ALL_QUERIES: tuple[QueryCase, ...] = QUERIES + EGO_QUERIES + WORDING_QUERIES
