@@ -5,7 +5,8 @@ its newest language scene when it is aligned (captions for colours and subtypes,
 picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
 the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
 objects' masks outlined (``viz.grounding_view.grounding_picture``) for aligned logs with camera images,
-else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``).
+else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``) with the matched objects outlined and
+their paths (and the ego's, when it is one of them) drawn over the hit's window.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import numpy as np
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.search.describe import SearchQuery, parse_description
 from simsplat_core.search.engine import SearchConfig, SearchHit, SearchResult, search_log
-from simsplat_core.search.frames import ObjectFrames, log_frames
+from simsplat_core.search.frames import EGO_ID, ObjectFrames, log_frames
 from simsplat_core.types import SceneLog
 from simsplat_core.viz.contact_sheet import bev_panel
 from simsplat_core.viz.grounding_view import grounding_picture
@@ -93,7 +94,8 @@ def hit_picture(store: ArtifactStore, item: SearchableLog, hit: SearchHit) -> tu
                       for v, px in zip(views, images)]
             if len(images) == masks.shape[0]:
                 return grounding_picture(images, masks), "cameras"
-    return bev_panel(item.log, frame), "bev"
+    return bev_panel(item.log, frame, highlight=hit.object_ids, window=hit.window,
+                     highlight_ego=EGO_ID in hit.object_ids), "bev"
 
 
 @dataclass(frozen=True)

@@ -60,8 +60,8 @@ _RELATION_RX = re.compile(
     r" (?P<obj>(?:the|a|an|another|some|other) (?:(?!while|whilst|as|when|and)[\w-]+ ){0,3}?(?:" + _NOUN_ALT + r"))"
     r"(?![\w-])")
 _REL_NAME = {"following": FOLLOWING, "follows": FOLLOWING, "follow": FOLLOWING, "tailing": FOLLOWING,
-             "tails": FOLLOWING, "leading": LEADING, "leads": LEADING, "behind": FOLLOWING, "ahead of": LEADING, "in front of": LEADING,
-             "next to": BESIDE, "beside": BESIDE, "alongside": BESIDE}
+             "tails": FOLLOWING, "leading": LEADING, "leads": LEADING, "behind": FOLLOWING, "ahead of": LEADING,
+             "in front of": LEADING, "next to": BESIDE, "beside": BESIDE, "alongside": BESIDE}
 _EGO_LANE_RX = re.compile(r"(?:the )?(?:ego|our|my)(?: vehicle's| car's)? lane (?:is |being )?"
                           r"(?P<verb>blocked|obstructed)"
                           r" by (?P<obj>.+)")

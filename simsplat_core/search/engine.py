@@ -25,8 +25,8 @@ A clause holds for object ``o`` at frame ``f`` when (``describe`` names the part
   ``beside_ahead_m`` along.
 
 The description holds at frame ``f`` when every clause holds for some object (``count`` objects). Hits are
-windows of ``windows.frame_windows`` (per object for one-clause, one-object descriptions, per log otherwise); score = mean
-appearance fit of the hit's objects times ``0.5 + 0.5 * min(1, frames / full_window_frames)``.
+windows of ``windows.frame_windows`` (per object for one-clause, one-object descriptions, per log otherwise);
+score = mean appearance fit of the hit's objects times ``0.5 + 0.5 * min(1, frames / full_window_frames)``.
 """
 
 from __future__ import annotations

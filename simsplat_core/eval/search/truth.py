@@ -114,9 +114,9 @@ def _route_coordinates(xy: np.ndarray, ego_xy: np.ndarray, ego_heading: np.ndarr
     the route is sampled at the ego's future positions, then every 0.5 m straight on from the last one; an agent
     is placed at its nearest route sample within ``ahead_m`` (``along``: metres of route to it, negative when
     behind the ego; ``lateral``: metres sideways of it in that sample's heading; ``nan`` where no sample)."""
-    O, F = xy.shape[:2]
-    along = np.full((O, F), np.nan)
-    lateral = np.full((O, F), np.nan)
+    n, F = xy.shape[:2]
+    along = np.full((n, F), np.nan)
+    lateral = np.full((n, F), np.nan)
     ext = np.arange(0.5, ahead_m + 0.5, 0.5)
     h_last = ego_heading[-1]
     tail = ego_xy[-1] + ext[:, None] * np.array([np.cos(h_last), np.sin(h_last)])
@@ -128,7 +128,7 @@ def _route_coordinates(xy: np.ndarray, ego_xy: np.ndarray, ego_heading: np.ndarr
         pts, heads, s = pts[keep], heads[keep], s[keep]
         d = xy[:, f, None, :] - pts[None]  # [O, K, 2]
         k = np.argmin(np.linalg.norm(d, axis=-1), axis=1)
-        dk = d[np.arange(O), k]
+        dk = d[np.arange(n), k]
         c, sn = np.cos(heads[k]), np.sin(heads[k])
         along[:, f] = s[k] + dk[:, 0] * c + dk[:, 1] * sn
         lateral[:, f] = -dk[:, 0] * sn + dk[:, 1] * c

@@ -13,6 +13,7 @@ from simsplat_core.search.describe import FOLLOWING
 from simsplat_core.search.engine import SearchConfig
 from simsplat_core.search.frames import EGO_ID, EgoPath, ObjectFrames, log_frames, mark_halts
 from simsplat_core.types import ObjectInfo, SceneLog, Track
+from simsplat_core.viz.contact_sheet import HIGHLIGHT_COLOR, bev_panel
 
 F = 50
 FPS = 10.0
@@ -133,3 +134,10 @@ def test_a_halt_is_stopping_over_the_whole_braking() -> None:
 def test_a_named_colour_wants_the_caption_colour_not_a_neighbour() -> None:
     cfg = SearchConfig()
     assert color_fit("purple", "blue", cfg.query) < cfg.min_appearance <= color_fit("purple", "purple", cfg.query)
+
+
+def test_bev_picture_highlights_the_hit(ego_log: SceneLog) -> None:
+    plain = bev_panel(ego_log, 25)
+    marked = bev_panel(ego_log, 25, highlight=("veh_tail",), window=(20, 30), highlight_ego=True)
+    magenta = np.all(marked == HIGHLIGHT_COLOR, axis=-1)
+    assert magenta.sum() > 20 and not np.all(plain == HIGHLIGHT_COLOR, axis=-1).any()
