@@ -846,6 +846,57 @@ def assets_sheet(
     console.print(f"contact sheet of bank {assets_bank.bank_hash[:12]} ({len(assets_bank)} assets): {uri}")
 
 
+# ------------------------------------------------------------------------------------------- search (issue 12)
+@app.command()
+def search(
+    text: Annotated[str, typer.Argument(help='A description, e.g. "a pedestrian crossing in front of ego while a car '
+                                              'turns right".')],
+    store: Annotated[str, typer.Option(help="Artifact store root holding logs (aligned ones give colours and "
+                                            "camera pictures).")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence to search (repeatable; default: every log).")] = None,
+    top: Annotated[int, typer.Option(min=1, help="Hits listed and drawn.")] = 10,
+    out: Annotated[str | None, typer.Option(help="Folder for the hit pictures (default: STORE/searches/<query>/).")
+                   ] = None,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the hits as one JSON object (seq_id, object_ids, "
+                                          "window [start, end], score, picture).")] = False,
+) -> None:
+    """Find where a description holds in the store's logs: objects and frame windows, ranked, a picture per hit
+    (cameras with the matched objects outlined for aligned logs, else a bird's-eye view)."""
+    from tasks.search import search_as_dict, search_store
+
+    try:
+        found = search_store(store, text, seq_ids=seq, top=top, out=out)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    if as_json:
+        typer.echo(json.dumps(search_as_dict(found), allow_nan=False))
+        return
+    table = Table(title=f"search: {text!r}")
+    for column in ("rank", "sequence", "objects", "frames", "score", "picture"):
+        table.add_column(column)
+    for rank, hit in enumerate(found.hits, start=1):
+        table.add_row(str(rank), hit.seq_id, ", ".join(hit.object_ids), f"{hit.window[0]}-{hit.window[1]}",
+                      f"{hit.score:.2f}", hit.picture or "-")
+    console.print(table)
+    console.print(found.message)
+
+
+@eval_app.command("search")
+def eval_search_command(
+    store: Annotated[list[str], typer.Option(help="Store(s) of synthetic logs (repeatable: several stores give the "
+                                                 "log-level figure more logs).")],
+    out: Annotated[str, typer.Option(help="Where tables/search.{parquet,md} go.")],
+) -> None:
+    """Search's RefAV balanced accuracies (timestamp and log level) on the query set over synthetic logs."""
+    from tasks.search_eval import evaluate_search
+
+    try:
+        summary = evaluate_search(store, out)
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    console.print(summary)
+
+
 @app.command()
 def world(
     out: Annotated[str, typer.Option(help="Artifact store root to write into.")],

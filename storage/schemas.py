@@ -636,3 +636,28 @@ def motion_outcomes_schema() -> pa.Schema:
 
     metadata = {SCHEMA_NAME_KEY: "motion_outcomes", SCHEMA_VERSION_KEY: str(MOTION_OUTCOMES_SCHEMA_VERSION)}
     return pa.schema([pa.field(n, t, nullable=nullable) for n, t, nullable in OUTCOME_COLUMNS], metadata=metadata)
+
+
+# ----------------------------------------------------------------------------- search evaluation (run table)
+#: ``schema_version`` of the ``search`` table.
+SEARCH_SCHEMA_VERSION = 1
+#: Columns of ``tables/search.parquet``: ``(name, type, nullable)``; the balanced accuracies are ``nan``-free nulls
+#: where undefined.
+SEARCH_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
+    ("query", pa.string(), False),
+    ("negative", pa.bool_(), False),
+    ("timestamp_ba", pa.float64(), True),
+    ("log_ba", pa.float64(), True),
+    ("hits", pa.int64(), False),
+    ("logs_true", pa.int64(), False),
+    ("logs_hit", pa.int64(), False),
+    ("seconds", pa.float64(), False),
+)
+
+
+def search_table_schema() -> pa.Schema:
+    """Schema of ``tables/search.parquet`` (``tasks.search_eval``): one row per query of the search query set --
+    query, negative (holds nowhere by the world's ground truth), timestamp_ba, log_ba (RefAV balanced accuracies),
+    hits, logs_true / logs_hit (logs containing the scenario / with a hit), seconds (search over all logs)."""
+    metadata = {SCHEMA_NAME_KEY: "search", SCHEMA_VERSION_KEY: str(SEARCH_SCHEMA_VERSION)}
+    return pa.schema([pa.field(n, t, nullable=nullable) for n, t, nullable in SEARCH_COLUMNS], metadata=metadata)

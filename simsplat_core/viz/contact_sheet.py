@@ -121,8 +121,18 @@ def draw_map(canvas: np.ndarray, map_features: Sequence[MapFeature], to_px: Call
                 cv2.polylines(canvas, [pts], False, MAP_COLORS[kind], 1, cv2.LINE_AA)
 
 
-def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 60.0) -> np.ndarray:
-    """Bird's-eye view in the ego frame of ``frame_idx`` (ego at centre, x up), ``[size, size, 3]`` uint8."""
+#: Colour of highlighted objects and their paths in the bird's-eye view (RGB).
+HIGHLIGHT_COLOR = (255, 0, 255)
+
+
+def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 60.0,
+              highlight: tuple[str, ...] = (), window: tuple[int, int] | None = None,
+              highlight_ego: bool = False) -> np.ndarray:
+    """Bird's-eye view in the ego frame of ``frame_idx`` (ego at centre, x up), ``[size, size, 3]`` uint8.
+
+    ``highlight``: object ids drawn filled-outlined in ``HIGHLIGHT_COLOR`` with their centre paths over ``window``
+    (``(first, last)`` frames, inclusive; default: the frame alone); ``highlight_ego`` draws the ego's path too.
+    """
     canvas = np.full((size, size, 3), 20, np.uint8)
     world_to_ego = invert_transform(log.ego_poses[frame_idx])
     px_per_m = size / (2.0 * extent_m)
@@ -141,12 +151,22 @@ def bev_panel(log: SceneLog, frame_idx: int, size: int = 480, extent_m: float = 
             continue
         footprint = to_px(box_corners(track.center[row], track.size[row], track.heading[row])[:4])
         color = CATEGORY_COLORS.get(categories.get(track.object_id, "other"), CATEGORY_COLORS["other"])
-        cv2.polylines(canvas, [footprint], True, color, 1, cv2.LINE_AA)
+        marked = track.object_id in highlight
+        cv2.polylines(canvas, [footprint], True, HIGHLIGHT_COLOR if marked else color, 3 if marked else 1,
+                      cv2.LINE_AA)
         # front edge
         cv2.line(canvas, tuple(int(v) for v in footprint[0]), tuple(int(v) for v in footprint[3]), (255, 255, 255), 1)
     ego_box = to_px(box_corners(log.ego_poses[frame_idx][:3, 3] + [0, 0, 0.8], np.array([4.6, 1.9, 1.6]),
                                 math.atan2(log.ego_poses[frame_idx][1, 0], log.ego_poses[frame_idx][0, 0]))[:4])
     cv2.fillPoly(canvas, [ego_box], (255, 255, 0))
+    first, last = window if window is not None else (frame_idx, frame_idx)
+    paths = [track.center[(track.frame_idx >= first) & (track.frame_idx <= last)] for track in log.tracks
+             if track.object_id in highlight]
+    if highlight_ego:
+        paths.append(log.ego_poses[max(first, 0): last + 1, :3, 3])
+    for path in paths:
+        if len(path) > 1:
+            cv2.polylines(canvas, [to_px(path)], False, HIGHLIGHT_COLOR, 2, cv2.LINE_AA)
     cv2.putText(canvas, f"BEV f{frame_idx} ({extent_m:.0f} m)", (4, 14), cv2.FONT_HERSHEY_SIMPLEX, 0.45,
                 (255, 255, 0), 1, cv2.LINE_AA)
     return canvas

@@ -1,0 +1,160 @@
+"""Search every log of a store by language and draw each hit (what ``simsplat search`` runs).
+
+Not a Prefect task: interactive, like ``simsplat query``. Per log: read the log (tracks, map; no images),
+its newest language scene when it is aligned (captions for colours and subtypes, node-id maps for the
+picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
+the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
+objects' masks outlined (``viz.grounding_view.grounding_picture``) for aligned logs with camera images,
+else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``) with the matched objects outlined and
+their paths (and the ego's, when it is one of them) drawn over the hit's window.
+"""
+
+from __future__ import annotations
+
+import logging
+import re
+import time
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
+from simsplat_core.search.describe import SearchQuery, parse_description
+from simsplat_core.search.engine import SearchConfig, SearchHit, SearchResult, search_log
+from simsplat_core.search.frames import EGO_ID, ObjectFrames, log_frames
+from simsplat_core.types import SceneLog
+from simsplat_core.viz.contact_sheet import bev_panel
+from simsplat_core.viz.grounding_view import grounding_picture
+from storage import ArtifactStore, read_scene_log
+from storage.language_scenes import read_language_scene
+from storage.logs import list_logs, read_image_rgb
+from storage.png import write_png
+
+logger = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True, eq=False)
+class SearchableLog:
+    """One log prepared for search: the log (no pixels), its language scene (``None``: not aligned), per-frame facts."""
+
+    log: SceneLog
+    scene: LanguageScene | None
+    objects: dict[str, ObjectFrames]
+
+    @property
+    def nodes(self) -> dict[str, NodeLanguage] | None:
+        return None if self.scene is None else {n.object_id: n for n in self.scene.nodes}
+
+
+def load_searchable(store: ArtifactStore, seq_id: str) -> SearchableLog:
+    """Read ``seq_id`` and compute its per-frame facts; the language scene is optional (captions, masks)."""
+    log = read_scene_log(store, seq_id, load_images=False)
+    try:
+        scene: LanguageScene | None = read_language_scene(store, seq_id, with_records=False).scene
+    except FileNotFoundError:
+        scene = None
+        logger.info("%s: not aligned; searching tracks and map only (no colours, BEV pictures)", seq_id)
+    return SearchableLog(log, scene, log_frames(log))
+
+
+def load_store(store_root: str, seq_ids: list[str] | None = None) -> list[SearchableLog]:
+    """Every log of the store (or ``seq_ids``), prepared for search.
+
+    Raises:
+        FileNotFoundError: the store has no logs, or a named sequence is missing (naming it).
+    """
+    store = ArtifactStore(store_root)
+    available = list_logs(store)
+    wanted = seq_ids or available
+    missing = [s for s in wanted if s not in available]
+    if missing or not wanted:
+        raise FileNotFoundError(f"{store_root}: no log {', '.join(missing) or '(none stored under logs/)'}")
+    return [load_searchable(store, s) for s in wanted]
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", text.lower()).strip("-")[:60] or "search"
+
+
+def hit_picture(store: ArtifactStore, item: SearchableLog, hit: SearchHit) -> tuple[np.ndarray, str]:
+    """``(RGB uint8 picture, kind)`` of a hit's middle frame: ``"cameras"`` (matched masks outlined) when the log is
+    aligned with node-id maps and images, else ``"bev"``."""
+    frame = hit.middle_frame
+    scene = item.scene
+    if scene is not None and scene.node_id_maps is not None and scene.maps_valid:
+        where = np.flatnonzero(scene.frame_indices == frame)
+        node_ids = [n.node_id for n in scene.nodes if n.object_id in hit.object_ids]
+        views = sorted((img for img in item.log.images if img.frame_idx == frame),
+                       key=lambda img: scene.cameras.index(img.camera) if img.camera in scene.cameras else 99)
+        if where.size and views:
+            masks = scene.masks(node_ids)[int(where[0])]  # [C, H, W]
+            images = [read_image_rgb(store, item.log.seq_id, v.camera, frame) for v in views]
+            images = [np.zeros((v.height, v.width, 3), np.float32) if px is None else px
+                      for v, px in zip(views, images)]
+            if len(images) == masks.shape[0]:
+                return grounding_picture(images, masks), "cameras"
+    return bev_panel(item.log, frame, highlight=hit.object_ids, window=hit.window,
+                     highlight_ego=EGO_ID in hit.object_ids), "bev"
+
+
+@dataclass(frozen=True)
+class StoreSearch:
+    """A description answered over a store: ranked hits of every log, each log's result, seconds taken."""
+
+    query: SearchQuery
+    hits: tuple[SearchHit, ...]
+    results: tuple[SearchResult, ...]
+    seconds: float
+    picture_kinds: dict[str, str]
+
+    @property
+    def message(self) -> str:
+        if self.hits:
+            return f"{len(self.hits)} hits in {len({h.seq_id for h in self.hits})} of {len(self.results)} logs"
+        reasons = "; ".join(r.message for r in self.results)
+        return f"no log matches {self.query.text!r}: {reasons}"
+
+
+def search_logs(items: list[SearchableLog], text: str, config: SearchConfig | None = None) -> StoreSearch:
+    """Answer ``text`` over prepared logs (no pictures); hits ranked over all logs."""
+    t0 = time.perf_counter()
+    query = parse_description(text)
+    results = tuple(search_log(i.log.seq_id, i.objects, i.log.num_frames, query, i.nodes, config) for i in items)
+    hits = sorted((h for r in results for h in r.hits), key=lambda h: (-h.score, h.seq_id, h.window[0]))
+    return StoreSearch(query, tuple(hits), results, time.perf_counter() - t0, {})
+
+
+def search_store(store_root: str, text: str, *, seq_ids: list[str] | None = None, top: int | None = None,
+                 out: str | None = None, pictures: bool = True, config: SearchConfig | None = None) -> StoreSearch:
+    """Search every log of the store (or ``seq_ids``) for ``text``; draw the first ``top`` hits' pictures into
+    ``out`` (default ``STORE/searches/<slug>/``) as ``<rank>-<seq_id>-<first>-<last>.png``."""
+    store = ArtifactStore(store_root)
+    found = search_logs(load_store(store_root, seq_ids), text, config)
+    by_seq = {i.log.seq_id: i for i in load_store(store_root, sorted({h.seq_id for h in found.hits}))} \
+        if pictures and found.hits else {}
+    hits = list(found.hits[:top] if top else found.hits)
+    kinds: dict[str, str] = {}
+    if pictures:
+        folder = (out or store.uri(f"searches/{_slug(text)}")).rstrip("/")
+        for rank, hit in enumerate(hits):
+            rgb, kind = hit_picture(store, by_seq[hit.seq_id], hit)
+            uri = write_png(f"{folder}/{rank + 1:03d}-{hit.seq_id}-{hit.window[0]}-{hit.window[1]}.png", rgb)
+            hits[rank] = replace(hit, picture=uri)
+            kinds[uri] = kind
+    logger.info("search %r: %s", text, found.message)
+    return StoreSearch(found.query, tuple(hits), found.results, found.seconds, kinds)
+
+
+def search_as_dict(found: StoreSearch) -> dict[str, Any]:
+    """``simsplat search --json``: ``query``, ``clauses``, ``hits`` (``seq_id``, ``object_ids``, ``window``
+    [start, end], ``score``, ``picture`` or ``None``, ``picture_kind``), ``message``, ``seconds``."""
+    return {
+        "query": found.query.text,
+        "clauses": [c.text for c in found.query.clauses],
+        "hits": [{"seq_id": h.seq_id, "object_ids": list(h.object_ids), "window": list(h.window),
+                  "score": round(h.score, 6), "picture": h.picture or None,
+                  "picture_kind": found.picture_kinds.get(h.picture)} for h in found.hits],
+        "message": found.message,
+        "seconds": round(found.seconds, 4),
+    }
