@@ -474,6 +474,10 @@ def mine(
     seed: Annotated[int, typer.Option(help="Seed of the mining loop (and of the rule-based client).")] = 0,
     run_id: Annotated[str | None, typer.Option(help="Run the scenarios belong to: edits/<run_id>/ (default: a new "
                                                "mine-<time> id).")] = None,
+    from_search: Annotated[str | None, typer.Option(help='Seed the loop from a search of the logs: mine only the '
+                                                    'sequences where this description holds, trying variants of '
+                                                    'what each hit\'s subject does first, e.g. "a pedestrian '
+                                                    'crossing in front of us".')] = None,
     as_json: Annotated[bool, typer.Option("--json", help="Print one JSON object on stdout: the accepted scenarios, "
                                           "per-sequence summaries and totals.")] = False,
 ) -> None:
@@ -493,13 +497,26 @@ def mine(
     if not list_asset_banks(artifacts):
         raise typer.BadParameter(f"no asset bank in {artifacts.uri('assets')} (run `simsplat assets build --store "
                                  f"{store}` first)", param_hint="--store")
+    seeds: dict[str, list] = {}
+    if from_search is not None:
+        from tasks.search import search_seeds
+
+        try:
+            found, seeds = search_seeds(store, from_search, seq_ids=seq_ids)
+        except (FileNotFoundError, ValueError) as exc:
+            raise typer.BadParameter(str(exc), param_hint="--from-search") from exc
+        if not seeds:
+            raise typer.BadParameter(f"nothing to seed the loop with: {found.message}", param_hint="--from-search")
+        seq_ids = [s for s in seq_ids if s in seeds]
+        logger.info("--from-search %r: %s; mining %s", from_search, found.message, seq_ids)
     run_id = run_id or new_run_id("mine")
     summaries = []
     try:
         with StepBars(headline=""):
             for seq_id in seq_ids:
                 summaries.append(mine_sequence_task.fn(store, seq_id, run_id, per_sequence=per_sequence,
-                                                       max_attempts=max_attempts, vlm=vlm, seed=seed))
+                                                       max_attempts=max_attempts, vlm=vlm, seed=seed,
+                                                       seed_prompts=seeds.get(seq_id, ())))
     except (FileNotFoundError, VLMError) as exc:
         raise typer.BadParameter(str(exc)) from exc
     data = _mining_as_dict(run_id, summaries)

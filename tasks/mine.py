@@ -32,6 +32,7 @@ from simsplat_core.compute_threads import set_compute_threads
 from simsplat_core.editing.commands import program_from_json
 from simsplat_core.mining.attempts import EDITS_COLUMNS, AttemptRecord, attempt_rows
 from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequence
+from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.vlm_protocol import VLMClient
 from storage import ArtifactStore
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
@@ -142,7 +143,7 @@ def _artifact_key(seq_id: str) -> str:
 
 @task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,
-                       vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str] = (),
+                       vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str | Proposal] = (),
                        client: VLMClient | None = None, threads: int = 0) -> MiningSummary:
     """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
     under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client

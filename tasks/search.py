@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
+from simsplat_core.mining.rule_proposals import Proposal
+from simsplat_core.mining.search_seeds import hit_variants
 from simsplat_core.search.describe import SearchQuery, parse_description
 from simsplat_core.search.engine import SearchConfig, SearchHit, SearchResult, search_log
 from simsplat_core.search.frames import EGO_ID, ObjectFrames, log_frames
@@ -158,3 +160,13 @@ def search_as_dict(found: StoreSearch) -> dict[str, Any]:
         "message": found.message,
         "seconds": round(found.seconds, 4),
     }
+
+
+def search_seeds(store_root: str, text: str, *, seq_ids: list[str] | None = None,
+                 per_hit: int = 2) -> tuple[StoreSearch, dict[str, list[Proposal]]]:
+    """Search the store for ``text`` (no pictures) and turn the hits into the mining loop's seed proposals per
+    sequence (``mining.search_seeds.hit_variants``: variants of what each hit's subject does)."""
+    items = load_store(store_root, seq_ids)
+    found = search_logs(items, text)
+    kinds = {i.log.seq_id: {o: f.kind for o, f in i.objects.items()} for i in items}
+    return found, hit_variants(found.hits, kinds, per_hit)

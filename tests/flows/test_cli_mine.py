@@ -72,3 +72,20 @@ def test_in_a_flow_the_task_publishes_progress_and_the_accepted_scenarios(prefec
             limit=50, offset=0)
     kinds = {(a.type, a.key) for a in artifacts}
     assert ("progress", None) in kinds and ("table", "mining-synth-000000") in kinds
+
+
+def test_mine_from_search_tries_variants_of_the_hits_first(store_root: str,  # noqa: F811
+                                                           garbage_server: ChatServer) -> None:  # noqa: F811
+    from tasks.search import search_seeds
+
+    found, seeds = search_seeds(store_root, "a vehicle")
+    assert found.hits and set(seeds) == {h.seq_id for h in found.hits}
+    result = runner.invoke(app, ["mine", "--store", store_root, "--per-sequence", "1", "--max-attempts", "1",
+                                 "--vlm", "openai", "--run-id", "from-search", "--from-search", "a vehicle", "--json"])
+    assert result.exit_code == 0, result.output
+    rows = read_edit_records(ArtifactStore(store_root), "from-search")
+    first = seeds[rows[0].seq_id][0]
+    assert rows[0].prompt == first.prompt and first.target_id in first.prompt
+    assert rows[0].mining["source"] == "seed" and {r.seq_id for r in rows} <= set(seeds)
+    result = runner.invoke(app, ["mine", "--store", store_root, "--from-search", "a purple bus reversing", "--json"])
+    assert result.exit_code == 2 and "nothing to seed the loop with" in result.output
