@@ -146,8 +146,10 @@ class AgentClause:
         return tuple(k for k in (voc.VEHICLE, voc.PEDESTRIAN) if not kinds or k in kinds)
 
     def describe(self) -> str:
-        """A short phrase for messages ("pedestrian crossing in front of ego")."""
-        return self.text
+        """A short phrase for messages ("a car following the bus": the clause with its relation, if any)."""
+        if self.related is None or not self.relation:
+            return self.text
+        return f"{self.text} ({self.relation} {'the ego' if self.related.is_ego else self.related.text})"
 
 
 @dataclass(frozen=True)
@@ -265,6 +267,32 @@ def parse_clause(text: str) -> AgentClause:
                        together=together)
 
 
+#: An agent noun phrase starting a clause: a determiner, up to three words that are not determiners, a noun.
+_DETERMINER = r"(?:a|an|the|some|another|any|one|two|three|several)"
+_AGENT_START_RX = re.compile(r"(?<![\w-])" + _DETERMINER + r" (?:(?!" + _DETERMINER + r" )[\w-]+ ){0,3}?(?:"
+                             + _NOUN_ALT + r")(?![\w-])")
+
+
+#: Words after which a noun phrase is their object, not a new clause's subject.
+_OBJECT_TAIL_RX = re.compile(r"(?<![\w-])(?:following|follows|tailing|behind|of|to|beside|alongside|by|at|on|in|"
+                             r"near|past|from|with|than|overtaking|passing)$")
+
+
+def main_clause_first(norm: str) -> str:
+    """A description that opens with its subordinate clause ("while we turn left(,) a pedestrian waits on the
+    sidewalk") turned round ("a pedestrian waits on the sidewalk while we turn left"), so that the conjunction split
+    (rule 1) sees it; other text as it is. The main clause starts at the first agent noun phrase after the opening
+    clause has an agent of its own and that is no object of a relation or preposition ("following the bus")."""
+    lead = _LEADING_CONJUNCTION_RX.match(norm)
+    if lead is None:
+        return norm
+    for m in _AGENT_START_RX.finditer(norm, lead.end()):
+        opening = norm[lead.end():m.start()].strip()
+        if opening and _has_agent(opening) and not _OBJECT_TAIL_RX.search(opening):
+            return f"{norm[m.start():].strip()} {lead.group(0).strip()} {opening}"
+    return norm
+
+
 def parse_description(text: str) -> SearchQuery:
     """Parse a search description (module docstring).
 
@@ -273,5 +301,5 @@ def parse_description(text: str) -> SearchQuery:
     """
     if not text or not text.strip():
         raise ValueError("empty search description")
-    norm = _REQUEST_RX.sub("", _ALIAS_RX.sub(lambda m: ALIASES[m.group(1)], normalise(text)))
+    norm = main_clause_first(_REQUEST_RX.sub("", _ALIAS_RX.sub(lambda m: ALIASES[m.group(1)], normalise(text))))
     return SearchQuery(text, tuple(parse_clause(part) for part in split_clauses(norm)))

@@ -261,7 +261,7 @@ def _no_hit_message(seq_id: str, query: SearchQuery, truths: list[ClauseTruth]) 
         if clause.unknown_places:
             return f"{seq_id}: the map has no {' or '.join(clause.unknown_places)} ({clause.text!r} holds nowhere)"
         if not ct.truth.any():
-            return f"{seq_id}: nothing matches {clause.text!r} in any frame"
+            return f"{seq_id}: nothing matches {clause.describe()!r} in any frame"
     return f"{seq_id}: the parts of {query.text!r} each hold somewhere but never in the same frames for long enough"
 
 

@@ -85,6 +85,17 @@ def test_ego_wording_parses() -> None:
     assert truck.parsed.subtype == "truck" and truck.motions == (voc.TURNING_LEFT,)
 
 
+@pytest.mark.parametrize("text", ["While we turn left, a pedestrian waits on the sidewalk.",
+                                  "while we turn left at the intersection a pedestrian waits on the sidewalk",
+                                  "as we turn left a pedestrian waits on the sidewalk"])
+def test_a_description_opening_with_its_while_clause_is_read_like_one_ending_with_it(text: str) -> None:
+    ped, ego = parse_description(text).clauses
+    assert ped.text == "a pedestrian waits on the sidewalk" and not ped.is_ego
+    assert ego.is_ego and ego.motions == (voc.TURNING_LEFT,)
+    car, ped2 = parse_description("while a car following the bus slows down, a pedestrian crosses").clauses[::-1]
+    assert car.relation == FOLLOWING and ped2.text == "a pedestrian crosses"
+
+
 def test_the_ego_turn_is_found_where_it_happens(objects: dict[str, ObjectFrames]) -> None:
     result = search_log("ego", objects, F, "while we turn left")
     assert [h.object_ids for h in result.hits] == [(EGO_ID,)]
