@@ -72,7 +72,7 @@ class MiningSummary:
         statuses: attempts per mining status (accepted / rejected / refused / failed).
         per_category: accepted scenarios per edit category.
         seconds: per stage (``load``, ``propose``, ``command``, ``edit``, ``render``, ``judge``, ``write``,
-            ``total``).
+            ``total``), and the editor's split of ``edit`` (``ground``, ``apply``, ``refine``, ``validate``).
         edits_table: URI of the run's edits table.
         scenarios: the accepted scenarios, in order.
     """

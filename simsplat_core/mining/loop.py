@@ -46,7 +46,7 @@ from simsplat_core.editing.commands import AssetSpec, EditProgram
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.mining.adjust import Adjustment, AlternativeAsset, adjust_program
-from simsplat_core.mining.attempts import STAGES, AttemptRecord, AttemptStatus, MiningResult, scenario_key
+from simsplat_core.mining.attempts import TIMED_STAGES, AttemptRecord, AttemptStatus, MiningResult, scenario_key
 from simsplat_core.mining.edit_kinds import command_kinds, edit_category
 from simsplat_core.mining.judge_input import judge_request_from_edit, targets_of, validation_failures
 from simsplat_core.mining.judge_views import JudgeViews, judge_views, proposal_views
@@ -190,7 +190,7 @@ class _Miner:
             source=s.pending.source, category=s.pending.category or category, program_json=program_json(program),
             status=status, failure_reason=reason, follows_prompt=None if verdict is None else verdict.follows_prompt,
             plausibility=None if verdict is None else verdict.plausibility, judgement=verdict,
-            adjustment=adjustment, seconds={stage: seconds.get(stage, 0.0) for stage in STAGES}, edited=edited)
+            adjustment=adjustment, seconds={stage: seconds.get(stage, 0.0) for stage in TIMED_STAGES}, edited=edited)
         logger.info("%s scenario %d attempt %d: %s %r%s", record.seq_id, s.index, attempt, status, s.pending.prompt,
                     f" ({reason})" if reason else "")
         return record
@@ -244,6 +244,7 @@ class _Miner:
                                   category=edit_category(program, kinds), adjustment=adjustment)
             return record, adjust_program(program, kinds, (), {exc.reason})
         seconds["edit"] = time.perf_counter() - started
+        seconds.update(edited.seconds)  # the editor's split of "edit"
         kinds = command_kinds(program, ctx.states, edited)
         category = edit_category(program, kinds)
         s.used_assets |= {a.asset_id.split(VARIANT_SEP, 1)[0] for a in edited.delta.added}
@@ -322,7 +323,7 @@ def mine_sequence(ctx: EditContext, client: VLMClient, config: MiningConfig | No
             prompts.append(pending.prompt)
             miner.scenario(index, pending, add)
         index += 1
-    totals = {stage: sum(r.seconds.get(stage, 0.0) for r in records) for stage in STAGES}
+    totals = {stage: sum(r.seconds.get(stage, 0.0) for r in records) for stage in TIMED_STAGES}
     totals["propose"] = facts_s + feed.seconds
     result = MiningResult(seq_id, getattr(client, "name", type(client).__name__), tuple(records), tuple(prompts),
                           totals)
