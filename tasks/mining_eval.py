@@ -18,7 +18,7 @@ from __future__ import annotations
 import logging
 import os
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,6 +37,7 @@ from simsplat_core.eval.mining import (
     stored_failure,
 )
 from simsplat_core.eval.tables import markdown
+from simsplat_core.mining.vlm_protocol import VLMClient
 from simsplat_core.vlm.openai_chat import OpenAIChatConfig, VLMError
 from storage import ArtifactStore
 from storage.edits import read_edit_delta, read_edit_records, read_trajectories
@@ -113,14 +114,16 @@ def _recheck(store: ArtifactStore, loaded: LoadedEdit, run_id: str, seq_id: str,
 @task(name="evaluate-mining", retries=0, cache_policy=NO_CACHE)
 def evaluate_mining_run(store_root: str, seq_ids: Sequence[str], out_root: str, out_relpath: str = "", *,
                         clients: Sequence[str] = ("rule",), per_sequence: int = 3, max_attempts: int = 3,
-                        seed: int = 0, cores: int | None = None, search_table: SearchTable | None = None
-                        ) -> MiningEvaluation:
+                        seed: int = 0, cores: int | None = None, search_table: SearchTable | None = None,
+                        client_overrides: Mapping[str, VLMClient] | None = None) -> MiningEvaluation:
     """Mine ``seq_ids`` with each of ``clients`` and write the mining tables into ``out_root`` (module docstring).
 
     Args:
         per_sequence: accepted scenarios wanted per sequence (K); max_attempts: attempts per proposal.
         cores: cores the throughput is counted on (default: this process's compute threads, at most the CPUs).
         search_table: the search benchmark's hook (:data:`SearchTable`; ``None``: no ``search`` table).
+        client_overrides: clients replacing the ones named (e.g. a rule-based client with another judge
+            configuration), by name.
 
     Raises:
         ValueError: no sequence, or an unknown client.
@@ -146,7 +149,8 @@ def evaluate_mining_run(store_root: str, seq_ids: Sequence[str], out_root: str, 
         run_id = runs[client] = new_run_id(f"evalmine-{client}")
         summaries: list[MiningSummary] = [
             mine_sequence_task.fn(store_root, seq_id, run_id, per_sequence=per_sequence, max_attempts=max_attempts,
-                                  vlm=client, seed=seed) for seq_id in seq_ids]
+                                  vlm=client, seed=seed, client=(client_overrides or {}).get(client))
+            for seq_id in seq_ids]
         seconds[client] = {s: sum(m.seconds.get(s, 0.0) for m in summaries) for s in MINING_STAGES}
         accepted[client] = sum(m.accepted for m in summaries)
         rows = [{"seq_id": r.seq_id, "edit_id": r.edit_id, **r.mining} for r in read_edit_records(store, run_id)]
