@@ -185,7 +185,7 @@ def _mean(values: Sequence[float]) -> float:
     return float(statistics.fmean(values)) if values else math.nan
 
 
-def _rate(num: int, den: int) -> float:
+def _rate(num: float, den: float) -> float:
     return num / den if den else math.nan
 
 

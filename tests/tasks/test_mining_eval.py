@@ -124,8 +124,8 @@ FAULTS = {
 
 
 @pytest.mark.parametrize("fault", list(FAULTS))
-def test_a_faulty_endpoint_fails_attempts_with_reasons_and_the_run_goes_on(store_root: str, server: ChatServer,
-                                                                         fault: str) -> None:  # noqa: F811
+def test_a_faulty_endpoint_fails_attempts_with_reasons_and_the_run_goes_on(
+        store_root: str, server: ChatServer, fault: str) -> None:  # noqa: F811
     reply, reason = FAULTS[fault]
     if reply is None:
         server.stop()  # nothing listens there any more
