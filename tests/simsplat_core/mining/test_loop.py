@@ -33,7 +33,7 @@ from simsplat_core.mining import (
     mine_sequence,
 )
 from simsplat_core.mining.adjust import MIN_LANE_GAP_M, adjust_program
-from simsplat_core.mining.attempts import EDITS_COLUMNS, STAGES, TIMED_STAGES
+from simsplat_core.mining.attempts import EDITS_COLUMNS, TIMED_STAGES
 from simsplat_core.mining.judge_input import targets_of
 from simsplat_core.mining.rule_judge import JudgeConfig
 from simsplat_core.mining.rule_proposals import Proposal
