@@ -159,5 +159,5 @@ def attempt_rows(result: MiningResult, run_id: str) -> list[dict[str, Any]]:
     return [attempt_row(r, run_id, result.client) for r in result.records]
 
 
-__all__ = ["ATTEMPT_STATUSES", "EDITS_COLUMNS", "STAGES", "TABLE_STATUS", "TIMED_STAGES", "AttemptRecord", "AttemptStatus",
-           "MiningResult", "attempt_row", "attempt_rows", "scenario_key"]
+__all__ = ["ATTEMPT_STATUSES", "EDITS_COLUMNS", "STAGES", "TABLE_STATUS", "TIMED_STAGES", "AttemptRecord",
+           "AttemptStatus", "MiningResult", "attempt_row", "attempt_rows", "scenario_key"]

@@ -253,7 +253,7 @@ class _Miner:
         shown = judge_views(edited, ctx.log, frames=config.judge_frames, max_width=config.judge_width,
                             bev_size=config.bev_size, title=s.pending.prompt)
         request = judge_request_from_edit(edited, shown.renders, shown.bev, visible_pixels=shown.visible_pixels,
-                                          prompt=s.pending.prompt)
+                                          prompt=s.pending.prompt, labeller=(ctx.log.ego_poses, ctx.map_ctx))
         seconds["render"] = time.perf_counter() - started
 
         started = time.perf_counter()
