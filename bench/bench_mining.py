@@ -55,6 +55,8 @@ def main() -> None:
             "max_attempts": args.max_attempts, "seed": args.seed, "threads": args.threads, "cpus": os.cpu_count(),
             "load_average": os.getloadavg(), "wall_s": round(time.perf_counter() - started, 1),
             "cpu_s": round(time.process_time() - cpu, 1), "runs": result.runs, "mining": result.mining,
+            "accepted_per_cpu_hour": {r["client"]: round(r["accepted"] / ((time.process_time() - cpu) / 3600), 1)
+                                      for r in result.mining if r["ran"]},
             "by_category": result.by_category, "stages": result.stages,
             "failed_scenarios": result.failed_scenarios, "tables": result.tables}
     out = Path(args.out)
@@ -63,7 +65,8 @@ def main() -> None:
     for name, uri in result.tables.items():
         md = Path(uri.removeprefix("file://")).with_suffix(".md")
         print(f"## {name}\n\n{md.read_text() if md.exists() else uri}")
-    print(f"wall {body['wall_s']} s, CPU {body['cpu_s']} s, load average {body['load_average'][0]:.1f}")
+    print(f"wall {body['wall_s']} s, CPU {body['cpu_s']} s (accepted per CPU hour {body['accepted_per_cpu_hour']}), "
+          f"load average {body['load_average'][0]:.1f}")
 
 
 if __name__ == "__main__":

@@ -71,8 +71,10 @@ class MiningSummary:
         attempts: attempts made (rows appended); accepted: scenarios accepted and stored.
         statuses: attempts per mining status (accepted / rejected / refused / failed).
         per_category: accepted scenarios per edit category.
-        seconds: per stage (``load``, ``propose``, ``command``, ``edit``, ``render``, ``judge``, ``write``,
-            ``total``), and the editor's split of ``edit`` (``ground``, ``apply``, ``refine``, ``validate``).
+        seconds: per stage (``load``, ``propose``, ``command``, ``edit``, ``render`` (the judge's views),
+            ``judge``, ``store_render`` (every frame and camera of the accepted scenarios, as ``simsplat edit``
+            stores them), ``write`` (encoding and files), ``total``), and the editor's split of ``edit``
+            (``ground``, ``apply``, ``refine``, ``validate``).
         edits_table: URI of the run's edits table.
         scenarios: the accepted scenarios, in order.
     """
@@ -131,7 +133,8 @@ def _store_accepted(store: ArtifactStore, loaded: LoadedEdit, config: MiningConf
         return store.uri(rel)
     timing: dict[str, float] = {}
     write_edit(store, record, key, loaded, program, attempt.edited, timing, append=False)
-    seconds["write"] = seconds.get("write", 0.0) + sum(timing.values())
+    seconds["store_render"] = seconds.get("store_render", 0.0) + timing.get("render", 0.0)
+    seconds["write"] = seconds.get("write", 0.0) + sum(timing.values()) - timing.get("render", 0.0)
     return store.uri(rel)
 
 
@@ -165,7 +168,8 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     step = StepProgress(f"mine {seq_id}", headline="")
     result = mine_sequence(loaded.ctx, client, config, seed_prompts=tuple(seed_prompts),
                            progress=lambda accepted, wanted: step(accepted, wanted))
-    seconds = {"load": loaded.seconds, **{k: float(v) for k, v in result.seconds.items()}, "write": 0.0}
+    seconds = {"load": loaded.seconds, **{k: float(v) for k, v in result.seconds.items()}, "store_render": 0.0,
+               "write": 0.0}
 
     records: list[EditRecord] = []
     scenarios: list[MinedScenario] = []

@@ -55,10 +55,11 @@ MINING_STAGES_COLUMNS: tuple[tuple[str, pa.DataType], ...] = (
     ("seconds_per_accepted", pa.float64()), ("accepted_per_hour_per_core", pa.float64()))
 #: Stages of ``mining_stages``, in the order of the loop: loading the sequence, proposing (scene facts, views,
 #: the client's call), turning prompts into commands, the editor (grounding, applying, refinement, validation),
-#: rendering the judge's views, judging, writing the accepted scenarios. Their sum is the ``total`` row (the
-#: loop's bookkeeping between stages is not timed).
+#: rendering the judge's views, judging, rendering the accepted scenarios for storage (every frame and camera),
+#: writing them (encoding, pictures, tables). Their sum is the ``total`` row (the loop's bookkeeping between
+#: stages is not timed).
 MINING_STAGES: tuple[str, ...] = ("load", "propose", "command", "ground", "apply", "refine", "validate", "render",
-                                  "judge", "write")
+                                  "judge", "store_render", "write")
 #: Category of a proposal whose category is unknown (a failed proposing call, a prompt nothing could parse).
 UNKNOWN_CATEGORY = "unknown"
 
