@@ -480,9 +480,10 @@ def mine(
     summaries = []
     try:
         with StepBars(headline=""):
-            for seq_id in seq_ids:
+            for i, seq_id in enumerate(seq_ids):  # the sequences take the edit categories in turn
                 summaries.append(mine_sequence_task.fn(store, seq_id, run_id, per_sequence=per_sequence,
-                                                       max_attempts=max_attempts, vlm=vlm, seed=seed))
+                                                       max_attempts=max_attempts, vlm=vlm, seed=seed,
+                                                       category_offset=i * per_sequence))
     except (FileNotFoundError, VLMError) as exc:
         raise typer.BadParameter(str(exc)) from exc
     data = _mining_as_dict(run_id, summaries)

@@ -145,10 +145,11 @@ def _artifact_key(seq_id: str) -> str:
 @task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str] = (),
-                       client: VLMClient | None = None) -> MiningSummary:
+                       client: VLMClient | None = None, category_offset: int | None = None) -> MiningSummary:
     """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
     under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client
-    with another judge configuration).
+    with another judge configuration). ``category_offset``: where the sequence starts in the run's order of edit
+    categories (``MiningConfig.category_offset``; a run passes ``i * per_sequence`` for its ``i``-th sequence).
 
     Raises:
         FileNotFoundError: the store lacks the sequence's log, language scene, or an asset bank (naming the store
@@ -161,7 +162,8 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     if not loaded.bank_hash:
         raise FileNotFoundError(f"{store.uri('assets')}: no asset bank to mine {seq_id!r} with "
                                 "(run `simsplat assets build` first)")
-    config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed)
+    config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed,
+                          category_offset=category_offset)
     client = client if client is not None else make_client(vlm, loaded, config)
     logger.info("%s: mining %d scenario(s) with %s (max %d attempts each, seed %d)", seq_id, per_sequence,
                 client.name, max_attempts, seed)

@@ -149,8 +149,9 @@ def evaluate_mining_run(store_root: str, seq_ids: Sequence[str], out_root: str, 
         run_id = runs[client] = new_run_id(f"evalmine-{client}")
         summaries: list[MiningSummary] = [
             mine_sequence_task.fn(store_root, seq_id, run_id, per_sequence=per_sequence, max_attempts=max_attempts,
-                                  vlm=client, seed=seed, client=(client_overrides or {}).get(client))
-            for seq_id in seq_ids]
+                                  vlm=client, seed=seed, client=(client_overrides or {}).get(client),
+                                  category_offset=i * per_sequence)
+            for i, seq_id in enumerate(seq_ids)]
         seconds[client] = {s: sum(m.seconds.get(s, 0.0) for m in summaries) for s in MINING_STAGES}
         accepted[client] = sum(m.accepted for m in summaries)
         rows = [{"seq_id": r.seq_id, "edit_id": r.edit_id, **r.mining} for r in read_edit_records(store, run_id)]

@@ -78,6 +78,9 @@ class MiningConfig:
         min_visible_pixels: targets covering fewer pixels of the judge's renders count as not visible (the default
             adjustment then brings them closer).
         seed: the run's seed: part of every ``edit_id`` (and the rule-based client's, :func:`default_client`).
+        category_offset: where this sequence starts in the run's order of edit categories (the rule-based client's,
+            :func:`default_client`; a run sets ``i * scenarios`` for its ``i``-th sequence so that its sequences
+            take the categories in turn; ``None``: each sequence its own seeded order).
         options: the editor's options (default: full refinement, the ego reacts).
     """
 
@@ -91,6 +94,7 @@ class MiningConfig:
     min_plausibility: int = 3
     min_visible_pixels: int = 30
     seed: int = 0
+    category_offset: int | None = None
     options: EditorOptions = field(default=DEFAULT_OPTIONS)
 
     def __post_init__(self) -> None:
@@ -106,8 +110,9 @@ class MiningConfig:
 
 
 def default_client(ctx: EditContext, config: MiningConfig) -> RuleBasedVLMClient:
-    """The rule-based client of ``config.seed``, parsing with the context's text encoder."""
-    return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder)
+    """The rule-based client of ``config.seed`` and ``config.category_offset``, parsing with the context's text
+    encoder."""
+    return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder, category_offset=config.category_offset)
 
 
 def program_json(program: EditProgram | None) -> str:
