@@ -12,8 +12,7 @@ suggestion of each parameter only), its ``value`` read for a number and a direct
   an agent only (``edit_kinds.moves``);
 * ``start_time`` -- ``"2 s later"`` adds to ``behaviour.delay_s`` (later than the attempt just judged, so repeated
   suggestions keep moving the start), ``"1 s earlier"`` takes from the delay (or the start time), a bare ``"3 s"``
-  sets ``start_time_s``, ``"hold still ..."`` / ``"stand ..."`` turns the delay into a start time (stand still
-  until then: what an agent that does not move in the log can do); moving agents only;
+  sets ``start_time_s``; moving agents only;
 * ``offset`` -- ``"5 m further"`` / ``"away"`` / ``"another spot"`` move the placement that much further from its
   anchor (``distance_m``; from the editor's default distance when none was asked, ``editing.placement`` and
   ``editing.edit_ops.DEFAULT_AHEAD_M``; an ``absolute`` position along its bearing), ``"closer"`` nearer (not
@@ -28,9 +27,7 @@ suggestion of each parameter only), its ``value`` read for a number and a direct
 Default changes when no suggestion changes anything (:data:`DEFAULT_ORDER`): a ``collision`` starts the moving
 agents :data:`DEFAULT_DELAY_S` later, or puts a standing insert :data:`DEFAULT_OFFSET_M` further away; ``offroad``
 drops the anchor, or centres the lateral offset; ``not_visible`` brings the insert :data:`DEFAULT_OFFSET_M` closer;
-``infeasible_placement`` (a refused placement) tries :data:`DEFAULT_OFFSET_M` further; ``infeasible_motion`` (a
-refused motion, e.g. a delay -- the default for a collision -- of an agent standing in the log) holds the agent
-still until the delay is over instead. Everything is a pure function
+``infeasible_placement`` (a refused placement) tries :data:`DEFAULT_OFFSET_M` further. Everything is a pure function
 of its inputs (no clock, no random numbers).
 """
 
@@ -72,7 +69,7 @@ DEFAULT_OFFSET_M = 5.0
 MIN_LANE_GAP_M = 8.0
 MIN_SIDE_GAP_M = 0.5
 #: Failure classes with a default change, in the order they are tried.
-DEFAULT_ORDER: tuple[str, ...] = ("collision", "offroad", "not_visible", "infeasible_placement", "infeasible_motion")
+DEFAULT_ORDER: tuple[str, ...] = ("collision", "offroad", "not_visible", "infeasible_placement")
 #: Limits of the command schema.
 _MAX_DELAY_S, _MAX_DISTANCE_M, _MAX_LATERAL_M, _MAX_FACTOR = 60.0, 300.0, 10.0, 10.0
 _BESIDE = frozenset({"left_of", "right_of", "next_to", "in_front_of", "behind"})
@@ -142,10 +139,6 @@ def change_start(command: EditCommand, value: str) -> EditCommand | None:
     """``command`` starting when ``value`` says (module docstring), ``None`` when that changes nothing."""
     text = value.lower()
     behaviour = _behaviour(command)
-    if _has(text, "hold", "stand"):  # a delay the agent cannot take (it stands in the log): stand still until then
-        if not behaviour.delay_s:
-            return None
-        return _with_behaviour(command, delay_s=None, start_time_s=(behaviour.start_time_s or 0.0) + behaviour.delay_s)
     if _has(text, "earlier", "sooner"):
         step = _amount(text, 1.0)
         if behaviour.start_time_s is not None and behaviour.start_time_s > 0:
@@ -292,8 +285,6 @@ def default_changes(failure: str, program: EditProgram, kinds: Sequence[str | No
         return [ParameterChange("offset", f"{DEFAULT_OFFSET_M:g} m closer", "default when the target is not seen")]
     if failure == "infeasible_placement":
         return [ParameterChange("offset", f"{DEFAULT_OFFSET_M:g} m further", "default for a refused placement")]
-    if failure == "infeasible_motion":
-        return [ParameterChange("start_time", "hold still until the delay is over", "default for a refused motion")]
     return []
 
 
