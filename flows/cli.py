@@ -513,10 +513,11 @@ def mine(
     summaries = []
     try:
         with StepBars(headline=""):
-            for seq_id in seq_ids:
+            for i, seq_id in enumerate(seq_ids):  # the sequences take the edit categories in turn
                 summaries.append(mine_sequence_task.fn(store, seq_id, run_id, per_sequence=per_sequence,
                                                        max_attempts=max_attempts, vlm=vlm, seed=seed,
-                                                       seed_prompts=seeds.get(seq_id, ())))
+                                                       seed_prompts=seeds.get(seq_id, ()),
+                                                       category_offset=i * per_sequence))
     except (FileNotFoundError, VLMError) as exc:
         raise typer.BadParameter(str(exc)) from exc
     data = _mining_as_dict(run_id, summaries)
@@ -671,6 +672,61 @@ def _print_editing(result) -> None:
     for name, uri in result.tables.items():
         console.print(f"{name}: {uri}")
 
+
+@eval_app.command("mining")
+def eval_mining(
+    store: Annotated[str, typer.Option(help="Artifact store root with aligned scenes and an asset bank; the mined "
+                                       "scenarios are stored in it under edits/evalmine-<client>-<time>/.")],
+    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    per_sequence: Annotated[int, typer.Option(min=1, help="Accepted scenarios wanted per sequence.")] = 3,
+    max_attempts: Annotated[int, typer.Option(min=1, help="Attempts per proposal.")] = 3,
+    clients: Annotated[str, typer.Option(help="VLM clients, comma separated: rule, openai (run only when "
+                                         "SIMSPLAT_VLM_URL and SIMSPLAT_VLM_MODEL are set).")] = "rule,openai",
+    seed: Annotated[int, typer.Option(help="Seed of the mining loop (and of the rule-based client).")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Mining benchmark (SIMSplat Table 5 analogue): mine every sequence per VLM client; completion, mean attempts
+    to acceptance, mean plausibility, accepted scenarios re-checked for collisions and off-road agents, acceptance
+    by edit category, where the time goes (accepted scenarios per hour per core), and the search benchmark of the same
+    sequences (tables/search: RefAV timestamp and log balanced accuracy per query)."""
+    from flows.progress import StepBars
+    from tasks.mining_eval import evaluate_mining_run
+    from tasks.search_eval import search_run_table
+
+    seq_ids = _aligned_sequences(store, seq)
+    names = [n.strip() for n in clients.split(",") if n.strip()]
+    try:
+        with StepBars(headline=""):
+            result = evaluate_mining_run.fn(store, seq_ids, out, clients=names, per_sequence=per_sequence,
+                                            max_attempts=max_attempts, seed=seed, search_table=search_run_table)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    if as_json:
+        from dataclasses import asdict
+
+        typer.echo(json.dumps(asdict(result), default=float))
+        return
+    _print_mining_eval(result)
+
+
+def _print_mining_eval(result) -> None:
+    table = Table(title=f"Mining on {len(result.seq_ids)} sequence(s)")
+    columns = ("client", "prompts", "accepted", "completion", "attempts_mean", "plausibility_mean",
+               "accepted_with_failure", "note")
+    for col in columns:
+        table.add_column(col)
+    for row in result.mining:
+        table.add_row(*(f"{row[c]:.2f}" if isinstance(row[c], float) else str(row[c]) for c in columns))
+    console.print(table)
+    for row in result.stages:
+        if row["stage"] == "total":
+            console.print(f"{row['client']}: {row['seconds']:.0f} s, {row['accepted_per_hour_per_core']:.1f} "
+                          f"accepted scenarios per hour per core ({result.cores} core(s))")
+    for line in result.failed_scenarios:
+        console.print(f"accepted but failing on re-check: {line}", markup=False, soft_wrap=True)
+    for name, uri in result.tables.items():
+        console.print(f"{name}: {uri}")
 
 #: Real driving-log samples beside the repository (``../shared/data``), the default of ``eval motion --real``.
 SHARED_REAL_LOGS: tuple[str, ...] = ("waymo/motion_data_one_scenario.tfrecord", "av2/sensor-log-7fab2350")

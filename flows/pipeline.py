@@ -230,7 +230,8 @@ def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: Minin
     with reserving_cpus(threads):
         futures = [mine_sequence_task.submit(store_root, seq_id, run_id, per_sequence=plan.per_sequence,
                                              max_attempts=plan.max_attempts, vlm=plan.vlm, seed=plan.seed,
-                                             threads=threads) for seq_id in seq_ids]
+                                             category_offset=i * plan.per_sequence, threads=threads)
+                   for i, seq_id in enumerate(seq_ids)]  # the sequences take the edit categories in turn
     summaries = _gather(futures, "mine", label=lambda s: s.seq_id)
     _publish_mining_table(summaries)
     return summaries

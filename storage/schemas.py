@@ -603,6 +603,29 @@ def editing_table_schema(name: str) -> pa.Schema:
     return _schema(name, 1, list(TABLE_COLUMNS[name]))
 
 
+# ----------------------------------------------------------------------------- mining evaluation (run tables)
+#: Tables of ``simsplat eval mining`` (columns defined by ``simsplat_core.eval.mining``).
+MINING_TABLES: tuple[str, ...] = ("mining", "mining_by_category", "mining_stages")
+
+
+def mining_table_schema(name: str) -> pa.Schema:
+    """Schema of one mining-evaluation table (``MINING_TABLES``): ``mining`` (one row per VLM client: prompts,
+    accepted, completion, attempts_mean, plausibility_mean, accepted_with_failure, ...), ``mining_by_category``
+    (client, category, prompts, accepted, completion, attempts_mean) and ``mining_stages`` (client, stage,
+    seconds, share, seconds_per_accepted, accepted_per_hour_per_core).
+
+    Raises:
+        KeyError: an unknown table name.
+    """
+    from simsplat_core.eval import mining  # imported here: storage loads without the core
+
+    columns = {"mining": mining.MINING_COLUMNS, "mining_by_category": mining.MINING_BY_CATEGORY_COLUMNS,
+               "mining_stages": mining.MINING_STAGES_COLUMNS}
+    if name not in columns:
+        raise KeyError(f"no mining table {name!r}; known: {list(columns)}")
+    return _schema(name, 1, list(columns[name]))
+
+
 # ----------------------------------------------------------------------------- motion evaluation (run table)
 #: ``schema_version`` of the ``motion`` table.
 MOTION_SCHEMA_VERSION = 2  # 2: predictor and refused columns

@@ -73,8 +73,10 @@ class MiningSummary:
         attempts: attempts made (rows appended); accepted: scenarios accepted and stored.
         statuses: attempts per mining status (accepted / rejected / refused / failed).
         per_category: accepted scenarios per edit category.
-        seconds: per stage (``load``, ``propose``, ``command``, ``edit``, ``render``, ``judge``, ``write``,
-            ``total``).
+        seconds: per stage (``load``, ``propose``, ``command``, ``edit``, ``render`` (the judge's views),
+            ``judge``, ``store_render`` (every frame and camera of the accepted scenarios, as ``simsplat edit``
+            stores them), ``write`` (encoding and files), ``total``), and the editor's split of ``edit``
+            (``ground``, ``apply``, ``refine``, ``validate``).
         edits_table: URI of the run's edits table.
         scenarios: the accepted scenarios, in order.
     """
@@ -133,7 +135,8 @@ def _store_accepted(store: ArtifactStore, loaded: LoadedEdit, config: MiningConf
         return store.uri(rel)
     timing: dict[str, float] = {}
     write_edit(store, record, key, loaded, program, attempt.edited, timing, append=False)
-    seconds["write"] = seconds.get("write", 0.0) + sum(timing.values())
+    seconds["store_render"] = seconds.get("store_render", 0.0) + timing.get("render", 0.0)
+    seconds["write"] = seconds.get("write", 0.0) + sum(timing.values()) - timing.get("render", 0.0)
     return store.uri(rel)
 
 
@@ -144,11 +147,13 @@ def _artifact_key(seq_id: str) -> str:
 @task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str | Proposal] = (),
-                       client: VLMClient | None = None, threads: int = 0) -> MiningSummary:
+                       client: VLMClient | None = None, category_offset: int | None = None,
+                       threads: int = 0) -> MiningSummary:
     """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
     under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client
-    with another judge configuration); ``threads``: torch/numba threads for this task (0 = leave the process
-    setting).
+    with another judge configuration). ``category_offset``: where the sequence starts in the run's order of edit
+    categories (``MiningConfig.category_offset``; a run passes ``i * per_sequence`` for its ``i``-th sequence).
+    ``threads``: torch/numba threads for this task (0 = leave the process setting).
 
     Raises:
         FileNotFoundError: the store lacks the sequence's log, language scene, or an asset bank (naming the store
@@ -163,14 +168,16 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     if not loaded.bank_hash:
         raise FileNotFoundError(f"{store.uri('assets')}: no asset bank to mine {seq_id!r} with "
                                 "(run `simsplat assets build` first)")
-    config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed)
+    config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed,
+                          category_offset=category_offset)
     client = client if client is not None else make_client(vlm, loaded, config)
     logger.info("%s: mining %d scenario(s) with %s (max %d attempts each, seed %d)", seq_id, per_sequence,
                 client.name, max_attempts, seed)
     step = StepProgress(f"mine {seq_id}", headline="")
     result = mine_sequence(loaded.ctx, client, config, seed_prompts=tuple(seed_prompts),
                            progress=lambda accepted, wanted: step(accepted, wanted))
-    seconds = {"load": loaded.seconds, **{k: float(v) for k, v in result.seconds.items()}, "write": 0.0}
+    seconds = {"load": loaded.seconds, **{k: float(v) for k, v in result.seconds.items()}, "store_render": 0.0,
+               "write": 0.0}
 
     records: list[EditRecord] = []
     scenarios: list[MinedScenario] = []

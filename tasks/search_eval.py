@@ -13,6 +13,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,7 @@ from simsplat_core.eval.search.truth import WorldAgents, query_truth
 from simsplat_core.eval.tables import markdown
 from simsplat_core.search.windows import covered
 from storage import ArtifactStore
+from storage.runs import RunTable
 from storage.schemas import search_table_schema
 from tasks.search import SearchableLog, load_store, search_logs
 
@@ -72,6 +74,26 @@ def summarise(rows: list[dict[str, Any]]) -> dict[str, float | int]:
             "seconds_mean": mean("seconds", rows)}
 
 
+def _search_markdown(table: pa.Table, summary: dict[str, Any], logs: int, stores: int) -> str:
+    return (f"# Search: RefAV balanced accuracies\n\n{logs} logs from {stores} store(s), "
+            f"{table.num_rows} queries ({summary['negatives']} hold nowhere).\n\n{markdown(table)}\n\n"
+            f"Mean timestamp BA {summary['timestamp_ba']}, log BA {summary['log_ba']} "
+            f"(positives: {summary['timestamp_ba_positives']}, {summary['log_ba_positives']}); "
+            f"negatives without a hit: {summary['negatives_without_hits']}/{summary['negatives']}.\n")
+
+
+def search_run_table(store_root: str, seq_ids: Sequence[str]) -> RunTable | None:
+    """The ``search`` table of ``seq_ids`` in one store, for ``tasks.mining_eval``'s ``search_table`` hook
+    (``None`` without sequences)."""
+    if not seq_ids:
+        return None
+    items = load_store(store_root, list(seq_ids))
+    rows = evaluate_queries(items)
+    schema = search_table_schema()
+    table = pa.Table.from_pylist(rows, schema=schema)
+    return RunTable(table, schema, _search_markdown(table, summarise(rows), len(items), 1))
+
+
 def evaluate_search(stores: list[str], out_root: str, *, queries: tuple[QueryCase, ...] = ALL_QUERIES,
                     out_relpath: str = "tables") -> dict[str, Any]:
     """Evaluate the search over every log of ``stores``; write ``OUT/<out_relpath>/search.{parquet,md}``.
@@ -91,12 +113,7 @@ def evaluate_search(stores: list[str], out_root: str, *, queries: tuple[QueryCas
     out = ArtifactStore(out_root)
     out.write_table(f"{out_relpath}/search.parquet", table, schema)
     summary = summarise(rows)
-    text = (f"# Search: RefAV balanced accuracies\n\n{len(items)} logs from {len(stores)} stores, "
-            f"{len(rows)} queries ({summary['negatives']} hold nowhere).\n\n{markdown(table)}\n\n"
-            f"Mean timestamp BA {summary['timestamp_ba']}, log BA {summary['log_ba']} "
-            f"(positives: {summary['timestamp_ba_positives']}, {summary['log_ba_positives']}); "
-            f"negatives without a hit: {summary['negatives_without_hits']}/{summary['negatives']}.\n")
-    out.write_bytes(f"{out_relpath}/search.md", text.encode("utf-8"))
+    out.write_bytes(f"{out_relpath}/search.md", _search_markdown(table, summary, len(items), len(stores)).encode())
     logger.info("search evaluation: %s", summary)
     return {**summary, "logs": len(items), "load_seconds": round(load_s, 3),
             "table": out.uri(f"{out_relpath}/search.parquet")}

@@ -64,6 +64,7 @@ from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.metrics import validate_agents
 from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.stage_clock import StageClock, maybe_stage
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -129,14 +130,17 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
         EditRefused: a command cannot be carried out (its ``command_index`` says which), or the program as a
             whole changes nothing.
     """
+    clock = StageClock()
     excluded: frozenset[str] = frozenset()
     best: tuple[int, Draft, SceneGraph, EditDelta, list[CommandOutcome]] | None = None
     for attempt in range(LOOK_RETRIES + 1):
-        draft, outcomes, delta = _run_with_room(ctx, program, options, excluded)
+        draft, outcomes, delta = _run_with_room(ctx, program, options, excluded, clock)
         if not options.check_looks:
-            best = (0, draft, _build_graph(ctx, draft, delta), delta, outcomes)
+            with clock.stage("apply"):
+                best = (0, draft, _build_graph(ctx, draft, delta), delta, outcomes)
             break
-        graph, delta, outcomes, misfits, fitted = _looked(ctx, draft, outcomes, delta)
+        with clock.stage("apply"):
+            graph, delta, outcomes, misfits, fitted = _looked(ctx, draft, outcomes, delta)
         if best is None or fitted > best[0]:
             best = (fitted, draft, graph, delta, outcomes)
         if not misfits:
@@ -149,28 +153,29 @@ def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = 
         excluded |= misfits
     assert best is not None  # the loop runs at least once
     _, draft, graph, delta, outcomes = best
-    validation = validate_agents(draft.states, ctx.map_ctx, changed_rows(draft.states))
+    with clock.stage("validate"):
+        validation = validate_agents(draft.states, ctx.map_ctx, changed_rows(draft.states))
     logger.info("%s: %d command(s): %s; validation %s", ctx.log.seq_id, len(outcomes),
                 "; ".join(o.summary for o in outcomes), "ok" if validation.ok else validation.failures())
     return EditedScene(prompt=program.prompt, original=ctx.graph, graph=graph, original_states=ctx.states,
                        states=draft.states, delta=delta, outcomes=tuple(outcomes), validation=validation,
-                       refinement=draft.refinement)
+                       refinement=draft.refinement, seconds=dict(clock.seconds))
 
 
 #: Times a program is re-applied with other assets when an inserted object does not read as the asked colour.
 LOOK_RETRIES = 1
 
 
-def _run_with_room(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str]
-                   ) -> tuple[Draft, list[CommandOutcome], EditDelta]:
+def _run_with_room(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str],
+                   clock: StageClock | None = None) -> tuple[Draft, list[CommandOutcome], EditDelta]:
     """:func:`_run_commands` with the inserted objects where asked; when the reacting traffic cannot cope there,
     the first of ``room.ROOM_SHIFTS`` where it can (else the asked spot)."""
-    asked = _run_commands(ctx, program, options, excluded)
+    asked = _run_commands(ctx, program, options, excluded, clock=clock)
     if not searches_room(program, options.refinement) or traffic_copes(asked[0]):
         return asked
     for share in ROOM_SHIFTS:
         try:
-            moved = _run_commands(ctx, program, options, excluded, room_shift=share)
+            moved = _run_commands(ctx, program, options, excluded, room_shift=share, clock=clock)
         except EditRefused:  # no room there (or the program fails there): the next spot
             continue
         if traffic_copes(moved[0]):
@@ -181,19 +186,22 @@ def _run_with_room(ctx: EditContext, program: EditProgram, options: EditorOption
 
 
 def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions, excluded: frozenset[str],
-                  room_shift: float = 0.0) -> tuple[Draft, list[CommandOutcome], EditDelta]:
+                  room_shift: float = 0.0, clock: StageClock | None = None
+                  ) -> tuple[Draft, list[CommandOutcome], EditDelta]:
     """Every command on a fresh draft (assets in ``excluded`` are not retrieved when another fits; inserted rows
-    moved by ``room_shift``, ``Draft.room_shift``)."""
-    grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding)
-    draft = Draft.start(ctx, grounder, options, excluded, room_shift)
-    outcomes = []
-    for index, command in enumerate(program.commands):
-        options.check(command, index)
-        outcomes.append(apply_command(draft, command, index))
-    if draft.delta().is_empty:
-        raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
+    moved by ``room_shift``, ``Draft.room_shift``); seconds into ``clock`` (``ground`` / ``apply`` / ``refine``)."""
+    with maybe_stage(clock, "apply"):
+        grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding, clock=clock)
+        draft = Draft.start(ctx, grounder, options, excluded, room_shift)
+        outcomes = []
+        for index, command in enumerate(program.commands):
+            options.check(command, index)
+            outcomes.append(apply_command(draft, command, index))
+        if draft.delta().is_empty:
+            raise EditRefused("the edit changes nothing in this scene", reason="unsupported")
     if options.refinement != "none":
-        react(draft, options.refinement, options.ego_reacts)
+        with maybe_stage(clock, "refine"):
+            react(draft, options.refinement, options.ego_reacts)
     return draft, outcomes, draft.delta()
 
 

@@ -35,6 +35,7 @@ from simsplat_core.language.query import QueryEngine
 from simsplat_core.language.query_parse import ParsedQuery, parse_query
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.stage_clock import StageClock, maybe_stage
 
 logger = logging.getLogger(__name__)
 
@@ -84,11 +85,13 @@ class Grounder:
         engine: the grounding engine.
         graph: the graph being edited (ids are checked against its object nodes).
         mode: the editor's grounding mode.
+        clock: where :meth:`ground` adds its wall seconds (stage ``"ground"``; ``None``: not timed).
     """
 
     def __init__(self, language: LanguageScene, engine: QueryEngine, graph: SceneGraph,
-                 mode: GroundingMode = "language") -> None:
+                 mode: GroundingMode = "language", clock: StageClock | None = None) -> None:
         self.language = language
+        self.clock = clock
         self.graph = graph
         self.mode = mode
         if mode == "attributes":
@@ -115,6 +118,10 @@ class Grounder:
             EditRefused: ``not_found`` (nothing matches, or only removed nodes), ``unsupported`` (a
                 description in ``"ids"`` mode).
         """
+        with maybe_stage(self.clock, "ground"):
+            return self._ground(ref, removed, command_index, role)
+
+    def _ground(self, ref: TargetRef, removed: Collection[int], command_index: int | None, role: str) -> Grounded:
         if ref.is_ego:
             raise EditRefused(f"the ego vehicle cannot be a {role} here", reason="unsupported",
                               command_index=command_index)

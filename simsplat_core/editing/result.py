@@ -23,6 +23,8 @@ if TYPE_CHECKING:
     from simsplat_core.motion.refine import Refinement
     from simsplat_core.scenario.metrics import ValidationReport
 
+#: The editor's timed stages (``EditedScene.seconds``), in order.
+EDIT_STAGES: tuple[str, ...] = ("ground", "apply", "refine", "validate")
 #: ``EditRefused.reason`` codes (stable: the ``edits`` table's ``failure_reason`` starts with one).
 REFUSAL_REASONS: tuple[str, ...] = (
     "unsupported",  # the words ask for something the command language cannot express
@@ -120,6 +122,9 @@ class EditedScene:
         outcomes: one per command, in order.
         validation: collisions, off-road and kinematics of the edited and refined agents (``scenario.metrics``).
         refinement: how the other agents reacted (``None``: not refined, everyone else replays the log).
+        seconds: wall seconds of the editor's stages (:data:`EDIT_STAGES`: grounding the targets and anchors,
+            applying the commands -- placement, motion planning, building the graph, the look check --, the
+            traffic's refinement, validation; re-applications summed); recorded, never read by the editor.
     """
 
     prompt: str
@@ -131,6 +136,7 @@ class EditedScene:
     outcomes: tuple[CommandOutcome, ...]
     validation: ValidationReport
     refinement: Refinement | None = None
+    seconds: dict[str, float] = field(default_factory=dict)
 
     @property
     def commands(self) -> tuple[EditCommand, ...]:

@@ -23,7 +23,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
 
-from simsplat_core.editing.result import EditedScene
+from simsplat_core.editing.result import EDIT_STAGES, EditedScene
 from simsplat_core.mining.vlm_protocol import Judgement
 
 AttemptStatus = Literal["accepted", "rejected", "refused", "failed"]
@@ -31,6 +31,10 @@ ATTEMPT_STATUSES: tuple[str, ...] = get_args(AttemptStatus)
 #: Stages timed per attempt (seconds): proposing, turning the prompt into commands, the edit (ground, apply,
 #: refine, validate), rendering the judge's views and the BEV, judging.
 STAGES: tuple[str, ...] = ("propose", "command", "edit", "render", "judge")
+#: Every timed stage of an attempt: :data:`STAGES` (the ``edits`` table's ``seconds_<stage>`` columns) and the
+#: editor's split of ``edit`` (``editing.result.EDIT_STAGES``: ground, apply, refine, validate; 0 for an edit
+#: refused before it finished).
+TIMED_STAGES: tuple[str, ...] = (*STAGES, *EDIT_STAGES)
 #: ``edits.status`` of each attempt status (the table knows ``succeeded`` / ``refused`` / ``failed``; a rejected
 #: attempt ran but is not kept: ``failed``, its ``failure_reason`` starting with ``rejected:``).
 TABLE_STATUS: dict[str, str] = {"accepted": "succeeded", "rejected": "failed", "refused": "refused", "failed": "failed"}
@@ -68,7 +72,7 @@ class AttemptRecord:
         follows_prompt, plausibility: the judge's answers (``None`` when not judged).
         judgement: the whole verdict (``None`` when not judged).
         adjustment: what changed from the previous attempt (``""`` for the first).
-        seconds: per stage of :data:`STAGES` (not compared).
+        seconds: per stage of :data:`TIMED_STAGES` (not compared).
         edited: the edited scene of an accepted attempt, kept in memory for the caller to store (else ``None``;
             not compared, not in the repr).
     """
@@ -113,7 +117,7 @@ class MiningResult:
         seq_id: the sequence; client: the VLM client's ``name``.
         records: every attempt, in order.
         prompts: the proposals taken, in order (seed prompts first).
-        seconds: total seconds per stage of :data:`STAGES` (``propose`` includes the scene facts and the
+        seconds: total seconds per stage of :data:`TIMED_STAGES` (``propose`` includes the scene facts and the
             proposal views), not compared.
     """
 
@@ -155,5 +159,5 @@ def attempt_rows(result: MiningResult, run_id: str) -> list[dict[str, Any]]:
     return [attempt_row(r, run_id, result.client) for r in result.records]
 
 
-__all__ = ["ATTEMPT_STATUSES", "EDITS_COLUMNS", "STAGES", "TABLE_STATUS", "AttemptRecord", "AttemptStatus",
-           "MiningResult", "attempt_row", "attempt_rows", "scenario_key"]
+__all__ = ["ATTEMPT_STATUSES", "EDITS_COLUMNS", "STAGES", "TABLE_STATUS", "TIMED_STAGES", "AttemptRecord",
+           "AttemptStatus", "MiningResult", "attempt_row", "attempt_rows", "scenario_key"]

@@ -14,7 +14,9 @@ The request holds, from the :class:`~simsplat_core.editing.result.EditedScene`:
 * the surrounding agents: those that reacted (``refined``) and up to ``max_surrounding`` others that come within
   ``near_m`` of a target, nearest first (the ego included);
 * the validation as text lines and as :class:`~simsplat_core.mining.vlm_protocol.ValidationFailure` values, and
-  the executed program.
+  the executed program;
+* given the log's ego poses and map (``labeller``), the targets' motion classes from the trajectory auto-labeller
+  (``motion_labels``), so a judge checks a requested manoeuvre the way the editing benchmark does.
 """
 
 from __future__ import annotations
@@ -25,9 +27,12 @@ import numpy as np
 
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.result import EditedScene
+from simsplat_core.language.motion_labels import label_trajectory
 from simsplat_core.mining.vlm_protocol import AgentTrajectory, JudgeRequest, ValidationFailure
 from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.metrics import ValidationReport
+from simsplat_core.scenario.trajectory import agent_kind, agent_trajectory
 
 #: Surrounding agents come within this distance (m) of a target at a common step.
 NEAR_M = 25.0
@@ -107,11 +112,30 @@ def visible_pixels_of(node_id_maps: Iterable[np.ndarray], states: AgentStates, o
     return out
 
 
+def motion_labels_of(states: AgentStates, object_ids: Iterable[str], ego_poses: np.ndarray,
+                     map_ctx: MapContext) -> dict[str, str]:
+    """Object id -> the trajectory auto-labeller's motion class (``language.motion_labels.label_trajectory`` of
+    ``scenario.trajectory.agent_trajectory``: what the editing benchmark checks) for those of ``object_ids``
+    present in ``states`` with a motion vocabulary and two valid steps; ``ego_poses`` is the log's ``[F, 4, 4]``."""
+    out = {}
+    for oid in object_ids:
+        if oid not in states.object_ids:
+            continue
+        row = states.index(oid)
+        if agent_kind(states.categories[row]) is None or states.valid[row].sum() < 2:
+            continue
+        out[oid] = label_trajectory(agent_trajectory(states, row, map_ctx), ego_poses, map_ctx).motion
+    return out
+
+
 def judge_request_from_edit(edited: EditedScene, renders: Sequence[np.ndarray], bev: np.ndarray, *,
                             visible_pixels: Mapping[str, int] | None = None, prompt: str | None = None,
-                            near_m: float = NEAR_M, max_surrounding: int = MAX_SURROUNDING) -> JudgeRequest:
+                            near_m: float = NEAR_M, max_surrounding: int = MAX_SURROUNDING,
+                            labeller: tuple[np.ndarray, MapContext] | None = None) -> JudgeRequest:
     """The :class:`JudgeRequest` of ``edited`` (module docstring) with its ``renders`` (``[H, W, 3]`` each) and
-    ``bev``; ``prompt`` defaults to the edit's (or, for a command-only edit, its outcomes' summaries)."""
+    ``bev``; ``prompt`` defaults to the edit's (or, for a command-only edit, its outcomes' summaries). Given
+    ``labeller`` (the log's ``[F, 4, 4]`` ego poses and its map), the targets' ``motion_labels``
+    (:func:`motion_labels_of`)."""
     states, before = edited.states, edited.original_states
     per_command = targets_of(edited)
     targets = list(dict.fromkeys(o for ids in per_command for o in ids))
@@ -126,8 +150,9 @@ def judge_request_from_edit(edited: EditedScene, renders: Sequence[np.ndarray], 
     return JudgeRequest(prompt=words, renders=renders, bev=bev, trajectories=trajectories,
                         validation=validation_lines(edited.validation), dt_s=dt, before=logged,
                         failures=validation_failures(edited.validation), program=program,
-                        command_targets=per_command, visible_pixels=visible_pixels)
+                        command_targets=per_command, visible_pixels=visible_pixels,
+                        motion_labels=None if labeller is None else motion_labels_of(states, targets, *labeller))
 
 
-__all__ = ["MAX_SURROUNDING", "NEAR_M", "judge_request_from_edit", "targets_of", "trajectory_of",
+__all__ = ["MAX_SURROUNDING", "NEAR_M", "judge_request_from_edit", "motion_labels_of", "targets_of", "trajectory_of",
            "validation_failures", "validation_lines", "visible_pixels_of"]

@@ -46,7 +46,7 @@ from simsplat_core.editing.commands import AssetSpec, EditProgram
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.mining.adjust import Adjustment, AlternativeAsset, adjust_program
-from simsplat_core.mining.attempts import STAGES, AttemptRecord, AttemptStatus, MiningResult, scenario_key
+from simsplat_core.mining.attempts import TIMED_STAGES, AttemptRecord, AttemptStatus, MiningResult, scenario_key
 from simsplat_core.mining.edit_kinds import command_kinds, edit_category
 from simsplat_core.mining.judge_input import judge_request_from_edit, targets_of, validation_failures
 from simsplat_core.mining.judge_views import JudgeViews, judge_views, proposal_views
@@ -78,6 +78,9 @@ class MiningConfig:
         min_visible_pixels: targets covering fewer pixels of the judge's renders count as not visible (the default
             adjustment then brings them closer).
         seed: the run's seed: part of every ``edit_id`` (and the rule-based client's, :func:`default_client`).
+        category_offset: where this sequence starts in the run's order of edit categories (the rule-based client's,
+            :func:`default_client`; a run sets ``i * scenarios`` for its ``i``-th sequence so that its sequences
+            take the categories in turn; ``None``: each sequence its own seeded order).
         options: the editor's options (default: full refinement, the ego reacts).
     """
 
@@ -91,6 +94,7 @@ class MiningConfig:
     min_plausibility: int = 3
     min_visible_pixels: int = 30
     seed: int = 0
+    category_offset: int | None = None
     options: EditorOptions = field(default=DEFAULT_OPTIONS)
 
     def __post_init__(self) -> None:
@@ -106,8 +110,9 @@ class MiningConfig:
 
 
 def default_client(ctx: EditContext, config: MiningConfig) -> RuleBasedVLMClient:
-    """The rule-based client of ``config.seed``, parsing with the context's text encoder."""
-    return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder)
+    """The rule-based client of ``config.seed`` and ``config.category_offset``, parsing with the context's text
+    encoder."""
+    return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder, category_offset=config.category_offset)
 
 
 def program_json(program: EditProgram | None) -> str:
@@ -190,7 +195,7 @@ class _Miner:
             source=s.pending.source, category=s.pending.category or category, program_json=program_json(program),
             status=status, failure_reason=reason, follows_prompt=None if verdict is None else verdict.follows_prompt,
             plausibility=None if verdict is None else verdict.plausibility, judgement=verdict,
-            adjustment=adjustment, seconds={stage: seconds.get(stage, 0.0) for stage in STAGES}, edited=edited)
+            adjustment=adjustment, seconds={stage: seconds.get(stage, 0.0) for stage in TIMED_STAGES}, edited=edited)
         logger.info("%s scenario %d attempt %d: %s %r%s", record.seq_id, s.index, attempt, status, s.pending.prompt,
                     f" ({reason})" if reason else "")
         return record
@@ -244,6 +249,7 @@ class _Miner:
                                   category=edit_category(program, kinds), adjustment=adjustment)
             return record, adjust_program(program, kinds, (), {exc.reason})
         seconds["edit"] = time.perf_counter() - started
+        seconds.update(edited.seconds)  # the editor's split of "edit"
         kinds = command_kinds(program, ctx.states, edited)
         category = edit_category(program, kinds)
         s.used_assets |= {a.asset_id.split(VARIANT_SEP, 1)[0] for a in edited.delta.added}
@@ -252,7 +258,7 @@ class _Miner:
         shown = judge_views(edited, ctx.log, frames=config.judge_frames, max_width=config.judge_width,
                             bev_size=config.bev_size, title=s.pending.prompt)
         request = judge_request_from_edit(edited, shown.renders, shown.bev, visible_pixels=shown.visible_pixels,
-                                          prompt=s.pending.prompt)
+                                          prompt=s.pending.prompt, labeller=(ctx.log.ego_poses, ctx.map_ctx))
         seconds["render"] = time.perf_counter() - started
 
         started = time.perf_counter()
@@ -322,7 +328,7 @@ def mine_sequence(ctx: EditContext, client: VLMClient, config: MiningConfig | No
             prompts.append(pending.prompt)
             miner.scenario(index, pending, add)
         index += 1
-    totals = {stage: sum(r.seconds.get(stage, 0.0) for r in records) for stage in STAGES}
+    totals = {stage: sum(r.seconds.get(stage, 0.0) for r in records) for stage in TIMED_STAGES}
     totals["propose"] = facts_s + feed.seconds
     result = MiningResult(seq_id, getattr(client, "name", type(client).__name__), tuple(records), tuple(prompts),
                           totals)

@@ -52,13 +52,17 @@ class RuleBasedVLMClient:
         facts_of: facts of a summary that carries none (``SceneSummary.facts`` is ``None``).
         encoder: text encoder for words the parser's rules do not know (default: loaded only when needed).
         judge_config: the judge's thresholds.
+        category_offset: where this sequence starts in the run's order of edit categories
+            (``rule_proposals.propose_edits``; ``None``: the scene's own seeded order).
     """
 
     name = "rule-based/1"
 
     def __init__(self, seed: int = 0, facts_of: Callable[[SceneSummary], SceneFacts] | None = None, *,
-                 encoder: TextEncoder | None = None, judge_config: JudgeConfig | None = None) -> None:
+                 encoder: TextEncoder | None = None, judge_config: JudgeConfig | None = None,
+                 category_offset: int | None = None) -> None:
         self.seed = int(seed)
+        self.category_offset = category_offset
         self.facts_of = facts_of
         self.encoder = encoder
         self.judge_config = judge_config or JudgeConfig()
@@ -85,7 +89,7 @@ class RuleBasedVLMClient:
         Raises:
             ValueError: no facts (see :meth:`facts`), or no feasible edit in the scene.
         """
-        found = propose_edits(self.facts(summary), count, self.seed)
+        found = propose_edits(self.facts(summary), count, self.seed, self.category_offset)
         if not found:
             raise ValueError(f"{summary.seq_id}: no feasible edit in this scene (no nameable objects, no lane and no "
                              "assets)")

@@ -12,7 +12,9 @@ Checks, each a failure class (:data:`PENALTIES`):
   change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked side, a turn changes its
   heading by :attr:`JudgeConfig.turn_deg` the asked way, reversing moves it backwards, a later start keeps it
   still until then, crossing moves a pedestrian off its log path, running raises its speed; anything else moves
-  the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone;
+  the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone; when the request
+  carries the auto-labeller's motion classes (``request.motion_labels``, from ``judge_input``), reversing, lane
+  changes, turns, going straight and crossing are checked on them as the editing benchmark does instead;
 * ``collision``, ``offroad``, ``kinematic`` -- the validation's failures (``request.failures``);
 * ``render`` -- no render is blank (constant) or mostly holes (near-black pixels);
 * ``visibility`` -- each present target covers at least :attr:`JudgeConfig.min_visible_pixels` pixels of the
@@ -44,12 +46,15 @@ from simsplat_core.mining.vlm_protocol import (
     ParameterChange,
     ValidationFailure,
 )
+from simsplat_core.scenario import vocabulary as voc
 
 logger = logging.getLogger(__name__)
 
 #: Plausibility lost per failed check class.
 PENALTIES: dict[str, int] = {"grounding": 1, "change": 1, "collision": 2, "offroad": 2, "kinematic": 1,
                              "render": 2, "visibility": 1}
+#: Motion classes of a pedestrian crossing the street.
+CROSSING_LABELS: frozenset[str] = frozenset({voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT})
 #: Check classes whose failure means the prompt is not followed.
 FOLLOW_CLASSES: frozenset[str] = frozenset({"grounding", "change", "render", "visibility"})
 
@@ -183,9 +188,34 @@ def _earlier(reason: str) -> ParameterChange:
     return ParameterChange("start_time", "1 s earlier", reason)
 
 
+def _label_findings(behaviour: Behaviour, label: str) -> list[tuple[str, ParameterChange]]:
+    """The manoeuvres of ``behaviour`` (reversing, a lane change, a turn or going straight, crossing the street)
+    that the auto-labeller's motion class ``label`` of the edited trajectory does not show, as the editing
+    benchmark checks them (``eval.editing.checks``): (what failed, the suggestion)."""
+    out = []
+    if behaviour.reverse and label != voc.REVERSING:
+        out.append((f"labelled {label}, not {voc.REVERSING}",
+                    _speed_suggestion(2.0, "reversing does not show: back up at this speed")))
+    if behaviour.lane_change is not None:
+        want = voc.CHANGING_LANE_LEFT if behaviour.lane_change == "left" else voc.CHANGING_LANE_RIGHT
+        if label != want:
+            out.append((f"labelled {label}, asked {want}", _earlier("the lane change does not complete in the log")))
+    if behaviour.turn in ("left", "right"):
+        want = voc.TURNING_LEFT if behaviour.turn == "left" else voc.TURNING_RIGHT
+        if label != want:
+            out.append((f"labelled {label}, asked {want}", _earlier("the turn does not complete in the log")))
+    elif behaviour.turn == "straight" and label in (voc.TURNING_LEFT, voc.TURNING_RIGHT):
+        out.append((f"labelled {label}, asked to go straight", _earlier("it turns before the intersection")))
+    if behaviour.cross_street and label not in CROSSING_LABELS:
+        out.append((f"labelled {label}, not crossing the street", _earlier("the crossing does not show in the log")))
+    return out
+
+
 def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, before: AgentTrajectory | None,
-                     dt: float, cfg: JudgeConfig) -> list[Finding]:
-    """What ``behaviour`` asks that ``after`` does not show (against ``before``, or its own start)."""
+                     dt: float, cfg: JudgeConfig, label: str | None = None) -> list[Finding]:
+    """What ``behaviour`` asks that ``after`` does not show (against ``before``, or its own start). Given the
+    auto-labeller's motion class ``label`` of ``after``, the manoeuvres are checked on it (:func:`_label_findings`)
+    instead of this judge's own thresholds."""
     a, b = motion_of(after, dt, cfg.tail_s), motion_of(before, dt, cfg.tail_s)
     ref = b if b.present else None
     out: list[Finding] = []
@@ -217,19 +247,21 @@ def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, bef
                  _speed_suggestion(0.5 * base_end, "braking does not show: ask for a lower speed"))
     if behaviour.stop is not None and a.end_speed > cfg.stop_mps:
         fail(f"does not stop (ends at {a.end_speed:.1f} m/s)", _earlier("the stop does not complete in the log"))
-    if behaviour.reverse:
+    if label is not None:
+        out += [Finding("change", f"{oid}: {why}", (change,)) for why, change in _label_findings(behaviour, label)]
+    if behaviour.reverse and label is None:
         along = _along(after, a.start_heading if after.heading is not None else b.start_heading)
         backwards = along < -cfg.moved_m if math.isfinite(along) else a.net_m >= cfg.moved_m
         if not backwards:
             fail(f"does not reverse (moves {along:+.1f} m along its heading)",
                  _speed_suggestion(2.0, "reversing does not show: back up at this speed"))
-    if behaviour.lane_change is not None:
+    if behaviour.lane_change is not None and label is None:
         sign = 1.0 if behaviour.lane_change == "left" else -1.0
         shift = a.lateral_m - (ref.lateral_m if ref is not None else 0.0)
         if not math.isfinite(shift) or sign * shift < cfg.lateral_m:
             fail(f"does not change lanes to the {behaviour.lane_change} (shifted {shift:+.1f} m sideways)",
                  _earlier("the lane change does not complete in the log"))
-    if behaviour.turn in ("left", "right"):
+    if behaviour.turn in ("left", "right") and label is None:
         sign = 1.0 if behaviour.turn == "left" else -1.0
         if sign * a.heading_change_deg < cfg.turn_deg:
             fail(f"does not turn {behaviour.turn} (heading changes {a.heading_change_deg:+.0f} deg)",
@@ -242,7 +274,7 @@ def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, bef
         if _moved_by(before, window, dt) > cfg.moved_m and _moved_by(after, window, dt) > cfg.still_m:
             fail(f"does not start {behaviour.delay_s:.1f} s later",
                  ParameterChange("start_time", f"{behaviour.delay_s + 1.0:.0f} s later", "the delay does not show"))
-    if behaviour.cross_street:
+    if behaviour.cross_street and label is None:
         moved = deviation_m(after, before) if before is not None else a.net_m
         if moved < cfg.cross_m or a.net_m < cfg.cross_m:
             fail(f"does not cross the street (moves {a.net_m:.1f} m)",
@@ -281,8 +313,9 @@ def _command_findings(index: int, command: EditCommand, ids: tuple[str, ...], re
         after = request.trajectory(oid)
         assert after is not None  # present
         if command.behaviour is not None:
+            label = None if request.motion_labels is None else request.motion_labels.get(oid)
             findings += _change_findings(oid, command.behaviour, after, request.log_trajectory(oid), request.dt_s,
-                                         cfg)
+                                         cfg, label)
         elif command.op == "modify":  # a move (placement only)
             before = request.log_trajectory(oid)
             if before is not None and deviation_m(after, before) < cfg.changed_m:

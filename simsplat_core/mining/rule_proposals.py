@@ -439,8 +439,21 @@ def _take(found: list[Proposal], used: set[str]) -> Proposal:
     return found.pop(index)
 
 
-def propose_edits(facts: SceneFacts, count: int, seed: int = 0) -> list[Proposal]:
+def category_order(seed: int, offset: int) -> list[str]:
+    """The run's order of the edit categories: a permutation seeded by ``seed`` alone (the same for every
+    sequence of a run), rotated to start at ``offset`` (mod the number of categories)."""
+    base = [EDIT_CATEGORIES[i] for i in np.random.default_rng(int(seed) & 0xFFFFFFFF).permutation(len(EDIT_CATEGORIES))]
+    k = int(offset) % len(base)
+    return base[k:] + base[:k]
+
+
+def propose_edits(facts: SceneFacts, count: int, seed: int = 0, category_offset: int | None = None) -> list[Proposal]:
     """Up to ``count`` distinct proposals for the scene (module docstring), deterministic for ``seed``.
+
+    The categories come in a seeded order of the scene (``category_offset`` ``None``), or, given
+    ``category_offset``, in the run's order from there (:func:`category_order`): a run gives its ``i``-th sequence
+    ``i * K`` (K scenarios per sequence), so that its sequences take the categories in turn instead of each
+    drawing its own order (with two sequences and K = 3, independent orders leave a category out 19 times in 20).
 
     Raises:
         ValueError: ``count < 1``.
@@ -449,7 +462,8 @@ def propose_edits(facts: SceneFacts, count: int, seed: int = 0) -> list[Proposal
         raise ValueError(f"count must be >= 1, got {count}")
     rng = proposal_rng(seed, facts.seq_id)
     pools = {c: deque(kinds) for c, kinds in candidates(facts, rng).items()}
-    order = [EDIT_CATEGORIES[i] for i in rng.permutation(len(EDIT_CATEGORIES))]
+    order = (category_order(seed, category_offset) if category_offset is not None
+             else [EDIT_CATEGORIES[i] for i in rng.permutation(len(EDIT_CATEGORIES))])
     picked: list[Proposal] = []
     seen: set[str] = set()
     used: set[str] = set()
@@ -473,4 +487,5 @@ def propose_edits(facts: SceneFacts, count: int, seed: int = 0) -> list[Proposal
     return picked
 
 
-__all__ = ["EDIT_CATEGORIES", "KINDS", "Proposal", "ProposalKind", "candidates", "propose_edits", "proposal_rng"]
+__all__ = ["EDIT_CATEGORIES", "KINDS", "Proposal", "ProposalKind", "candidates", "category_order", "propose_edits",
+           "proposal_rng"]

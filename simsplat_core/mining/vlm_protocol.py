@@ -177,6 +177,9 @@ class JudgeRequest:
         program: the executed :class:`EditProgram`.
         command_targets: per command of ``program``, the object ids it acted on (inserted, changed or removed).
         visible_pixels: object id -> pixels it covers in ``renders`` (``None``: not measured).
+        motion_labels: object id -> the motion class the trajectory auto-labeller (``language.motion_labels``, the
+            one the editing benchmark checks edits with) gives the agent's judged trajectory, for the targets it can
+            label (``None``: not labelled).
     """
 
     prompt: str
@@ -191,6 +194,7 @@ class JudgeRequest:
     program: EditProgram | None = None
     command_targets: Sequence[tuple[str, ...]] = ()
     visible_pixels: Mapping[str, int] | None = None
+    motion_labels: Mapping[str, str] | None = None
 
     def __post_init__(self) -> None:
         if not self.prompt.strip():
@@ -213,6 +217,8 @@ class JudgeRequest:
         object.__setattr__(self, "command_targets", targets)
         if self.visible_pixels is not None:
             object.__setattr__(self, "visible_pixels", {str(k): int(v) for k, v in self.visible_pixels.items()})
+        if self.motion_labels is not None:
+            object.__setattr__(self, "motion_labels", {str(k): str(v) for k, v in self.motion_labels.items()})
         if self.program is not None and not self.command_json.strip():
             object.__setattr__(self, "command_json", program_to_json(self.program))
 

@@ -9,6 +9,7 @@ ego-frame ``y`` velocity is motion from the ego's left to its right.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -16,6 +17,9 @@ from simsplat_core.geometry import invert_transform, yaw_of_rotation
 from simsplat_core.scenario.map_context import MapContext, MapFacts
 from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES, PEDESTRIAN, VEHICLE
 from simsplat_core.types import SceneLog, Track
+
+if TYPE_CHECKING:
+    from simsplat_core.scenario.agents import AgentStates
 
 #: Agent kinds with a motion codebook (``VEHICLE``, ``PEDESTRIAN``: the order indexes training samples).
 AGENT_KINDS: tuple[str, ...] = tuple(MOTION_VOCABULARIES)
@@ -202,3 +206,21 @@ def log_trajectories(
             track, obj.category, log.timestamps_us, map_context, half_window_s
         )
     return out
+
+
+def agent_trajectory(states: AgentStates, row: int, map_context: MapContext) -> ObjectTrajectory:
+    """Agent ``row`` of ``states`` (e.g. an edited scenario's) as an ``ObjectTrajectory`` over its valid steps, with
+    the map's facts: what the trajectory auto-labeller (``language.motion_labels``) reads.
+
+    Raises:
+        ValueError: the agent has no motion vocabulary (static objects) or fewer than two valid steps.
+    """
+    kind = agent_kind(states.categories[row])
+    valid = states.valid[row]
+    if kind is None or valid.sum() < 2:
+        raise ValueError(f"agent {states.object_ids[row]!r} ({states.categories[row]}) has no trajectory to label")
+    t, xy = states.times[valid], states.xy[row, valid]
+    heading = np.unwrap(states.heading[row, valid])
+    return ObjectTrajectory(states.object_ids[row], states.categories[row], kind, states.frame_idx[valid], t, xy,
+                            heading, smoothed_velocity(t, xy, 0.5), np.ones(len(t), dtype=bool),
+                            map_context.facts(xy, heading))

@@ -45,7 +45,7 @@ from simsplat_core.language.motion_labels import MotionLabel, label_trajectory
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.geometry import box_footprints, footprints_overlap, segment_distances
-from simsplat_core.scenario.trajectory import ObjectTrajectory, agent_kind, smoothed_velocity
+from simsplat_core.scenario.trajectory import ObjectTrajectory, agent_trajectory, smoothed_velocity
 
 #: Half a lane: an object is in a lane when this close to a lane-following path (metres).
 IN_LANE_M = 1.75
@@ -134,15 +134,7 @@ def edited_trajectory(truth: SceneTruth, states: AgentStates, row: int) -> Objec
     Raises:
         ValueError: the agent has no motion vocabulary (static objects) or fewer than two valid steps.
     """
-    kind = agent_kind(states.categories[row])
-    valid = states.valid[row]
-    if kind is None or valid.sum() < 2:
-        raise ValueError(f"agent {states.object_ids[row]!r} ({states.categories[row]}) has no trajectory to label")
-    t, xy = states.times[valid], states.xy[row, valid]
-    heading = np.unwrap(states.heading[row, valid])
-    return ObjectTrajectory(states.object_ids[row], states.categories[row], kind, states.frame_idx[valid], t, xy,
-                            heading, smoothed_velocity(t, xy, 0.5), np.ones(len(t), dtype=bool),
-                            truth.map_context.facts(xy, heading))
+    return agent_trajectory(states, row, truth.map_context)
 
 
 def motion_label(truth: SceneTruth, states: AgentStates, row: int) -> MotionLabel:

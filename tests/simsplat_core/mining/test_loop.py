@@ -33,7 +33,7 @@ from simsplat_core.mining import (
     mine_sequence,
 )
 from simsplat_core.mining.adjust import MIN_LANE_GAP_M, adjust_program
-from simsplat_core.mining.attempts import EDITS_COLUMNS, STAGES
+from simsplat_core.mining.attempts import EDITS_COLUMNS, TIMED_STAGES
 from simsplat_core.mining.judge_input import targets_of
 from simsplat_core.mining.rule_judge import JudgeConfig
 from simsplat_core.mining.rule_proposals import Proposal
@@ -111,7 +111,7 @@ def test_the_rule_based_loop_is_deterministic_and_accepts_valid_scenarios(ctx: E
     assert 1 <= len(mined.accepted) <= CONFIG.scenarios and mined.client == "rule-based/1"
     assert len(progress) == len(again.records) and progress[-1] == (len(again.accepted), CONFIG.scenarios)
     for record in mined.records:
-        assert record.category in EDIT_CATEGORIES and record.attempt >= 1 and set(record.seconds) == set(STAGES)
+        assert record.category in EDIT_CATEGORIES and record.attempt >= 1 and set(record.seconds) == set(TIMED_STAGES)
         assert record.export == (record.status == "accepted")
         assert (record.edited is not None) == record.export
     for record in mined.accepted:
@@ -119,7 +119,7 @@ def test_the_rule_based_loop_is_deterministic_and_accepts_valid_scenarios(ctx: E
         assert record.follows_prompt and record.plausibility is not None and record.plausibility >= 3
         assert record.edited.prompt == record.prompt and _program(record.program_json).commands
     assert [n.node_id for n in ctx.graph.nodes] == nodes and ctx.states.object_ids == agents  # stored scene as it was
-    assert set(mined.seconds) == set(STAGES) and mined.prompts[0] == mined.records[0].prompt
+    assert set(mined.seconds) == set(TIMED_STAGES) and mined.prompts[0] == mined.records[0].prompt
 
 
 def test_a_collision_is_rejected_and_retried_with_the_object_further_away(collided: MiningResult) -> None:
