@@ -35,7 +35,14 @@ from simsplat_core.editing.renders import frame_views, render_frame
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.eval.editing.checks import check_refusal, check_states
 from simsplat_core.eval.editing.fidelity import FidelityScore, edit_fidelity, render_fidelity
-from simsplat_core.eval.editing.observation import AssetLook, EditObservation, PixelEvidence, ViewSet, state_changes
+from simsplat_core.eval.editing.observation import (
+    AssetLook,
+    EditObservation,
+    PixelEvidence,
+    ViewSet,
+    ego_contact_frames,
+    state_changes,
+)
 from simsplat_core.eval.editing.outcomes import PromptOutcome
 from simsplat_core.eval.editing.pixels import MIN_VIEW_PIXELS, check_pixels, object_crops
 from simsplat_core.eval.editing.prompts import EditPrompt
@@ -308,7 +315,7 @@ def evaluate_prompt(scene: EvalScene, prompt: EditPrompt, method: Method, config
                              log_views(truth.log, frames), dict(world.instance),
                              {o: f.instance_id for o, f in truth.facts.items()}, world.native,
                              reference_captions(truth, prompt, obs, frames, sources),
-                             views.silhouettes(frames, shown))
+                             views.silhouettes(frames, shown), ego_contact_frames(obs.after))
     pixels = check_pixels(prompt.intent, obs, evidence)
     fidelity: FidelityScore | None = None
     if all(o in world.native for o in (*changes.added, *changes.redrawn)):

@@ -22,6 +22,7 @@ import numpy as np
 
 from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
+from simsplat_core.scenario.metrics import overlap_rows
 
 #: Trajectories differing by more than this (metres / radians) at some valid step count as changed.
 CHANGE_TOL = 1e-3
@@ -182,6 +183,8 @@ class PixelEvidence:
         world_silhouette: per inserted / moved / redrawn object, ``[F, C]`` pixels it would cover in
             ``world_edited``'s views with nothing in front of it (``World.silhouette_pixels``); with its pixels in
             ``world_edited`` this tells how much of it the world shows (``pixels.expected_views``).
+        ego_contact: log frames at which the ego, replaying its log, touches another agent of the edited scene
+            (:func:`ego_contact_frames`): its cameras sit at or inside that agent, no view of them is judged.
     """
 
     edited: ViewSet
@@ -192,7 +195,17 @@ class PixelEvidence:
     native: frozenset[str] = frozenset()
     reference_captions: dict[str, AppearanceCaption] = field(default_factory=dict)
     world_silhouette: dict[str, np.ndarray] = field(default_factory=dict)
+    ego_contact: frozenset[int] = frozenset()
+
+
+def ego_contact_frames(states: AgentStates) -> frozenset[int]:
+    """Log frames at which the ego's box overlaps another agent's box in ``states`` (an edit made traffic stop in the
+    path the ego replays; a reacting ego would have braked, the logged cameras drive on into it)."""
+    if EGO_ID not in states.object_ids:
+        return frozenset()
+    touching = overlap_rows(states, [states.index(EGO_ID)])[0].any(axis=0)  # [T]
+    return frozenset(int(f) for f in states.frame_idx[touching])
 
 
 __all__ = ["CHANGE_TOL", "AssetLook", "EditObservation", "PixelEvidence", "StateChanges", "ViewSet",
-           "state_changes", "trajectory_changed"]
+           "ego_contact_frames", "state_changes", "trajectory_changed"]

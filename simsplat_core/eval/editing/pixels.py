@@ -7,7 +7,8 @@ of the unedited scene, at the same frames and cameras.
 * **visible**: an inserted, moved or redrawn object should be seen where the world's rendering of the
   edit shows it mostly unoccluded (at least ``MIN_VIEW_PIXELS`` pixels of its instance in a view, and at
   least ``MIN_UNOCCLUDED`` of the pixels its silhouette would cover with nothing in front of it: a sliver
-  past a nearer car is a place where the reconstructed neighbour's extent decides, not the edit); there the
+  past a nearer car is a place where the reconstructed neighbour's extent decides, not the edit), at frames
+  where the ego replaying its log touches no agent (``PixelEvidence.ego_contact``); there the
   rendered node must cover at least ``MIN_COVER`` of those pixels, in at least ``MIN_VIEW_SHARE`` of the
   views. An object the world does not show in the checked frames (out of view, hidden behind others) has
   nothing to check in pixels (its place is checked on the trajectories).
@@ -58,6 +59,7 @@ def expected_views(evidence: PixelEvidence, object_id: str) -> list[tuple[int, i
         return []
     counts = (evidence.world_edited.ids == inst).sum(axis=(2, 3))  # [F, C]
     shown = counts >= MIN_VIEW_PIXELS
+    shown &= np.array([f not in evidence.ego_contact for f in evidence.world_edited.frames])[:, None]
     silhouette = evidence.world_silhouette.get(object_id)
     if silhouette is not None:
         shown &= counts >= MIN_UNOCCLUDED * silhouette

@@ -44,6 +44,17 @@ def test_visible_needs_the_node_where_the_world_shows_the_object() -> None:
     assert v.result().passed and "not mostly in sight" in v.result().reason
 
 
+def test_no_view_is_judged_at_a_frame_where_the_logged_ego_drives_into_an_agent() -> None:
+    grey = np.full((H, W, 3), 0.5)
+    world = _views(grey, _box(7, 0))
+    undrawn = PixelEvidence(_views(grey, np.full((H, W), -1)), world, world, {"new_0": 7}, {})
+    v = Verdict()
+    assert check_visible(undrawn, "new_0", 42, v) and not v.result().passed
+    v = Verdict()  # frame 0: the ego's cameras sit inside another car, nothing there is judged
+    assert not check_visible(dataclasses.replace(undrawn, ego_contact=frozenset({0})), "new_0", 42, v)
+    assert v.result().passed
+
+
 def test_a_sliver_of_an_object_mostly_hidden_behind_another_is_not_a_view_to_check() -> None:
     grey = np.full((H, W, 3), 0.5)
     world = _views(grey, _box(7, 0))  # 100 pixels of the object in sight

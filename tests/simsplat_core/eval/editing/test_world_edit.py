@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.eval.editing.observation import AssetLook
+from simsplat_core.eval.editing.observation import AssetLook, ego_contact_frames
 from simsplat_core.eval.editing.world_edit import AWAY_M, edit_world, trajectory_of
 from simsplat_core.scenario.agents import AgentStates
 
@@ -97,3 +97,16 @@ def test_moved_agent_follows_its_edited_trajectory_and_absent_steps_hide_it(scen
     assert not (edited.render(frame)[cam][5] == edited.instance[oid]).any()
     traj = trajectory_of(after, row)
     assert traj["s"][-1] == pytest.approx(np.linalg.norm(np.diff(before.xy[row, 10:], axis=0), axis=1).sum())
+
+
+def test_frames_where_the_logged_ego_touches_an_agent(scene) -> None:
+    truth, before = scene
+    assert ego_contact_frames(before) == frozenset()  # the log's own traffic keeps clear of the ego
+    n = before.num_steps
+    h = float(truth.ego_heading[0])
+    ahead = truth.ego_xy[0] + 3.0 * np.array([np.cos(h), np.sin(h)])  # a car standing 3 m ahead of the ego's start
+    after = before.with_agent("new_0", "vehicle", "inserted", xy=np.tile(ahead, (n, 1)), heading=np.full(n, h),
+                              speed=np.zeros(n), valid=np.ones(n, bool), size=(4.6, 1.8, 1.45), node_id=99)
+    touching = ego_contact_frames(after)
+    assert 0 in touching and len(touching) < n  # the ego drives into it, then on past its place
+
