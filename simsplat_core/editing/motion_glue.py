@@ -520,14 +520,18 @@ def first_overlap(states: AgentStates, motion: Motion, size: np.ndarray,
 def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callable[[], Motion], log: LogTrajectory,
                       late: str, start_step: int, index: int, label: str) -> None:
     """Refuse a delayed start (a delay or a start time; ``late`` says which: "set off 2 s later") that is
-    meaningless or cannot be carried out: the agent does not move in its log
-    (nothing to start later), or, held back by the other agents (which replay their log and do not make room),
+    meaningless or cannot be carried out: the agent neither moves in its log nor is set moving by the edit
+    (nothing to start later: "cross the street 2 s later" sets a standing pedestrian off, "start 2 s later" alone
+    does not), or, held back by the other agents (which replay their log and do not make room),
     it covers under :data:`DELAY_PROGRESS_SHARE` of what the same delayed start covers on a free road
     (``free_plan()``) -- naming the agent in its way."""
     states = draft.states
     valid = np.flatnonzero(log.valid)
     moved = float(np.linalg.norm(log.xy[valid[-1]] - log.xy[valid[0]])) if valid.size else 0.0
-    if moved < LOG_MOVES_M:
+    free = free_plan()
+    free_steps = np.flatnonzero(free.valid)
+    expected = _path_length(free.xy[free_steps[free_steps >= start_step]])
+    if moved < LOG_MOVES_M and expected <= LOG_MOVES_M:
         raise EditRefused(f"{label} does not move in the log (it stays within {moved:.1f} m): a delayed start needs "
                           "an agent that sets off; give it a speed to drive off instead", reason="infeasible_motion",
                           command_index=index)
@@ -535,9 +539,6 @@ def _check_delay_kept(draft: Draft, row: int, motion: Motion, free_plan: Callabl
     steps = np.flatnonzero(motion.valid)
     steps = steps[steps >= start_step]
     got = _path_length(motion.xy[steps])
-    free = free_plan()
-    free_steps = np.flatnonzero(free.valid)
-    expected = _path_length(free.xy[free_steps[free_steps >= start_step]])
     if expected <= LOG_MOVES_M or got >= DELAY_PROGRESS_SHARE * expected:
         return
     hit = first_overlap(states, motion, states.size[row], (states.object_ids[row],))

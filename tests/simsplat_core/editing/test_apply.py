@@ -683,3 +683,24 @@ def test_a_car_inserted_close_behind_a_standing_car_creeps_up_instead_of_running
     motion = plan_inserted(Draft.start(ctx, grounder, DEFAULT_OPTIONS), None, car, placed, 0, 0)
     assert 0.0 < motion.speed[0] <= np.sqrt(2.0 * JOIN_DECEL_MPS2 * (gap - FOLLOW_GAP_M)) + 1e-6
     assert first_overlap(states, motion, np.asarray(car.size), ("ego",)) is None
+
+
+def test_an_agent_standing_in_its_log_that_the_edit_sets_moving_can_set_off_later(ctx):
+    """"Cross the street 2 s later" sets off a pedestrian who stands through its log; a delay alone does not (there
+    is nothing to start later)."""
+    st = ctx.states
+    standing = [o for r, (o, c) in enumerate(zip(st.object_ids, st.categories, strict=True))
+                if c == "pedestrian" and st.valid[r].sum() >= 30
+                and np.linalg.norm(np.ptp(st.xy[r, st.valid[r]], axis=0)) < 0.5]
+    assert standing, "the fixture scene has a standing pedestrian"
+    oid = standing[0]
+    edited = apply_edit(ctx, EditProgram(commands=[EditCommand(
+        op="modify", target=TargetRef(object_id=oid), behaviour=Behaviour(cross_street=True, delay_s=2.0))]))
+    r = edited.states.index(oid)
+    valid = np.flatnonzero(edited.states.valid[r])
+    xy, t = edited.states.xy[r, valid], edited.states.times[valid]
+    assert np.linalg.norm(xy[t <= t[0] + 1.9] - xy[0], axis=1).max() < 0.2  # waits the 2 s where it stood
+    assert np.linalg.norm(xy[-1] - xy[0]) > 1.0  # then sets off across
+    with pytest.raises(EditRefused, match="does not move in the log"):
+        apply_edit(ctx, EditProgram(commands=[EditCommand(
+            op="modify", target=TargetRef(object_id=oid), behaviour=Behaviour(delay_s=2.0))]))
