@@ -47,6 +47,7 @@ from simsplat_core.editing.commands import (
     EditProgram,
     Placement,
     SpeedSpec,
+    TargetRef,
 )
 from simsplat_core.editing.edit_ops import DEFAULT_AHEAD_M
 from simsplat_core.editing.placement import LANE_AHEAD_M, LONG_GAP_M, SIDE_GAP_M
@@ -309,6 +310,36 @@ def adjust_program(program: EditProgram, kinds: Sequence[str | None], suggestion
     return None
 
 
+
+def retarget(program: EditProgram, command_index: int | None, object_id: str) -> Adjustment | None:
+    """The next attempt after the words of a command's object did not ground (a ``not_found`` refusal): that
+    command (``None``: the first) acts on -- or, for an insert, is placed by -- ``object_id``, the object the
+    proposer meant (``Pending.target_id``), by id. ``None`` when the command names no object by description (a
+    group, an id, the ego) or already names ``object_id``."""
+    index = command_index or 0
+    if not 0 <= index < len(program.commands):
+        return None
+    command = program.commands[index]
+    by_id = TargetRef(object_id=object_id)
+    if command.op == "insert":
+        anchor = command.placement.anchor if command.placement is not None else None
+        if anchor is None or anchor.description is None or anchor.is_ego or anchor.group:
+            return None
+        assert command.placement is not None
+        changed = command.model_copy(update={"placement": command.placement.model_copy(update={"anchor": by_id})})
+        what = f"anchor {anchor.description!r}"
+    else:
+        target = command.target
+        if target is None or target.description is None or target.group:
+            return None
+        changed = command.model_copy(update={"target": by_id})
+        what = f"target {target.description!r}"
+    commands = [*program.commands[:index], changed, *program.commands[index + 1:]]
+    return Adjustment(program.model_copy(update={"commands": commands}),
+                      (f"command {index + 1}: {what} -> object {object_id} (the proposer's referent; the words did "
+                       "not ground)",))
+
+
 __all__ = ["DEFAULT_DELAY_S", "DEFAULT_OFFSET_M", "DEFAULT_ORDER", "Adjustment", "AlternativeAsset", "adjust_program",
            "apply_change", "asked_placement", "change_anchor", "change_asset", "change_offset", "change_speed",
-           "change_start", "default_changes", "moved_placement"]
+           "change_start", "default_changes", "moved_placement", "retarget"]

@@ -21,8 +21,10 @@ without repeats), until ``config.scenarios`` are accepted or the proposals run o
    the judge says -- and the judge says it follows the prompt with plausibility at least
    ``config.min_plausibility``; else ``"rejected"``, and the next attempt runs the program adjusted by the judge's
    parameter changes, or by a default change for the failure class (``mining.adjust``: collision, off-road, the
-   targets covering fewer than ``config.min_visible_pixels`` pixels, a refused placement). When nothing can be
-   adjusted the loop moves on.
+   targets covering fewer than ``config.min_visible_pixels`` pixels, a refused placement). A refusal because the
+   words of the target (or anchor) did not ground is retried naming the object the proposer meant by id
+   (``Pending.target_id``, ``adjust.retarget``; proposers that do not say which object they meant are not
+   retried). When nothing can be adjusted the loop moves on.
 
 Decisions depend only on the scene, the client's answers and the config (timings are recorded, never read), so
 the rule-based client gives the same records for the same seed. Every attempt is an
@@ -45,7 +47,7 @@ from simsplat_core.editing.asset_record import VARIANT_SEP
 from simsplat_core.editing.commands import AssetSpec, EditProgram
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
 from simsplat_core.editing.result import EditedScene, EditRefused
-from simsplat_core.mining.adjust import Adjustment, AlternativeAsset, adjust_program
+from simsplat_core.mining.adjust import Adjustment, AlternativeAsset, adjust_program, retarget
 from simsplat_core.mining.attempts import TIMED_STAGES, AttemptRecord, AttemptStatus, MiningResult, scenario_key
 from simsplat_core.mining.edit_kinds import command_kinds, edit_category
 from simsplat_core.mining.judge_input import judge_request_from_edit, targets_of, validation_failures
@@ -247,6 +249,8 @@ class _Miner:
             kinds = command_kinds(program, ctx.states)
             record = self._record(s, attempt, "refused", _refusal(exc), seconds, program=program,
                                   category=edit_category(program, kinds), adjustment=adjustment)
+            if exc.reason == "not_found" and s.pending.target_id is not None:  # say which object was meant
+                return record, retarget(program, exc.command_index, s.pending.target_id)
             return record, adjust_program(program, kinds, (), {exc.reason})
         seconds["edit"] = time.perf_counter() - started
         seconds.update(edited.seconds)  # the editor's split of "edit"

@@ -51,6 +51,8 @@ class Pending:
         source: ``"seed"`` or ``"client"``.
         propose_s: seconds of the proposing round, charged to the round's first proposal (0 for the others).
         error: why proposing failed (``"<Type>: <message>"``; ``""`` for a proposal).
+        target_id: the scene object the proposer meant (``Proposal.target_id``: the rule-based client and search
+            seeds know it; ``None``: not said).
     """
 
     prompt: str
@@ -58,6 +60,7 @@ class Pending:
     source: str = "client"
     propose_s: float = 0.0
     error: str = ""
+    target_id: str | None = None
 
 
 def _key(prompt: str) -> str:
@@ -90,8 +93,10 @@ class ProposalFeed:
         self._queue: deque[Pending] = deque()
         self._open = True
         for seed in seeds:
-            prompt, category = (seed.prompt, seed.category) if isinstance(seed, Proposal) else (str(seed), "")
-            self._push(Pending(prompt, category, "seed"))
+            if isinstance(seed, Proposal):
+                self._push(Pending(seed.prompt, seed.category, "seed", target_id=seed.target_id))
+            else:
+                self._push(Pending(str(seed), "", "seed"))
 
     def _push(self, pending: Pending) -> bool:
         key = _key(pending.prompt)
@@ -101,14 +106,14 @@ class ProposalFeed:
         self._queue.append(pending)
         return True
 
-    def _ask(self, count: int) -> list[tuple[str, str]]:
-        """``(prompt, category)`` of up to ``count`` proposals of the client."""
+    def _ask(self, count: int) -> list[tuple[str, str, str | None]]:
+        """``(prompt, category, target id)`` of up to ``count`` proposals of the client."""
         if isinstance(self.client, CategorisedProposer):
-            return [(p.prompt, p.category) for p in self.client.proposals(self.summary, count)]
+            return [(p.prompt, p.category, p.target_id) for p in self.client.proposals(self.summary, count)]
         if callable(self._views):
             self._views = list(self._views())
         request = ProposalRequest(self._views, self.summary, count)
-        return [(p, "") for p in self.client.propose(request)]
+        return [(p, "", None) for p in self.client.propose(request)]
 
     def _round(self) -> None:
         """One more round of the client's proposals into the queue (or the feed's end)."""
@@ -127,8 +132,9 @@ class ProposalFeed:
         seconds = time.perf_counter() - started
         self.seconds += seconds
         added = 0
-        for prompt, category in found:
-            added += self._push(Pending(prompt, category, "client", seconds if added == 0 else 0.0))
+        for prompt, category, target_id in found:
+            added += self._push(Pending(prompt, category, "client", seconds if added == 0 else 0.0,
+                                        target_id=target_id))
         logger.info("%s: round %d: %d proposal(s), %d new", self.summary.seq_id, self.rounds, len(found), added)
         if added == 0 or self.rounds >= self.max_rounds:
             self._open = False

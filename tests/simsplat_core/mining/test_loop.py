@@ -199,6 +199,25 @@ def test_seed_prompts_come_first_and_a_failed_proposal_call_is_recorded(ctx: Edi
     assert failed.prompt == "" and failed.source == "client"
 
 
+def test_words_that_do_not_ground_are_retried_naming_the_object_the_proposer_meant(
+        ctx: EditContext, rule_client: RuleBasedVLMClient) -> None:
+    from simsplat_core.editing.apply import apply_edit
+    from simsplat_core.editing.parser import parse_prompt
+
+    (van,) = apply_edit(ctx, parse_prompt(REMOVE_VAN)).outcomes[0].changed_object_ids
+    wrong = "Remove the purple van."  # no purple van here: the words do not ground
+    meant = Proposal(wrong, "remove", "remove", False, target_id=van)
+    result = mine_sequence(ctx, ScriptedClient([], rule_client), dataclasses.replace(CONFIG, scenarios=1),
+                           seed_prompts=[meant])
+    refused, retried = result.records
+    assert refused.status == "refused" and refused.failure_reason.startswith("not_found: ")
+    assert retried.attempt == 2 and retried.status == "accepted" and f"-> object {van}" in retried.adjustment
+    assert _program(retried.program_json).commands[0].target.object_id == van
+    unsaid = mine_sequence(ctx, ScriptedClient([], rule_client), dataclasses.replace(CONFIG, scenarios=1),
+                           seed_prompts=[wrong])  # a proposer that does not say which object: not retried
+    assert [(r.attempt, r.status) for r in unsaid.records] == [(1, "refused")]
+
+
 def test_the_rule_based_client_follows_the_seed_prompts(ctx: EditContext, rule_client: RuleBasedVLMClient,
                                                         mined: MiningResult) -> None:
     result = mine_sequence(ctx, rule_client, dataclasses.replace(CONFIG, scenarios=1), seed_prompts=[SLOWER_SUV])
