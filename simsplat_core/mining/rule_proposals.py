@@ -126,16 +126,28 @@ def _spot_clear(facts: SceneFacts, areas: tuple[str, ...], ahead_m: float, clear
     return not any(a.area in areas and abs(a.ahead_m - ahead_m) < clear_m for a in facts.agents)
 
 
+#: A lane change takes about this long (s) ...
+LANE_CHANGE_S = 4.0
+#: ... and at least this much plain road (m) beyond where it starts.
+LANE_CHANGE_MIN_M = 20.0
+
+
 def _lane_reach(facts: SceneFacts) -> float:
     return min(INSERT_MAX_M, facts.road.lane_ahead_m - LANE_END_MARGIN_M)
 
 
 def _distances(facts: SceneFacts, lo: float, hi: float, areas: tuple[str, ...], rng: np.random.Generator,
-               plain: bool = False, clear_m: float = SPOT_CLEAR_M, most: int = 2) -> list[float]:
+               plain: bool = False, clear_m: float = SPOT_CLEAR_M, most: int = 2, room_m: float = 0.0) -> list[float]:
     """Up to ``most`` whole-metre distances ahead within ``[lo, hi]`` (on plain road when ``plain``, within the ego
-    lane's reach) that no agent of ``areas`` is within ``clear_m`` of, drawn at random."""
+    lane's reach; with ``room_m``, on plain road that goes on at least ``room_m`` further, e.g. for a lane change to
+    finish before the next intersection or crosswalk) that no agent of ``areas`` is within ``clear_m`` of, drawn at
+    random."""
     hi = min(hi, _lane_reach(facts))
-    spans = facts.road.plain_road_within(lo, hi) if plain else ((lo, hi),) if hi >= lo else ()
+    if room_m > 0.0:
+        spans: tuple[tuple[float, float], ...] = tuple(
+            (a, min(b - room_m, hi)) for a, b in facts.road.plain_road_within(lo, np.inf) if min(b - room_m, hi) >= a)
+    else:
+        spans = facts.road.plain_road_within(lo, hi) if plain else ((lo, hi),) if hi >= lo else ()
     whole = sorted({float(d) for a, b in spans for d in range(int(np.ceil(a)), int(np.floor(b)) + 1)})
     clear = [d for d in whole if _spot_clear(facts, areas, d, clear_m)]
     picks = rng.permutation(len(clear))[:most]
@@ -180,9 +192,12 @@ def _inserts(kind: str, facts: SceneFacts, rng: np.random.Generator, category: s
 
 
 def _cut_in(facts: SceneFacts, rng: np.random.Generator) -> list[Proposal]:
+    """A car put in a lane beside ours that changes into ours ahead of us, where the plain road goes on long enough
+    for the move (:data:`LANE_CHANGE_S` at the ego's speed, at least :data:`LANE_CHANGE_MIN_M`)."""
+    room = max(LANE_CHANGE_MIN_M, LANE_CHANGE_S * facts.road.ego_speed_mps)
     out = []
     for side in _sides(facts):
-        ds = _distances(facts, INSERT_MIN_M, 25.0, (f"{side}_lane", "ego_lane"), rng)
+        ds = _distances(facts, INSERT_MIN_M, 25.0, (f"{side}_lane", "ego_lane"), rng, room_m=room)
         out += _inserts("cut_in", facts, rng, "add_vehicle", ds, _assets(facts, "vehicle"), True, side=side,
                         other=_other(side))
     return out

@@ -65,7 +65,7 @@ def test_proposals_cover_every_category_and_the_safety_critical_edits(facts: Sce
     client = RuleBasedVLMClient(seed=0)
     six = client.proposals(summary(facts), 6)
     assert {p.category for p in six} == set(EDIT_CATEGORIES)  # one per category when six are asked
-    several = [p for seed in range(4) for p in RuleBasedVLMClient(seed=seed).proposals(summary(facts), 8)]
+    several = [p for seed in range(8) for p in RuleBasedVLMClient(seed=seed).proposals(summary(facts), 8)]
     kinds = {p.kind for p in several}
     for family, members in SAFETY_FAMILIES.items():
         assert kinds & members, f"no {family} among {sorted(kinds)}"
@@ -168,6 +168,10 @@ def test_only_feasible_edits_are_proposed() -> None:
     assert all("left lane" in p.prompt or "to our left" in p.prompt or "left-hand" in p.prompt
                for p in wide["cut_in"])
     assert "left" in wide["lane_change"][0].prompt and "right" in wide["turn"][0].prompt
+    # a cut-in starts where the plain road goes on long enough for the lane change (here 20 m at 5 m/s)
+    near_junction = _kinds(_scene(moving, parked, left_lane=True, lanes_our_way=2, plain_road=((0.0, 38.0),)))
+    assert near_junction["cut_in"] and all(d <= 18 for d in _asked_distances(near_junction["cut_in"]))
+    assert "cut_in" not in _kinds(_scene(moving, parked, left_lane=True, lanes_our_way=2, plain_road=((0.0, 25.0),)))
     # no plain road ahead: nobody jaywalks in front of us, no obstacle goes in the lane
     junction = _kinds(_scene(moving, plain_road=((0.0, 8.0),)))
     assert not {"jaywalker", "runner", "cones_in_lane", "obstacle_in_lane"} & set(junction)
