@@ -348,6 +348,18 @@ def _generic_findings(request: JudgeRequest, cfg: JudgeConfig) -> tuple[list[Fin
 
 
 # ---------------------------------------------------------------------------------------------- validation
+def _pace_asked(request: JudgeRequest, object_id: str) -> bool:
+    """A command acting on ``object_id`` asks for its pace (a speed or a gait: "run", "at 30 km/h"): slowing it down
+    would undo the prompt."""
+    if request.program is None:
+        return False
+    for command, targets in zip(request.program.commands, request.command_targets):
+        b = command.behaviour
+        if object_id in targets and b is not None and (b.speed is not None or b.gait is not None):
+            return True
+    return False
+
+
 def _validation_findings(failures: Iterable[ValidationFailure], request: JudgeRequest) -> list[Finding]:
     out = []
     for f in failures:
@@ -358,7 +370,7 @@ def _validation_findings(failures: Iterable[ValidationFailure], request: JudgeRe
         if f.kind == "collision":
             other = f.other_id or "another agent"
             changes = [ParameterChange("start_time", "2 s later", f"{f.object_id} meets {other}")]
-            if speed > 0.5:
+            if speed > 0.5 and not _pace_asked(request, f.object_id):  # a runner told to run is not slowed down
                 changes.append(ParameterChange("speed", f"{0.7 * speed:.1f} m/s", f"slower, to keep clear of {other}"))
             if source in ("inserted", "refined", ""):
                 changes.append(ParameterChange("offset", "5 m further away", f"place it clear of {other}"))

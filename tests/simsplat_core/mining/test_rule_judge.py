@@ -95,6 +95,16 @@ def test_injected_collision_and_off_road_failures(braking: EditedScene, client: 
     assert client.judge(both).plausibility == 1
 
 
+def test_a_pedestrian_told_to_run_is_not_asked_to_slow_down_after_a_collision(editor: Editor,
+                                                                              client: RuleBasedVLMClient) -> None:
+    edited = editor.edit("Make the pedestrian in a white top and black pants run.")
+    request = judge_request_from_edit(edited, [RENDER], RENDER)
+    (runner,) = request.command_targets[0]
+    hit = dataclasses.replace(request, failures=(ValidationFailure(runner, "collision", 12, "veh_01", "crash"),))
+    changes = {s.parameter for s in client.judge(hit).suggestions}
+    assert "start_time" in changes and "speed" not in changes  # running slower is not running
+
+
 def test_an_unchanged_target_does_not_follow_the_prompt(braking: EditedScene, client: RuleBasedVLMClient) -> None:
     request = judge_request_from_edit(braking, [RENDER], RENDER)
     unchanged = [dataclasses.replace(t, xy=request.log_trajectory(t.object_id).xy)  # type: ignore[union-attr]
