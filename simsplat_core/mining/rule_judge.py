@@ -360,6 +360,15 @@ def _pace_asked(request: JudgeRequest, object_id: str) -> bool:
     return False
 
 
+def _may_slow(request: JudgeRequest, object_id: str) -> bool:
+    """A slower ``object_id`` is a change the program can make: the program (when known) acts on it, and does not
+    ask for its pace (a runner told to run is not slowed down; an agent the traffic model moved is no command's)."""
+    if request.program is None:
+        return True
+    acted_on = {o for targets in request.command_targets for o in targets}
+    return object_id in acted_on and not _pace_asked(request, object_id)
+
+
 def _validation_findings(failures: Iterable[ValidationFailure], request: JudgeRequest) -> list[Finding]:
     out = []
     for f in failures:
@@ -370,7 +379,7 @@ def _validation_findings(failures: Iterable[ValidationFailure], request: JudgeRe
         if f.kind == "collision":
             other = f.other_id or "another agent"
             changes = [ParameterChange("start_time", "2 s later", f"{f.object_id} meets {other}")]
-            if speed > 0.5 and not _pace_asked(request, f.object_id):  # a runner told to run is not slowed down
+            if speed > 0.5 and _may_slow(request, f.object_id):
                 changes.append(ParameterChange("speed", f"{0.7 * speed:.1f} m/s", f"slower, to keep clear of {other}"))
             if source in ("inserted", "refined", ""):
                 changes.append(ParameterChange("offset", "5 m further away", f"place it clear of {other}"))

@@ -103,6 +103,10 @@ def test_a_pedestrian_told_to_run_is_not_asked_to_slow_down_after_a_collision(ed
     hit = dataclasses.replace(request, failures=(ValidationFailure(runner, "collision", 12, "veh_01", "crash"),))
     changes = {s.parameter for s in client.judge(hit).suggestions}
     assert "start_time" in changes and "speed" not in changes  # running slower is not running
+    moving = [t.object_id for t in request.trajectories if t.object_id not in (runner, "ego")
+              and float(np.nanmax(np.linalg.norm(np.diff(t.xy, axis=0), axis=1), initial=0.0)) > 0.2]
+    other = dataclasses.replace(request, failures=(ValidationFailure(moving[0], "collision", 12, runner, "crash"),))
+    assert "speed" not in {s.parameter for s in client.judge(other).suggestions}  # no command's agent to slow
 
 
 def test_an_unchanged_target_does_not_follow_the_prompt(braking: EditedScene, client: RuleBasedVLMClient) -> None:
