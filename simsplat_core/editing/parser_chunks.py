@@ -50,6 +50,9 @@ RELATIVES = ("that is", "that are", "which is", "which are", "who is", "who are"
 #: A direction after an ``-ing`` word: it is a participle ("the pedestrian crossing *from the left*").
 _DIRECTION = re.compile(r"(?:from (?:the )?(?:left|right)|(?:left|right) to"
                         r"|(?:to|towards|toward) the (?:left|right))\b")
+#: Where an ``-ing`` word's action happens, when that place is a crosswalk or the road itself: a participle ("a
+#: pedestrian crossing *at the crosswalk*" is a person; a crosswalk is not at a crosswalk).
+_WHERE_CROSSED = re.compile(r"(?:at|on|over|across|along|in) (?:the |a )?(?:crosswalk|zebra|road|street)\b")
 #: A describing clause ends where the clause's own verb's complement starts: a result ("bring the car turning
 #: *to a halt*"), a change of speed ("make the car which is going straight *10 km/h faster*", "*twice as fast*")
 #: or where to stop ("stop the car which is going straight *before it reaches* the crosswalk").
@@ -80,9 +83,11 @@ def head_noun(tokens: Sequence[str], i: int) -> int:
     """Tokens of the (longest) head noun at ``i`` (0: none)."""
     for n in range(min(lex.HEAD_NOUN_MAX_WORDS, len(tokens) - i), 0, -1):
         if " ".join(tokens[i : i + n]) in lex.HEAD_NOUNS:
+            rest = " ".join(tokens[i + n :])
             if (n > 1 and tokens[i + n - 1].endswith("ing") and i + n < len(tokens)
-                    and (tokens[i + n] in COORDINATOR_STARTS or _DIRECTION.match(" ".join(tokens[i + n :])))):
-                continue  # "the pedestrian crossing the street / from left to right": a participle, not a crosswalk
+                    and (tokens[i + n] in COORDINATOR_STARTS or _DIRECTION.match(rest) or _WHERE_CROSSED.match(rest))):
+                continue  # "the pedestrian crossing the street / from left to right / at the crosswalk": a
+                # participle, not a crosswalk
             return n
     return 0
 

@@ -98,6 +98,10 @@ INSERT: list[tuple[str, list[dict[str, Any]]]] = [
       {"op": INS, AS: "barrier", PR: "behind", "placement.anchor.description": "the truck"}]),
     ("add a pedestrian crossing the street in front of the bus",
      [{"op": INS, AC: "pedestrian", PR: "in_front_of", PA: "bus", "behaviour.cross_street": True}]),
+    ("add a pedestrian crossing at the crosswalk ahead",  # a person: a crosswalk is not at a crosswalk
+     [{"op": INS, AC: "pedestrian", PR: "on_crosswalk", "behaviour.cross_street": True}]),
+    ("put a cone on the pedestrian crossing at the intersection",  # here the crossing is the place
+     [{"op": INS, AS: "traffic cone", PR: "on_crosswalk"}]),
     ("add a car in the right lane driving at 50 km/h",
      [{"op": INS, PR: "in_lane", PL: "right", SP_MODE: "absolute", SP_VAL: 50.0, SP_UNIT: "km/h"}]),
     ("place a child 3 meters to the right of the red car",
