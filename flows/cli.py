@@ -9,8 +9,9 @@ import dataclasses
 import json
 import logging
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 from rich.console import Console
@@ -638,12 +639,17 @@ def eval_editing(
                                              methods=names, render_all=render_all, seed=seed)
     except (FileNotFoundError, ValueError, KeyError) as exc:
         raise typer.BadParameter(str(exc)) from exc
+    _report(result, as_json, _print_editing)
+
+
+def _report(result, as_json: bool, printer: Callable[[Any], None]) -> None:
+    """An evaluation's result: one JSON object on stdout (``--json``, dataclass fields) or ``printer``'s tables."""
     if as_json:
         from dataclasses import asdict
 
         typer.echo(json.dumps(asdict(result), default=float))
         return
-    _print_editing(result)
+    printer(result)
 
 
 def _print_editing(result) -> None:
@@ -702,12 +708,7 @@ def eval_mining(
                                             max_attempts=max_attempts, seed=seed, search_table=search_run_table)
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc)) from exc
-    if as_json:
-        from dataclasses import asdict
-
-        typer.echo(json.dumps(asdict(result), default=float))
-        return
-    _print_mining_eval(result)
+    _report(result, as_json, _print_mining_eval)
 
 
 def _print_mining_eval(result) -> None:

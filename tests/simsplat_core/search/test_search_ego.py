@@ -12,18 +12,9 @@ from simsplat_core.search import parse_description, search_log
 from simsplat_core.search.describe import FOLLOWING
 from simsplat_core.search.engine import SearchConfig
 from simsplat_core.search.frames import EGO_ID, EgoPath, ObjectFrames, log_frames, mark_halts
-from simsplat_core.types import ObjectInfo, SceneLog, Track
+from simsplat_core.types import ObjectInfo, SceneLog
 from simsplat_core.viz.contact_sheet import HIGHLIGHT_COLOR, bev_panel
-
-F = 50
-FPS = 10.0
-
-
-def _track(oid: str, xy: np.ndarray, heading: np.ndarray) -> Track:
-    speed = np.r_[np.linalg.norm(np.diff(xy, axis=0), axis=1) * FPS, 0.0]
-    center = np.c_[xy, np.full(len(xy), 0.8)]
-    return Track(oid, np.arange(len(xy)), center, np.tile([4.5, 1.9, 1.6], (len(xy), 1)), heading, speed,
-                 np.ones(len(xy), dtype=bool))
+from tests.simsplat_core.search.test_search import FPS, F, _track
 
 
 def _left_turn(n: int, start: int) -> tuple[np.ndarray, np.ndarray]:
