@@ -33,6 +33,7 @@ demo: $(STAMP)
 		--out $(STORE)/novel_view_frame20_left1m.png
 	$(VENV)/bin/simsplat query --store $(STORE) --seq synth-000000 "the red car turning right" \
 		--out $(STORE)/query_red_car_turning_right.png
+	$(VENV)/bin/simsplat search --store $(STORE) "a pedestrian crossing in front of us while a car turns"
 	$(VENV)/bin/simsplat edit --store $(STORE) --seq synth-000000 \
 		"remove the white van and make the red car stop before the crosswalk"
 	$(VENV)/bin/simsplat edit --store $(STORE) --seq synth-000000 "add a yellow taxi in our lane 15 m ahead"
