@@ -10,6 +10,7 @@ only in ``scenario/vocabulary.py``.
 
 from __future__ import annotations
 
+from simsplat_core.editing.procedural_assets import STATIC_KINDS as PROCEDURAL_STATIC_KINDS
 from simsplat_core.language.query_parse import LOWER_GARMENTS, NOUNS, UPPER_GARMENTS
 from simsplat_core.scenario import vocabulary as voc
 
@@ -136,6 +137,12 @@ EXTRA_ASSET_NOUNS: dict[str, tuple[str, str | None]] = {
     "minibus": ("vehicle", "bus"), "school bus": ("vehicle", "bus"), "tram": ("vehicle", "bus"),
     "convertible": ("vehicle", "car"), "coupe": ("vehicle", "car"), "wagon": ("vehicle", "car"),
 }
+# every procedural static kind the bank can build, by its name and aliases, singular and plural ("an excavator",
+# "a digger", "arrow boards"); the words above keep their broader subtypes
+for _kind in PROCEDURAL_STATIC_KINDS.values():
+    for _word in (_kind.subtype, *_kind.aliases):
+        EXTRA_ASSET_NOUNS.setdefault(_word, ("static", _kind.subtype))
+        EXTRA_ASSET_NOUNS.setdefault(_word + "s", ("static", _kind.subtype))
 #: What grounding-noun categories become as an asset category.
 ASSET_CATEGORY: dict[str, str] = {"vehicle": "vehicle", "pedestrian": "pedestrian", "static": "static",
                                   "sign": "static", "cyclist": "vehicle"}

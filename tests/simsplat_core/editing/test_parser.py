@@ -98,6 +98,9 @@ INSERT: list[tuple[str, list[dict[str, Any]]]] = [
       {"op": INS, AS: "barrier", PR: "behind", "placement.anchor.description": "the truck"}]),
     ("add a pedestrian crossing the street in front of the bus",
      [{"op": INS, AC: "pedestrian", PR: "in_front_of", PA: "bus", "behaviour.cross_street": True}]),
+    ("put a yellow excavator behind the stopped silver sedan",  # every procedural kind, by name or alias
+     [{"op": INS, AC: "static", "asset.subtype": "excavator", PR: "behind", PA: "stopped silver sedan"}]),
+    ("add a digger on the road ahead", [{"op": INS, AC: "static", "asset.subtype": "excavator"}]),
     ("add a pedestrian crossing at the crosswalk ahead",  # a person: a crosswalk is not at a crosswalk
      [{"op": INS, AC: "pedestrian", PR: "on_crosswalk", "behaviour.cross_street": True}]),
     ("put a cone on the pedestrian crossing at the intersection",  # here the crossing is the place
