@@ -13,7 +13,8 @@ import sys
 import time
 
 from simsplat_core.eval.search.queries import ALL_QUERIES
-from tasks.search import load_store, search_logs
+from simsplat_core.search.logs import search_logs
+from tasks.search import load_store
 
 logger = logging.getLogger("bench_search")
 

@@ -13,19 +13,17 @@ from __future__ import annotations
 
 import logging
 import re
-import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
+from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.search_seeds import hit_variants
-from simsplat_core.search.describe import SearchQuery, parse_description
-from simsplat_core.search.engine import SearchConfig, SearchHit, SearchResult, search_log
-from simsplat_core.search.frames import EGO_ID, ObjectFrames, log_frames
-from simsplat_core.types import SceneLog
+from simsplat_core.search.engine import SearchConfig, SearchHit
+from simsplat_core.search.frames import EGO_ID, log_frames
+from simsplat_core.search.logs import SearchableLog, StoreSearch, search_logs
 from simsplat_core.viz.contact_sheet import bev_panel
 from simsplat_core.viz.grounding_view import grounding_picture
 from storage import ArtifactStore, read_scene_log
@@ -34,19 +32,6 @@ from storage.logs import list_logs, read_image_rgb
 from storage.png import write_png
 
 logger = logging.getLogger(__name__)
-
-
-@dataclass(frozen=True, eq=False)
-class SearchableLog:
-    """One log prepared for search: the log (no pixels), its language scene (``None``: not aligned), per-frame facts."""
-
-    log: SceneLog
-    scene: LanguageScene | None
-    objects: dict[str, ObjectFrames]
-
-    @property
-    def nodes(self) -> dict[str, NodeLanguage] | None:
-        return None if self.scene is None else {n.object_id: n for n in self.scene.nodes}
 
 
 def load_searchable(store: ArtifactStore, seq_id: str) -> SearchableLog:
@@ -100,41 +85,14 @@ def hit_picture(store: ArtifactStore, item: SearchableLog, hit: SearchHit) -> tu
                      highlight_ego=EGO_ID in hit.object_ids), "bev"
 
 
-@dataclass(frozen=True)
-class StoreSearch:
-    """A description answered over a store: ranked hits of every log, each log's result, seconds taken."""
-
-    query: SearchQuery
-    hits: tuple[SearchHit, ...]
-    results: tuple[SearchResult, ...]
-    seconds: float
-    picture_kinds: dict[str, str]
-
-    @property
-    def message(self) -> str:
-        if self.hits:
-            return f"{len(self.hits)} hits in {len({h.seq_id for h in self.hits})} of {len(self.results)} logs"
-        reasons = "; ".join(r.message for r in self.results)
-        return f"no log matches {self.query.text!r}: {reasons}"
-
-
-def search_logs(items: list[SearchableLog], text: str, config: SearchConfig | None = None) -> StoreSearch:
-    """Answer ``text`` over prepared logs (no pictures); hits ranked over all logs."""
-    t0 = time.perf_counter()
-    query = parse_description(text)
-    results = tuple(search_log(i.log.seq_id, i.objects, i.log.num_frames, query, i.nodes, config) for i in items)
-    hits = sorted((h for r in results for h in r.hits), key=lambda h: (-h.score, h.seq_id, h.window[0]))
-    return StoreSearch(query, tuple(hits), results, time.perf_counter() - t0, {})
-
-
 def search_store(store_root: str, text: str, *, seq_ids: list[str] | None = None, top: int | None = None,
                  out: str | None = None, pictures: bool = True, config: SearchConfig | None = None) -> StoreSearch:
     """Search every log of the store (or ``seq_ids``) for ``text``; draw the first ``top`` hits' pictures into
     ``out`` (default ``STORE/searches/<slug>/``) as ``<rank>-<seq_id>-<first>-<last>.png``."""
     store = ArtifactStore(store_root)
-    found = search_logs(load_store(store_root, seq_ids), text, config)
-    by_seq = {i.log.seq_id: i for i in load_store(store_root, sorted({h.seq_id for h in found.hits}))} \
-        if pictures and found.hits else {}
+    items = load_store(store_root, seq_ids)
+    found = search_logs(items, text, config)
+    by_seq = {i.log.seq_id: i for i in items}
     hits = list(found.hits[:top] if top else found.hits)
     kinds: dict[str, str] = {}
     if pictures:
