@@ -18,7 +18,10 @@ own with the text encoder (query role), so "turning left" is compared with motio
 * *appearance* ``p_app = a * g``: ``g = exp(-(s_best - s) / appearance_temperature)`` with ``s`` the
   cosine of the appearance text with the node's ``f_app`` (``s_best`` the best node's; ``g = 1`` when
   the text is only the category noun: "car" against "a red SUV" or "a white van" is E5 noise of a
-  few hundredths that decided group queries), and an attribute factor ``a`` from the node's caption:
+  few hundredths that decided group queries; ``g >= caption_confirmed_floor`` when the caption names
+  every colour the query names and fits its subtype: the field's rendered mean mixes views and can sit
+  0.05 cosine below the best node, which alone dropped "a silver hatchback" from "the silver car turning
+  left"), and an attribute factor ``a`` from the node's caption:
   each colour the query names multiplies by 1 when the caption has it (garment colours compared
   garment by garment: E5 cannot tell "red shirt and blue pants" from "blue shirt and red pants"), by
   ``color_similar`` for a neighbouring name (white/silver, silver/gray, orange/red, ...) and by
@@ -253,6 +256,9 @@ class QueryEngine:
                 if not parsed.categories and not parsed.named_colors:  # "the giraffe": nothing known to check
                     g[has_feature & (np.nan_to_num(sims, nan=1.0) < cfg.unknown_floor)] = 0.0
             attrs = np.array([attribute_fit(parsed, n, cfg) if n.caption is not None else 1.0 for n in nodes])
+            if parsed.named_colors:
+                confirmed = has_caption & (attrs >= 1.0)
+                g[confirmed] = np.maximum(g[confirmed], cfg.caption_confirmed_floor)
             missing = cfg.missing_appearance if scene_has_appearance(scene) else 1.0  # no images: neutral
             p_app = np.where(has_caption | has_feature, g * attrs, missing)
         p_mot = np.full(len(nodes), nan)

@@ -18,6 +18,10 @@ class QueryConfig:
         appearance_temperature: raw cosine gap to the best node that divides the appearance score by e.
         candidate_ratio: narrowing rule: candidates keep ``p_app >= candidate_ratio * max p_app``.
         candidate_top_k: at most this many candidates (``0``: no cap).
+        caption_confirmed_floor: the feature-field factor of a node whose caption names every colour
+            the query names (and fits its subtype) is at least this: the field's rendered mean mixes
+            views and can sit 0.05 cosine below the best node's, which alone must not drop a node the
+            caption confirms ("the silver car turning left" whose caption is "a silver hatchback").
         color_mismatch, color_similar: factors for a named colour the caption contradicts / nearly has.
         subtype_mismatch: factor for a named subtype the caption contradicts.
         direction_mismatch: factor for a crossing direction the node's trajectory contradicts.
@@ -50,6 +54,7 @@ class QueryConfig:
     appearance_temperature: float = 0.05
     candidate_ratio: float = 0.4
     candidate_top_k: int = 0
+    caption_confirmed_floor: float = 0.5
     color_mismatch: float = 0.05
     color_similar: float = 0.4
     subtype_mismatch: float = 0.2
@@ -86,6 +91,7 @@ class QueryConfig:
                 raise ValueError(f"QueryConfig.{name} must be a finite number > 0, got {value!r}")
         for name in (
             "candidate_ratio",
+            "caption_confirmed_floor",
             "color_mismatch",
             "color_similar",
             "subtype_mismatch",

@@ -45,7 +45,7 @@ MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ),
     (
         r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b"
-        r"|sitting in (?:the|its) lane|in (?:its|the) lane",
+        r"|sitting in (?:the|its|their|his|her) lane|in (?:its|the|their|his|her) lane",
         (voc.STOPPED, voc.STANDING),
     ),
     (r"\bparked\b|parking (?:spot|space|bay)", (voc.PARKED,)),

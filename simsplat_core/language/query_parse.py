@@ -166,6 +166,12 @@ def _nouns() -> dict[str, tuple[Noun, bool]]:
         noun = Noun(categories, subtype, words[0])
         for i, word in enumerate(words):
             out[word] = (noun, i > 0 and word not in ("someone", "somebody"))
+    for words, categories, subtype in table:
+        # the plural users type by the regular rule even where English spells it otherwise ("lorrys",
+        # "childs", "passer-bys"); a table plural or another noun of that spelling wins
+        singular = words[0]
+        if len(words) > 1 and not singular.endswith("s"):
+            out.setdefault(singular + "s", (out[singular][0], True))
     return out
 
 
@@ -244,7 +250,8 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("context", 1, r"(?:in (?:the|a) lane )?(?:driving|coming|heading|moving|going|travelling|traveling|approaching)"
                    r" towards? (?:us|me|ego|our car)"),
     ("context", 1, r"(?:approaching )?from the opposite direction"),
-    ("context", 1, r"(?:on|in|out on|along|down) (?:the |a )?(?:road|street|travel lane|lane|roadway|carriageway)"),
+    ("context", 1, r"(?:on|in|out on|along|down) (?:the |a |its |their |his |her )?"
+                   r"(?:road|street|travel lane|lane|roadway|carriageway)"),
     ("sector", 1, r"(?:(?:on|to|at|off|in) (?:the |my |our |your )?)" + _SIDE
                   + r"(?:[- ]hand)?(?: side)?(?: lane)?(?: of (?:" + _EGO_ALT + r"|the (?:road|street)))?"),
     ("sector", 1, _SIDE + r" of " + _EGO),
@@ -267,7 +274,7 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("motion", 1, r"(?:(?:just |stuck )?(?:stopped|halted|idling|queuing|queueing|stationary|at a standstill"
                   r"|not moving|not going anywhere|standing still|sitting still|motionless|sitting|waiting)(?: around)?"
                   r"(?: to cross| at the (?:light|lights|red light|signal|stop line)"
-                  r"| in (?:the |its )?(?:lane|traffic|line|queue))?)"),
+                  r"| in (?:the |its |their |his |her )?(?:lane|traffic|line|queue))?)"),
     ("motion", 1, r"(?:sitting )?parked(?: up)?|sitting in a parking (?:spot|space|bay)"),
     ("motion", 1, r"reversing|reverses|backing (?:up|out)|backs (?:up|out)|in reverse(?: gear)?"
                   r"|(?:driving|going|moving) backwards?"),

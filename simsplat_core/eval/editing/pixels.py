@@ -24,6 +24,9 @@ of the unedited scene, at the same frames and cameras.
 * **removed**: in views where the log shows a removed object (``MIN_VIEW_PIXELS``), the edited render has
   no pixel of its node, and over the object's pixels it is closer (mean squared error) to the world's
   rendering without the object than to the log's image with it, in at least ``MIN_VIEW_SHARE`` of them.
+  Where the world without it shows the background on ``MIN_BACKGROUND_SHARE`` of those pixels, only those
+  count: an agent the removed one hid all along (a black car that only ever showed behind a silver one)
+  is a grey smear in any reconstruction, and that smear is not the removed car (``removed_region``).
 """
 
 from __future__ import annotations
@@ -45,6 +48,9 @@ MIN_UNOCCLUDED = 0.5
 MIN_COVER = 0.3
 #: ... in this share of the views that show it.
 MIN_VIEW_SHARE = 0.6
+#: A removal is judged over the pixels where the world without it shows the background when they are at
+#: least this share of the object's pixels (``removed_region``).
+MIN_BACKGROUND_SHARE = 0.3
 #: Crops smaller than this are not captioned.
 MIN_CAPTION_PIXELS = 40
 #: Body styles the captioner names from the box (others are not checked by type).
@@ -139,6 +145,16 @@ def check_appearance(evidence: PixelEvidence, intent: EditIntent, object_id: str
         v.require(caption.subtype == asset.subtype, f"{object_id}: a {caption.subtype}, asked a {asset.subtype}")
 
 
+def removed_region(shown: np.ndarray, ids_without: np.ndarray) -> np.ndarray:
+    """The pixels where a removal is judged by colour: of ``shown`` (``[H, W]`` bool, where the log showed the
+    removed object), those where the world without it shows the background (``ids_without`` ``[H, W]``
+    instance ids, ``0`` = background) -- when they are at least ``MIN_BACKGROUND_SHARE`` of them; otherwise
+    all of ``shown``. An agent that the removed one hid from the log all along is unknown to any
+    reconstruction; what is judged is that the removed object is gone from the static scene behind it."""
+    background = shown & (ids_without == 0)
+    return background if background.sum() >= MIN_BACKGROUND_SHARE * shown.sum() else shown
+
+
 def check_removed(evidence: PixelEvidence, object_id: str, node_id: int, v: Verdict) -> None:
     """No pixel of the removed node, and its region looks like the world without it (module docstring)."""
     inst = evidence.original_instance.get(object_id)
@@ -155,7 +171,7 @@ def check_removed(evidence: PixelEvidence, object_id: str, node_id: int, v: Verd
     v.require(left == 0, f"{left} pixels of removed node {node_id} still rendered")
     closer = []
     for f, c in views:
-        mask = orig.ids[f, c] == inst
+        mask = removed_region(orig.ids[f, c] == inst, evidence.world_edited.ids[f, c])
         edited = evidence.edited.rgb[f, c][mask]
         without = float(np.mean((edited - evidence.world_edited.rgb[f, c][mask]) ** 2))
         with_it = float(np.mean((edited - orig.rgb[f, c][mask]) ** 2))
@@ -189,6 +205,6 @@ def check_pixels(intent: EditIntent, obs: EditObservation, evidence: PixelEviden
     return v.result()
 
 
-__all__ = ["CHECKABLE_SUBTYPES", "MIN_CAPTION_PIXELS", "MIN_COVER", "MIN_UNOCCLUDED", "MIN_VIEW_PIXELS",
-           "MIN_VIEW_SHARE", "check_appearance", "check_pixels", "check_removed", "check_visible", "expected_views",
-           "object_crops"]
+__all__ = ["CHECKABLE_SUBTYPES", "MIN_BACKGROUND_SHARE", "MIN_CAPTION_PIXELS", "MIN_COVER", "MIN_UNOCCLUDED",
+           "MIN_VIEW_PIXELS", "MIN_VIEW_SHARE", "check_appearance", "check_pixels", "check_removed", "check_visible",
+           "expected_views", "object_crops", "removed_region"]

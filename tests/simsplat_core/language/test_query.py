@@ -385,3 +385,40 @@ def test_auto_labels_correct_an_unsure_aligner(encoder: TextEncoder, codebooks: 
     # location: the labelled sector moves weight the same way, and a full-label engine follows the labels only
     labels_only = QueryEngine(encoder, QueryConfig(label_weight=1.0), codebooks=codebooks)
     assert labels_only.ground(scene, "the car going straight").node_ids == (2,)
+
+
+def _with_field_feature(scene: LanguageScene, object_id: str, feature: np.ndarray) -> LanguageScene:
+    """``scene`` with ``object_id``'s rendered appearance feature replaced (its caption kept)."""
+    nodes = tuple(dataclasses.replace(n, f_app=feature) if n.object_id == object_id else n for n in scene.nodes)
+    return dataclasses.replace(scene, nodes=nodes)
+
+
+def _field_feature_off_by(scene: LanguageScene, object_id: str, encoder: TextEncoder, cosine_drop: float) -> np.ndarray:
+    """``object_id``'s own feature turned away so that its cosine to itself drops by ``cosine_drop``."""
+    own = scene.node(next(n.node_id for n in scene.nodes if n.object_id == object_id)).f_app
+    other = encoder.encode_passages(["a photo of an empty street at night"])[0]
+    other = other - (other @ own) * own
+    other /= np.linalg.norm(other)
+    cos = 1.0 - cosine_drop
+    return cos * own + math.sqrt(1.0 - cos * cos) * other
+
+
+def test_a_caption_that_names_every_asked_colour_keeps_the_node_a_candidate(
+    engine: QueryEngine, scene: LanguageScene, encoder: TextEncoder
+) -> None:
+    """The field's rendered mean mixes views; a gap of about a tenth of cosine must not drop a node whose
+    caption says exactly the asked colour (the only red sedan turning left at the intersection is A)."""
+    blurred = _with_field_feature(scene, "A", _field_feature_off_by(scene, "A", encoder, 0.15))
+    g = engine.ground(blurred, "the red car turning left at the intersection")
+    assert [m.object_id for m in g.matches] == ["A"]
+    # a caption that contradicts the colour is not rescued
+    assert "D" not in {m.object_id for m in engine.ground(blurred, "every red sedan").matches}
+
+
+def test_a_lane_phrase_is_not_a_look(engine: QueryEngine, scene: LanguageScene, encoder: TextEncoder) -> None:
+    """"every vehicle stopped in their lane" names no look ("in their lane" is where it stops): every
+    vehicle is equally a vehicle, so a stopped vehicle with an odd field feature is still in the group."""
+    blurred = _with_field_feature(scene, "G", _field_feature_off_by(scene, "G", encoder, 0.08))
+    g = engine.ground(blurred, "every vehicle stopped in their lane")
+    assert "G" in {m.object_id for m in g.matches}
+    assert {m.appearance for m in g.ranking} == {1.0}

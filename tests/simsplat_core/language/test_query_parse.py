@@ -196,6 +196,14 @@ def test_group_words_and_plurals() -> None:
     assert not parse_query("someone crossing").group
 
 
+def test_regular_plurals_of_irregular_nouns_are_groups() -> None:
+    """Users write "lorrys" for "lorries": the regular plural of a noun still asks for every match."""
+    lorries = parse_query("Remove the red lorrys")
+    assert lorries.group and lorries.noun == "lorry"
+    assert parse_query("the childs crossing the road").group
+    assert not parse_query("the red lorry").group
+
+
 def test_appearance_text_and_extra_words() -> None:
     parsed = parse_query("Could you please show me the red SUV turning left?")
     assert parsed.appearance == "red SUV"

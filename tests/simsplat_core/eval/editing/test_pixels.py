@@ -87,6 +87,32 @@ def test_removed_region_must_look_like_the_scene_without_it() -> None:
     assert "still rendered" in v.result().reason
 
 
+def test_a_removal_is_judged_on_the_background_it_uncovers_not_on_an_agent_it_hid_all_along() -> None:
+    """A silver car is removed; behind it the world shows a black car (instance 9) that the log never saw
+    and, on a third of the pixels, the grey road. A reconstruction draws the never-seen car as a smear."""
+    road, silver, black, smear = 0.45, 0.7, 0.05, 0.55
+    with_it = np.full((H, W, 3), road)
+    with_it[5:15, 10:20] = silver
+    original = _views(with_it, _box(3, 0))
+    without = np.full((H, W, 3), road)
+    without[5:15, 10:17] = black
+    ids_without = np.zeros((H, W), np.int32)
+    ids_without[5:15, 10:17] = 9
+    world_without = _views(without, ids_without)
+    ours = np.full((H, W, 3), road)
+    ours[5:15, 10:17] = smear
+    v = Verdict()
+    check_removed(PixelEvidence(_views(ours, np.full((H, W), -1)), world_without, original, {}, {"veh_00": 3}),
+                  "veh_00", 12, v)
+    assert v.result().passed, v.result().reason
+    ghost = ours.copy()
+    ghost[5:15, 17:20] = silver  # the removed car still shows over the road behind it
+    v = Verdict()
+    check_removed(PixelEvidence(_views(ghost, np.full((H, W), -1)), world_without, original, {}, {"veh_00": 3}),
+                  "veh_00", 12, v)
+    assert not v.result().passed and "looks like the scene with it" in v.result().reason
+
+
 def test_caption_of_the_rendered_object_checks_colour_and_type(truths) -> None:
     """A perfect editor: the 'Gaussian' render is the world's own render of the edit (node id = instance id)."""
     truth = truths[0]
