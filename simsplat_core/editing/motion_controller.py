@@ -137,7 +137,7 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
         cruise = DEFAULT_CRUISE_MPS
     v_ref = _speed_reference(req, cruise, reverse=req.reverse)
     stop = _stop_target(req, route, s0, map_ctx)
-    leader = _leader_track(req, route, s0)
+    leader = _leader_track(req, route, s0, map_ctx)
     v0 = 0.0 if req.hold_until_s is not None and _first_step(req) else start.speed
     horizon = float(req.times[-1] - req.times[start.step])
     reach = s0 + max(abs(v0), cruise or 0.0, req.limits.max_speed_mps / 2) * horizon + 50.0
@@ -322,8 +322,10 @@ def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan
                           f"halfway through the turn, {0.5 * (s_turn + s_end) - s0:.0f} m)", reason="infeasible_motion")
 
 
-def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderTrack | None:
-    """The followed leader and the traffic, where each is on the route ahead of the start; traffic that will
+def _leader_track(req: VehicleMotionRequest, route: Route, s0: float, map_ctx: MapContext) -> LeaderTrack | None:
+    """The followed leader and the traffic, where each is on the route ahead of the start (within
+    ``ON_ROUTE_M`` of it and on the drivable surface: a person standing on the corner's pavement beside a
+    right turn is no obstacle); traffic that will
     be on the route within ``ANTICIPATE_S`` already blocks it where it will enter, standing (unless the plan is
     past that point by then: ``LeaderTrack.enter_t``); the agent's own log along the route lets a plan behind
     it keep the log's gaps to the traffic (``LeaderTrack.log_s``)."""
@@ -334,9 +336,12 @@ def _leader_track(req: VehicleMotionRequest, route: Route, s0: float) -> LeaderT
     s = np.zeros((len(agents), t))
     present = np.zeros((len(agents), t), dtype=bool)
     for i, other in enumerate(agents):
-        for k in np.flatnonzero(other.valid):
+        steps = np.flatnonzero(other.valid)
+        on_road = map_ctx.facts(other.xy[steps], other.heading[steps]).on_drivable if steps.size else steps
+        for k, drivable in zip(steps, on_road):
             s[i, k], lat = route.project(other.xy[k])
-            present[i, k] = abs(lat) <= ON_ROUTE_M and s[i, k] > s0
+            present[i, k] = abs(lat) <= ON_ROUTE_M and s[i, k] > s0 and (bool(drivable) or i == 0 and
+                                                                           req.leader is not None)
     if req.leader is not None and not present[0, req.start.step:].any():
         raise EditRefused(f"{req.label} cannot follow {req.leader.label}: it is not ahead of {req.label} on its "
                           "path", reason="infeasible_motion")

@@ -255,6 +255,25 @@ def test_traffic_entering_behind_a_car_does_not_hold_it_back(world) -> None:
     assert not footprints_overlap(plan.xy, plan.heading, CAR[:2], turner.xy, turner.heading, CAR[:2]).any()
 
 
+def test_a_person_on_the_corner_pavement_beside_a_right_turn_does_not_stop_it(world) -> None:
+    """The turn's path passes within a couple of metres of the kerb: a person standing on the pavement there
+    is no obstacle; the same person standing on the road in the path is."""
+    free = _car(world, Behaviour(turn="right"), lane=1, speed=8.0, n=60)
+    turning = np.flatnonzero(np.abs(np.diff(free.heading)) > 1e-3)
+    right = np.c_[np.sin(free.heading), -np.cos(free.heading)]
+    # the first point of the pavement within 2.4 m to the right of the turn's path
+    k, inside = next((int(k), free.xy[k] + off * right[k]) for k in turning for off in np.arange(1.0, 2.45, 0.1)
+                     if not world["ctx"].facts((free.xy[k] + off * right[k])[None], np.zeros(1)).on_drivable[0])
+
+    def standing_at(xy: np.ndarray) -> OtherAgent:
+        return OtherAgent("ped", "a person", np.tile(xy, (60, 1)), np.zeros(60), np.ones(60, bool), PERSON)
+
+    on_pavement = _car(world, Behaviour(turn="right"), lane=1, speed=8.0, n=60, traffic=(standing_at(inside),))
+    np.testing.assert_allclose(on_pavement.xy, free.xy, atol=1e-6)
+    with pytest.raises(EditRefused, match="turning requires"):  # stands in the path all along: no turn
+        _car(world, Behaviour(turn="right"), lane=1, speed=8.0, n=60, traffic=(standing_at(free.xy[k]),))
+
+
 def test_a_slowed_car_keeps_the_gap_its_log_kept(world) -> None:
     """A car that in its log follows the car ahead closely (much closer than the planner's own headway) and is
     asked to go slower only drops back: it slows to the asked speed without braking below it, and stays at least
