@@ -25,7 +25,9 @@ STATIONARY_CLASSES = (voc.PARKED, voc.STOPPED, voc.STANDING)
 MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     (r"\bleft\b.*\bturn|\bturn\w*\b.*\bleft\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?left", (voc.TURNING_LEFT,)),
     (r"\bright\b.*\bturn|\bturn\w*\b.*\bright\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?right", (voc.TURNING_RIGHT,)),
-    (r"^(?!.*\b(?:left|right)\b).*(?:\bturn|corner)", (voc.TURNING_LEFT, voc.TURNING_RIGHT)),
+    # "corner" is a turn only as a verb or taken ("cornering", "round the corner"), not a place ("on the corner")
+    (r"^(?!.*\b(?:left|right)\b).*(?:\bturn|\bcorner(?:ing|s)\b|(?:round|around|take|takes|taking|turning|turns)"
+     r" (?:the |a )?corner)", (voc.TURNING_LEFT, voc.TURNING_RIGHT)),
     (r"straight|cruising|\bcontinu", (voc.GOING_STRAIGHT,)),
     (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bleft\b|\bleft\b.*\blane", (voc.CHANGING_LANE_LEFT,)),
     (r"(?:lane|merg|switch|cut|shift|hop)\w*.*\bright\b|\bright\b.*\blane", (voc.CHANGING_LANE_RIGHT,)),
@@ -44,7 +46,7 @@ MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
         (voc.STOPPED, voc.PARKED, voc.STANDING),
     ),
     (
-        r"\bstopped\b|\bhalted\b|idling|queu|waiting|in traffic|\bstuck\b"
+        r"\bstopped\b|\bhalted\b|idling|queu|waiting|(?:standing still )?in traffic|\bstuck\b"
         r"|sitting in (?:the|its|their|his|her) lane|in (?:its|the|their|his|her) lane",
         (voc.STOPPED, voc.STANDING),
     ),

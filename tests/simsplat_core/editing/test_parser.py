@@ -10,6 +10,7 @@ import pytest
 
 from simsplat_core.editing.commands import program_from_json, program_to_json
 from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.parser_anchor import motion_kinds
 from simsplat_core.editing.parser_lexicon import SUPPORTED
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.text import TextEncoder, default_text_encoder
@@ -543,6 +544,10 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
     ("add a car next to the pedestrian turning left",
      [{"op": INS, AC: "vehicle", PR: "next_to", "placement.anchor.description": "the pedestrian",
        "behaviour.turn": "left"}]),
+    # "standing still in traffic" is a car's state as much as a person's: it stays with the car it follows
+    ("Put a person in a white sweater beside the white vehicle standing still in traffic.",
+     [{"op": INS, AC: "pedestrian", PR: "next_to",
+       "placement.anchor.description": "the white vehicle standing still in traffic", "behaviour": None}]),
     ("add a car behind the van parked on the right and make it turn left",
      [{"op": INS, PR: "behind", "placement.anchor.description": "the van parked on the right",
        "behaviour.turn": "left"}]),
@@ -612,6 +617,13 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
 ]
 
 TABLE = REMOVE + INSERT + REPLACE + SPEED + STOP + MOTION + PEDESTRIAN + MULTI + TYPED + FAMILIES
+
+
+def test_a_corner_is_a_turn_only_when_it_is_taken() -> None:
+    assert motion_kinds("standing on the corner") == {"pedestrian"}
+    assert motion_kinds("waiting at the corner") == {"pedestrian"}
+    assert motion_kinds("going round the corner") == {"vehicle"}
+    assert motion_kinds("cornering fast") == {"vehicle"}
 
 
 def test_the_table_is_large_and_distinct() -> None:
