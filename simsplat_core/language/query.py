@@ -59,7 +59,11 @@ enables (each raised to its weight): read as the probability that every part mat
 failed part (a car that is not turning) sinks the whole match. A single-object
 query returns the best candidate when its score reaches ``no_match_threshold``, a group query ("all
 ...", "every ...", plurals) every candidate at or above ``group_threshold``; otherwise the grounding is
-empty and its message says which part found nothing ("no pedestrian in this scene is crossing").
+empty and its message says which part found nothing ("no pedestrian in this scene is crossing") -- except
+that a single-object query naming a colour and a motion or location that no candidate fits takes the node
+whose caption names a neighbouring colour and fits the rest (``_nearest_colour``: the captioner names a
+sunlit silver car white, so "the silver car continuing straight" is the white one doing it; the message says
+so).
 ``simsplat_core.eval.grounding.calibration.calibrate_thresholds`` picks both thresholds from labelled
 queries.
 
@@ -82,6 +86,7 @@ from __future__ import annotations
 
 import logging
 from collections.abc import Sequence
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -302,6 +307,32 @@ class QueryEngine:
             for i in order
         )
 
+    def _nearest_colour(self, scene: LanguageScene, parsed: ParsedQuery,
+                        ranking: tuple[NodeMatch, ...]) -> NodeMatch | None:
+        """For a single-object query naming colours and a motion or location that no candidate fits: the node
+        whose caption names a neighbouring colour (``SIMILAR_COLORS``: the captioner names a sunlit silver body
+        white, a grey one silver) and that fits everything else, scored by the caption's colour factor alone
+        (the field feature follows the caption's name) -- when it reaches ``no_match_threshold``."""
+        cfg = self.config
+        if not (cfg.use_appearance and parsed.named_colors and cfg.scored_parts(parsed)
+                and (parsed.motion or parsed.location)):
+            return None
+        best: NodeMatch | None = None
+        for m in ranking:
+            node = scene.node(m.node_id)
+            if m.candidate or node.caption is None:
+                continue
+            attrs = attribute_fit(parsed, node, cfg)
+            if attrs < cfg.color_similar:
+                continue
+            parts = [(attrs, cfg.appearance_weight)] + [(p, w) for p, w in ((m.motion, cfg.motion_weight),
+                                                                           (m.location, cfg.location_weight))
+                                                       if np.isfinite(p)]
+            score = float(np.exp(sum(w * np.log(max(p, 1e-12)) for p, w in parts)))
+            if score >= cfg.no_match_threshold and (best is None or score > best.score):
+                best = dataclasses.replace(m, score=score, appearance=attrs)
+        return best
+
     def ground(self, scene: LanguageScene, text: str) -> Grounding:
         """Ground ``text`` in ``scene`` (module docstring).
 
@@ -318,10 +349,17 @@ class QueryEngine:
             matches = tuple(candidates[:1]) if candidates and candidates[0].score >= cfg.no_match_threshold else ()
         if not cfg.scored_parts(parsed):
             matches = ()
+        nearest = None if matches or parsed.group or not cfg.scored_parts(parsed) else self._nearest_colour(
+            scene, parsed, ranking)
         looks = looks_named(parsed)
         if cfg.use_appearance and looks and not scene_has_appearance(scene):
             matches = ()
             message = no_images_message(scene, looks)
+        elif nearest is not None:
+            matches = (nearest,)
+            node = scene.node(nearest.node_id)
+            message = (f"{nearest.object_id} (node {nearest.node_id}): {node.caption.text if node.caption else ''} "
+                       f"(no {parsed.subject()} fits the rest; this one's colour is the nearest)")
         else:
             message = grounding_message(scene, parsed, ranking, matches, cfg)
         logger.debug("%s: %r -> %s (%s)", scene.seq_id, text, [m.node_id for m in matches], message)

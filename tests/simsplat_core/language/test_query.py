@@ -422,3 +422,25 @@ def test_a_lane_phrase_is_not_a_look(engine: QueryEngine, scene: LanguageScene, 
     g = engine.ground(blurred, "every vehicle stopped in their lane")
     assert "G" in {m.object_id for m in g.matches}
     assert {m.appearance for m in g.ranking} == {1.0}
+
+
+def test_a_single_query_whose_colour_is_read_as_its_neighbour_finds_the_object_that_fits_the_rest(
+    encoder: TextEncoder, codebooks: MotionCodebooks, engine: QueryEngine
+) -> None:
+    """The captioner names a sunlit silver car white: "the silver car going straight" means the white one going
+    straight when no silver car does; a colour that is no neighbour, or a group query, does not reach it."""
+    scene = hand_built_scene([
+        ObjectSpec("silver_turning", "vehicle", vehicle_caption("silver", "sedan"),
+                   motion_label("silver_turning", voc.TURNING_LEFT, voc.IN_FRONT_OF_EGO, voc.AT_THE_INTERSECTION)),
+        ObjectSpec("white_straight", "vehicle", vehicle_caption("white", "hatchback"),
+                   motion_label("white_straight", voc.GOING_STRAIGHT, voc.IN_FRONT_OF_EGO, voc.ON_THE_ROAD)),
+        ObjectSpec("red_parked", "vehicle", vehicle_caption("red", "SUV"),
+                   motion_label("red_parked", voc.PARKED, voc.RIGHT_OF_EGO, voc.BY_THE_CURB)),
+    ], encoder, codebooks)
+    g = engine.ground(scene, "the silver car going straight")
+    assert [m.object_id for m in g.matches] == ["white_straight"]
+    assert "nearest" in g.message
+    assert [m.object_id for m in engine.ground(scene, "the silver car turning left").matches] == ["silver_turning"]
+    assert engine.ground(scene, "the blue car going straight").matches == ()
+    assert engine.ground(scene, "all the silver cars going straight").matches == ()
+    assert engine.ground(scene, "the silver car").matches[0].object_id == "silver_turning"

@@ -44,6 +44,21 @@ def test_visible_needs_the_node_where_the_world_shows_the_object() -> None:
     assert v.result().passed and "not mostly in sight" in v.result().reason
 
 
+def test_a_far_object_drawn_a_pixel_off_the_worlds_mesh_is_drawn_where_it_should_be() -> None:
+    """A far car 10 x 4 pixels large that the reconstruction draws two pixels thin and one pixel low is drawn
+    where it should be; the same drawn four pixels below it is not."""
+    grey = np.full((H, W, 3), 0.5)
+    truth = np.zeros((H, W), np.int32)
+    truth[8:12, 10:20] = 7
+    world = _views(grey, truth)
+    for top, drawn_there in ((11, True), (15, False)):
+        ours = np.full((H, W), -1, np.int32)
+        ours[top:top + 2, 10:20] = 42
+        v = Verdict()
+        check_visible(PixelEvidence(_views(grey, ours), world, world, {"new_0": 7}, {}), "new_0", 42, v)
+        assert v.result().passed == drawn_there, top
+
+
 def test_no_view_is_judged_at_a_frame_where_the_logged_ego_drives_into_an_agent() -> None:
     grey = np.full((H, W, 3), 0.5)
     world = _views(grey, _box(7, 0))
