@@ -544,6 +544,10 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
     ("add a car next to the pedestrian turning left",
      [{"op": INS, AC: "vehicle", PR: "next_to", "placement.anchor.description": "the pedestrian",
        "behaviour.turn": "left"}]),
+    # "away from the crosswalk" is where not to cross (jaywalking), not how far ahead to put the person
+    ("Insert a person wearing a white jacket crossing the street away from the crosswalk, 10 meters ahead.",
+     [{"op": INS, AC: "pedestrian", PR: "in_front_of", "placement.distance_m": 10.0,
+       "behaviour.cross_street": True, "behaviour.jaywalk": True}]),
     # "standing still in traffic" is a car's state as much as a person's: it stays with the car it follows
     ("Put a person in a white sweater beside the white vehicle standing still in traffic.",
      [{"op": INS, AC: "pedestrian", PR: "next_to",
