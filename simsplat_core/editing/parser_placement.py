@@ -43,8 +43,8 @@ _RELATIVE: tuple[tuple[str, str], ...] = (
 #: Relations to the ego without a noun phrase ("20 m ahead", "on our left").
 _EGO_RELATIVE: tuple[tuple[str, str], ...] = (
     # "away from the crosswalk" says where not to be, not how far ahead
-    (_D + r"(?:up )?(?:ahead|in front|forward|down the road|up the road|further(?: ahead| up| down)?|away)(?! of| from)",
-     "in_front_of"),
+    (_D + r"(?:up )?(?:ahead|in front|forward|down the road|up the road|further(?: ahead| up| down)?|away)"
+          r"(?! of| from)", "in_front_of"),
     (r"(?P<d>\d+(?:\.\d+)?) m (?:behind|back)(?! of)", "behind"),
     (r"(?:to|on|at) (?:the|our|my) (?P<side>left|right)(?:[- ]hand)?(?: side)?(?! of| lane)", "side"),
 )

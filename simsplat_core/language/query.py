@@ -84,9 +84,9 @@ scores as functions), ``query_messages`` (the answer in words), ``query_result``
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 from collections.abc import Sequence
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np

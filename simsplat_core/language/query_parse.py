@@ -166,7 +166,7 @@ def _nouns() -> dict[str, tuple[Noun, bool]]:
         noun = Noun(categories, subtype, words[0])
         for i, word in enumerate(words):
             out[word] = (noun, i > 0 and word not in ("someone", "somebody"))
-    for words, categories, subtype in table:
+    for words, _categories, _subtype in table:
         # the plural users type by the regular rule even where English spells it otherwise ("lorrys",
         # "childs", "passer-bys"); a table plural or another noun of that spelling wins
         singular = words[0]

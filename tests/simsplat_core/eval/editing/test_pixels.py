@@ -128,6 +128,33 @@ def test_a_removal_is_judged_on_the_background_it_uncovers_not_on_an_agent_it_hi
     assert not v.result().passed and "looks like the scene with it" in v.result().reason
 
 
+def test_a_removal_weighs_its_views_by_their_pixels() -> None:
+    """Gone from a large near view, a car still seems there in two tiny far ones (noise): it is removed. The
+    other way round it is not."""
+    with_it, without = np.zeros((H, W, 3)), np.ones((H, W, 3))
+    with_it[2:18, 2:28] = [0.8, 0.1, 0.1]  # near: 416 pixels
+    with_it_far = np.zeros((H, W, 3))
+    with_it_far[5:11, 10:17] = [0.8, 0.1, 0.1]  # far: 42 pixels
+    ids_near, ids_far = np.zeros((H, W), np.int32), np.zeros((H, W), np.int32)
+    ids_near[2:18, 2:28] = 3
+    ids_far[5:11, 10:17] = 3
+
+    def stack(*views: tuple[np.ndarray, np.ndarray]) -> ViewSet:
+        """Views of frames 0, 1, ... (one camera) from ``(rgb, ids)`` pairs."""
+        rgb = np.stack([v[0] for v in views])[:, None].astype(np.float32)
+        ids = np.stack([v[1] for v in views])[:, None].astype(np.int32)
+        return ViewSet(tuple(range(len(views))), ("front",), rgb, ids)
+
+    original = stack((with_it, ids_near), (with_it_far, ids_far), (with_it_far, ids_far))
+    world_without = stack(*[(without, np.zeros((H, W)))] * 3)
+    none = np.full((H, W), -1)
+    for ours, passed in (((without, with_it_far, with_it_far), True), ((with_it, without, without), False)):
+        v = Verdict()
+        check_removed(PixelEvidence(stack(*[(im, none) for im in ours]), world_without, original, {}, {"veh_00": 3}),
+                      "veh_00", 12, v)
+        assert v.result().passed == passed, v.result().reason
+
+
 def test_caption_of_the_rendered_object_checks_colour_and_type(truths) -> None:
     """A perfect editor: the 'Gaussian' render is the world's own render of the edit (node id = instance id)."""
     truth = truths[0]
