@@ -6,8 +6,9 @@
 1. a route (``motion_routes``): the agent's own log path (extended along the lane graph), a lane-graph
    path through the next intersection for a turn, the neighbour lane for a lane change (quintic lateral
    ramp over ``lane_change_s`` at the cruise speed), a sideways shift, a path straight back for reversing;
-   for pedestrians the path across the nearest crosswalk, straight across the road away from crosswalks
-   (jaywalking), or on along their way;
+   for pedestrians the path across the nearest crosswalk (when it is reached in half the time left; else
+   straight across from where they stand), straight across the road away from crosswalks (jaywalking), or on
+   along their way;
 2. a longitudinal plan (``speed_profile.plan_speed``): jerk-limited tracking of the wanted speed (the log's
    own speed where the behaviour does not change it, replayed later after a delayed start; a turn its log
    halts short of is driven at the log's top pace), curve speed caps (never below the log's own speed
@@ -36,6 +37,7 @@ from simsplat_core.editing.motion_requests import (
     PASS_RAMP_M,
     PASS_TRAIL_M,
     STOP_GAP_M,
+    WALK_MPS,
     LogTrajectory,
     OtherAgent,
     PassingStep,
@@ -68,8 +70,11 @@ from simsplat_core.scene.pose_track import PoseTrack
 
 logger = logging.getLogger(__name__)
 
-#: Lateral distance within which another agent counts as on the route (leaders, objects to stop behind), m.
+#: Lateral distance within which another agent counts as on the route (leaders, objects to stop behind), m ...
 ON_ROUTE_M = 2.5
+#: ... for traffic, at most the half widths of both plus this clearance (two cars: 2.5 m; a car and a person
+#: standing at the edge of a crosswalk 2.4 m off its lane's centre line: not in its way), m.
+ROUTE_CLEARANCE_M = 0.6
 #: Traffic about to enter the route within this time blocks it where it will enter (crossing traffic), s.
 ANTICIPATE_S = 2.0
 #: A stop asked by a time may come to rest this much later (s); later is refused.
@@ -84,6 +89,8 @@ MIN_RAMP_M = 10.0
 #: Jaywalkers start at least this far from any crosswalk, m; they step this far beyond the far kerb, m.
 JAYWALK_CLEARANCE_M = 8.0
 KERB_STEP_M = 1.5
+#: A pedestrian told to cross walks to the nearest crosswalk when that takes at most this share of the time left.
+CROSSWALK_WALK_SHARE = 0.5
 #: Crosswalks farther than this from a pedestrian are not "nearest" to walk to, m.
 CROSSWALK_REACH_M = 60.0
 
@@ -324,8 +331,9 @@ def _check_turn_reached(req: VehicleMotionRequest, route: Route, plan: SpeedPlan
 
 def _leader_track(req: VehicleMotionRequest, route: Route, s0: float, map_ctx: MapContext) -> LeaderTrack | None:
     """The followed leader and the traffic, where each is on the route ahead of the start (within
-    ``ON_ROUTE_M`` of it and on the drivable surface: a person standing on the corner's pavement beside a
-    right turn is no obstacle); traffic that will
+    ``ON_ROUTE_M`` of it, traffic within its and the agent's half widths plus ``ROUTE_CLEARANCE_M``, and on the
+    drivable surface: a person standing on the corner's pavement beside a right turn is no obstacle); traffic
+    that will
     be on the route within ``ANTICIPATE_S`` already blocks it where it will enter, standing (unless the plan is
     past that point by then: ``LeaderTrack.enter_t``); the agent's own log along the route lets a plan behind
     it keep the log's gaps to the traffic (``LeaderTrack.log_s``)."""
@@ -336,12 +344,13 @@ def _leader_track(req: VehicleMotionRequest, route: Route, s0: float, map_ctx: M
     s = np.zeros((len(agents), t))
     present = np.zeros((len(agents), t), dtype=bool)
     for i, other in enumerate(agents):
+        followed = i == 0 and req.leader is not None
+        reach = ON_ROUTE_M if followed else min(ON_ROUTE_M, (req.size[1] + other.size[1]) / 2.0 + ROUTE_CLEARANCE_M)
         steps = np.flatnonzero(other.valid)
         on_road = map_ctx.facts(other.xy[steps], other.heading[steps]).on_drivable if steps.size else steps
         for k, drivable in zip(steps, on_road):
             s[i, k], lat = route.project(other.xy[k])
-            present[i, k] = abs(lat) <= ON_ROUTE_M and s[i, k] > s0 and (bool(drivable) or i == 0 and
-                                                                           req.leader is not None)
+            present[i, k] = abs(lat) <= reach and s[i, k] > s0 and (bool(drivable) or followed)
     if req.leader is not None and not present[0, req.start.step:].any():
         raise EditRefused(f"{req.label} cannot follow {req.leader.label}: it is not ahead of {req.label} on its "
                           "path", reason="infeasible_motion")
@@ -390,7 +399,7 @@ def plan_pedestrian(request: PedestrianMotionRequest, map_ctx: MapContext) -> Pl
     start = req.start
     own = _own_route(req)
     if req.cross_street:
-        route = _jaywalk_route(req, map_ctx) if req.jaywalk else _crosswalk_route(req, map_ctx)
+        route = _crossing_route(req, map_ctx)
     else:
         route = own if own is not None else straight_route(start.xy, start.heading)
     s0 = route.project(start.xy)[0]
@@ -416,6 +425,25 @@ def _passing(route: Route, step: PassingStep, s0: float) -> Route:
     s_from = route.project(step.from_xy)[0] - PASS_LEAD_M
     s_until = route.project(step.until_xy)[0] + PASS_TRAIL_M
     return passing_route(route, max(s_from, s0), s_until, step.offset_m, PASS_RAMP_M)
+
+
+def _crossing_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
+    """Across the road: jaywalking away from crosswalks when asked; else at the nearest crosswalk when the
+    pedestrian can walk to it in :data:`CROSSWALK_WALK_SHARE` of the time left, so that it crosses within the
+    steps; else straight across from where it stands ("a man 8 m ahead walking across the road" crosses there,
+    not 20 m on at a crosswalk the log ends before it reaches)."""
+    if req.jaywalk:
+        return _jaywalk_route(req, map_ctx)
+    if map_ctx.crosswalks:
+        start = req.start
+        near = min(min(float(np.linalg.norm(a - start.xy)), float(np.linalg.norm(b - start.xy)))
+                   for a, b in (crosswalk_ends(p) for p in map_ctx.crosswalks))
+        on_one = -signed_polygon_distance(start.xy[None], list(map_ctx.crosswalks)).min() < 1.0
+        speed = req.target_speed_mps if req.target_speed_mps else WALK_MPS
+        left = float(req.times[-1] - req.times[start.step])
+        if on_one or near <= CROSSWALK_WALK_SHARE * speed * left:
+            return _crosswalk_route(req, map_ctx)
+    return _jaywalk_route(req, map_ctx, keep_clear=False)
 
 
 def _crosswalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
@@ -444,9 +472,9 @@ def _crosswalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route
     return polyline_route(np.array(pts), smooth=3)
 
 
-def _jaywalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
+def _jaywalk_route(req: PedestrianMotionRequest, map_ctx: MapContext, keep_clear: bool = True) -> Route:
     """Straight across the road (perpendicular to the nearest lane), at least ``JAYWALK_CLEARANCE_M`` from any
-    crosswalk, onto the far kerb."""
+    crosswalk (``keep_clear``; else from where it stands), onto the far kerb."""
     start = req.start
     nearest = nearest_lane_segment(map_ctx, start.xy)
     if nearest is None:
@@ -462,7 +490,7 @@ def _jaywalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
         direction = normal if np.dot(normal, [np.cos(start.heading), np.sin(start.heading)]) >= 0 else -normal
     else:
         direction = normal if np.dot(normal, to_road) >= 0 else -normal
-    begin = _away_from_crosswalks(start.xy, along, map_ctx)
+    begin = _away_from_crosswalks(start.xy, along, map_ctx) if keep_clear else start.xy
     ray = begin + np.arange(0.0, 60.0, 0.25)[:, None] * direction
     ray_facts = map_ctx.facts(ray, np.full(len(ray), np.arctan2(direction[1], direction[0])))
     on_road = ray_facts.on_drivable if map_ctx.has_drivable else ray_facts.lane_dist < 2.0

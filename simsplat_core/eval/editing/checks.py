@@ -475,18 +475,20 @@ def _check_placement(truth: SceneTruth, intent: EditIntent, after: AgentStates, 
 
 
 def _check_crossing_spot(truth: SceneTruth, p: PlacementIntent, row: int, after: AgentStates, v: Verdict) -> None:
-    """An inserted crossing pedestrian crosses about ``d`` ahead: measured where it first steps on the road."""
+    """An inserted crossing pedestrian crosses about ``d`` ahead: measured where it first steps on the road, from
+    the anchor's centre or its front (either reading, as for every said distance: ``_distance_ok``)."""
     valid = np.flatnonzero(after.valid[row])
     on_road = valid[truth.layout.on_road(after.xy[row, valid])]
     if not v.require(on_road.size > 0, "the crossing pedestrian never steps on the road"):
         return
     step = int(on_road[0])
-    axy, ah, _ = _anchor_pose(truth, p.anchor, int(valid[0]))
+    axy, ah, asize = _anchor_pose(truth, p.anchor, int(valid[0]))
     ahead = float(_in_frame(after.xy[row, step], axy, ah)[0])
     v.measured["crossing_ahead_m"] = ahead
-    if p.distance_m is not None:
-        v.require(abs(ahead - p.distance_m) <= max(4.0, 0.35 * p.distance_m),
-                  f"crosses {ahead:.1f} m ahead, asked {p.distance_m:g} m")
+    if p.distance_m is not None:  # centre to centre, or from the anchor's front to the person (either reading)
+        gap = ahead - float(asize[0]) / 2.0 - float(after.size[row, 0]) / 2.0
+        v.require(_distance_ok(ahead, gap, p.distance_m, tol_frac=0.35, tol_min=4.0),
+                  f"crosses {ahead:.1f} m ahead (centres; {gap:.1f} m from the front), asked {p.distance_m:g} m")
     else:
         v.require(ahead > 0, "crosses behind the ego")
 

@@ -274,6 +274,26 @@ def test_a_person_on_the_corner_pavement_beside_a_right_turn_does_not_stop_it(wo
         _car(world, Behaviour(turn="right"), lane=1, speed=8.0, n=60, traffic=(standing_at(free.xy[k]),))
 
 
+def test_a_person_standing_beside_the_lane_does_not_stop_a_car_but_one_in_it_does(world) -> None:
+    """A person standing on the road 2.3 m off the car's lane centre (the edge of a crosswalk) leaves a car room
+    to pass; 0.5 m off it, the car stops short of them."""
+    layout = world["layout"]
+    start = layout.arm_point("W", layout.stopline_s("W") + 75.0, layout.lane_offset("W", True, 0))
+
+    def person_at(lateral: float) -> OtherAgent:
+        xy = start + np.array([30.0, lateral])  # the arm runs along +x from the ego's start
+        assert world["ctx"].facts(xy[None], np.zeros(1)).on_drivable[0]
+        return OtherAgent("ped", "a person", np.tile(xy, (80, 1)), np.zeros(80), np.ones(80, bool), PERSON)
+
+    free = _car(world, Behaviour(), before_stop_m=75.0, speed=10.0, n=80)
+    beside = _car(world, Behaviour(), before_stop_m=75.0, speed=10.0, n=80, traffic=(person_at(2.3),))
+    np.testing.assert_allclose(beside.xy, free.xy, atol=1e-6)
+    ahead = person_at(0.5)
+    held = _car(world, Behaviour(), before_stop_m=75.0, speed=10.0, n=80, traffic=(ahead,))
+    assert not footprints_overlap(held.xy, held.heading, CAR[:2], ahead.xy, ahead.heading, PERSON[:2]).any()
+    assert held.speed[-1] < 0.5  # nearly at rest short of them
+
+
 def test_a_slowed_car_keeps_the_gap_its_log_kept(world) -> None:
     """A car that in its log follows the car ahead closely (much closer than the planner's own headway) and is
     asked to go slower only drops back: it slows to the asked speed without braking below it, and stays at least
@@ -364,6 +384,20 @@ def test_pedestrian_crosses_at_the_crosswalk_or_jaywalks_away_from_it(world) -> 
     mid = layout.arm_point("W", 50.0, -kerb)
     straight = _person(world, Behaviour(jaywalk=True), mid, 0.0, n=250)
     assert abs(straight.xy[-1, 0] - mid[0]) < 0.5
+
+
+def test_a_crosswalk_out_of_reach_within_the_log_is_not_walked_to(world) -> None:
+    """Told to cross with 4 s left, a person 30 m from the nearest crosswalk crosses where it stands (it would
+    spend the whole log walking along the kerb); with a minute left it walks to the crosswalk."""
+    layout, ctx = world["layout"], world["ctx"]
+    kerb = layout.hw_h + 1.5
+    spot = layout.arm_point("W", layout.crosswalk_range("W")[1] + 30.0, -kerb)
+    short = _person(world, Behaviour(cross_street=True), spot, 0.0, n=40)
+    facts = ctx.facts(short.xy, short.heading)
+    assert facts.on_drivable.any() and not facts.in_crosswalk.any()
+    assert np.abs(short.xy[:, 0] - spot[0]).max() < 0.5  # straight across
+    long = _person(world, Behaviour(cross_street=True), spot, 0.0, n=600)
+    assert ctx.facts(long.xy, long.heading).in_crosswalk.sum() > 10
 
 
 def test_pedestrian_gaits_and_stops(world) -> None:

@@ -7,7 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simsplat_core.eval.editing.checks import check_refusal, check_states, measured_speed
+from simsplat_core.eval.editing.checks import Verdict, _check_crossing_spot, check_refusal, check_states, measured_speed
 from simsplat_core.eval.editing.intents import (
     EGO,
     AssetIntent,
@@ -349,3 +349,17 @@ def test_a_faster_walker_may_step_aside_only_to_pass_someone(truth, before) -> N
     assert passing.passed, passing.reason
     alone = check_states(truth, intent, _obs(*with_other_at(xy[peak] + 40.0 * left[peak])))
     assert not alone.passed and "leaves its path" in alone.reason
+
+
+def test_a_crossing_spot_is_measured_from_the_egos_centre_or_its_front(truth, before) -> None:
+    """"8 m in front of us, walking across the road": a person stepping onto the road 8 m past the ego's front
+    (12.5 m from its centre) crosses where asked; 25 m ahead does not."""
+    ego = truth.road_position(truth.ego_xy[0], float(truth.ego_heading[0]))
+    layout = truth.layout
+    placement = PlacementIntent("in_front_of", EGO, 8.0)
+    for centre_m, ok in ((12.5, True), (25.0, False)):
+        spot = layout.arm_point(ego.arm, ego.along - centre_m, 1.0)  # on the road, ahead of the ego
+        after = _insert(before, "new_0", "pedestrian", spot, 0.0, (0.6, 0.6, 1.7))
+        v = Verdict()
+        _check_crossing_spot(truth, placement, after.index("new_0"), after, v)
+        assert v.result().passed == ok, (centre_m, v.result().reason)
