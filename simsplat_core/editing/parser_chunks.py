@@ -144,7 +144,7 @@ def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Itera
         j = i + 2 if tokens[i + 1] == "id" else i + 1
         return j + 1 if j < n and any(c.isdigit() for c in tokens[j]) else i
     k = match(tokens, i, lex.EGO_WORDS)
-    if k and not head_noun(tokens, i + k):  # "the ego lane" is a lane
+    if k and (tokens[i] in ("us", "me") or not head_noun(tokens, i + k)):  # "the ego lane" is a lane; "us back up"
         return i + k
     j = i
     while True:  # determiners and counts

@@ -544,6 +544,9 @@ FAMILIES: list[tuple[str, list[dict[str, Any]]]] = [
     ("add a car next to the pedestrian turning left",
      [{"op": INS, AC: "vehicle", PR: "next_to", "placement.anchor.description": "the pedestrian",
        "behaviour.turn": "left"}]),
+    # "us" ends the noun phrase: "back up" after it is the verb
+    ("Make the red SUV ahead of us back up.",
+     [{"op": MOD, TD: "the red suv ahead of us", "behaviour.reverse": True}]),
     # "away from the crosswalk" is where not to cross (jaywalking), not how far ahead to put the person
     ("Insert a person wearing a white jacket crossing the street away from the crosswalk, 10 meters ahead.",
      [{"op": INS, AC: "pedestrian", PR: "in_front_of", "placement.distance_m": 10.0,
