@@ -23,8 +23,9 @@ parks in line with it, on the anchor's heading line, its whole box on the drivab
 road or a sidewalk (anywhere, on a map without sidewalks). A pedestrian about to cross the road
 (``crossing=True``) placed behind / in front of its anchor stands at the edge of the road beside that spot
 (within :data:`KERB_REACH_M`), facing across it. A box overlapping an agent at that frame is nudged along its
-lane (or heading) by up to :data:`NUDGE_M` (or :func:`distance_slack` of a given distance, when more; away from
-the anchor only when no distance is given); otherwise the placement is refused, naming the object in the way.
+lane (or heading) by up to :data:`NUDGE_M` (:data:`QUEUE_REACH_M` behind / in front of an anchor with no
+distance said; :func:`distance_slack` of a given distance, when more; away from the anchor first when no
+distance is given); otherwise the placement is refused, naming the object in the way.
 Refusals are ``EditRefused(reason="infeasible_placement")`` ("cannot place a car on the sidewalk", "no lane to
 the left of the white van").
 """
@@ -75,6 +76,9 @@ STANDING_MPS = 0.5
 #: Boxes are nudged by up to this much (in ``NUDGE_STEP_M`` steps) to clear another agent; clearance kept, m.
 NUDGE_M = 4.0
 NUDGE_STEP_M = 0.5
+#: ... or this much behind / in front of an anchor with no distance said: "behind the pickup" where a car
+#: already waits right behind it is behind that car.
+QUEUE_REACH_M = 10.0
 CLEARANCE_M = 0.3
 #: A said distance may be met this loosely (share of it, at least ``NUDGE_M``) when the exact spot is taken or
 #: is not of the asked kind of area.
@@ -519,7 +523,9 @@ def _clear(ctx: _Context, placed: PlacedPose, spot: _Spot, occupied: AgentStates
     assert occupied is not None
     first = occupied.object_ids[blocked[0]]
     what = f"{occupied.categories[blocked[0]]} {first!r}" if first != EGO_ID else "the ego vehicle"
-    limit = NUDGE_M if ctx.placement.distance_m is None else distance_slack(ctx.placement.distance_m)
+    unsaid_queue = ctx.placement.distance_m is None and spot.side in ("behind", "in_front_of")
+    limit = (QUEUE_REACH_M if unsaid_queue else NUDGE_M) if ctx.placement.distance_m is None else distance_slack(
+        ctx.placement.distance_m)
     steps = np.arange(NUDGE_STEP_M, limit + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
     # no distance said: away from the anchor first, then closer to it (still clear of it and on its side)
     away = {"behind": -1.0, "in_front_of": 1.0}.get(spot.side or "", 1.0) if ctx.placement.distance_m is None else 1.0

@@ -254,6 +254,18 @@ def test_a_car_in_line_with_a_parked_car_is_refused_off_the_road_or_where_taken(
     assert nudged.xy[1] == pytest.approx(parked.xy[1])
 
 
+def test_behind_an_anchor_with_a_car_queued_behind_it_is_behind_that_car(world) -> None:
+    """"Place a car behind the parked car" where another waits 2 m behind it: behind that one (no distance said);
+    "3 m behind" it is taken (the said distance cannot be met)."""
+    parked = _parked_anchor(world, 40.0)
+    spot = _place(world, Placement(relation="behind"), anchor=parked)
+    queued = _with_box(_ego_only(world), "car_9", "vehicle", spot.xy, 0.0, CAR)
+    behind = _place(world, Placement(relation="behind"), anchor=parked, occupied=queued)
+    assert "car_9" in behind.note and behind.xy[0] < spot.xy[0] - CAR[0]
+    _refused(world, Placement(relation="behind", distance_m=3.0), "the spot is taken by vehicle 'car_9'",
+             anchor=parked, occupied=queued)
+
+
 # ------------------------------------------------------------------------------------------ crossing pedestrians
 def test_a_pedestrian_about_to_cross_starts_at_the_road_edge(world) -> None:
     ctx = world["ctx"]
