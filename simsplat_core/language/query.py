@@ -58,7 +58,8 @@ the score of a candidate is the product of the scores of the signals the query u
 enables (each raised to its weight): read as the probability that every part matches, so one clearly
 failed part (a car that is not turning) sinks the whole match. A single-object
 query returns the best candidate when its score reaches ``no_match_threshold``, a group query ("all
-...", "every ...", plurals) every candidate at or above ``group_threshold``; otherwise the grounding is
+...", "every ...", plurals) every candidate at or above ``group_threshold`` (of those captioned the body style
+it names, when any is: "the pickup trucks" are not joined by a box truck); otherwise the grounding is
 empty and its message says which part found nothing ("no pedestrian in this scene is crossing") -- except
 that a single-object query naming a colour and a motion or location that no candidate fits takes the node
 whose caption names a neighbouring colour and fits the rest (``_nearest_colour``: the captioner names a
@@ -106,6 +107,7 @@ from simsplat_core.language.query_scoring import (
     motion_distribution,
     motion_score,
     scene_has_appearance,
+    subtype_fit,
 )
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import QUERY, EmbeddingCache, TextEncoder, l2_normalise
@@ -125,6 +127,17 @@ class _QueryVectors:
     motion: dict[str, float] | None  # merged motion class -> membership in [0, 1]
     sector: dict[str, float] | None
     context: dict[str, float] | None
+
+
+def _named_style_first(scene: LanguageScene, parsed: ParsedQuery, matches: tuple[NodeMatch, ...],
+                       config: QueryConfig) -> tuple[NodeMatch, ...]:
+    """A group query naming a body style ("the pickup trucks") takes the nodes captioned that style when there
+    are any: a related style ("truck", ``SUBTYPE_FIT`` 0.5) stands in only for a style no node has."""
+    if parsed.subtype is None:
+        return matches
+    named = tuple(m for m in matches if (cap := scene.node(m.node_id).caption) is not None
+                  and subtype_fit(parsed.subtype, cap.subtype, config) >= 1.0)
+    return named or matches
 
 
 class QueryEngine:
@@ -344,7 +357,8 @@ class QueryEngine:
         candidates = [m for m in ranking if m.candidate]
         cfg = self.config
         if parsed.group:
-            matches = tuple(m for m in candidates if m.score >= cfg.group_threshold)
+            matches = _named_style_first(scene, parsed, tuple(m for m in candidates if m.score >= cfg.group_threshold),
+                                         cfg)
         else:
             matches = tuple(candidates[:1]) if candidates and candidates[0].score >= cfg.no_match_threshold else ()
         if not cfg.scored_parts(parsed):

@@ -444,3 +444,21 @@ def test_a_single_query_whose_colour_is_read_as_its_neighbour_finds_the_object_t
     assert engine.ground(scene, "the blue car going straight").matches == ()
     assert engine.ground(scene, "all the silver cars going straight").matches == ()
     assert engine.ground(scene, "the silver car").matches[0].object_id == "silver_turning"
+
+
+def test_a_group_naming_a_body_style_takes_that_style_before_a_related_one(
+    encoder: TextEncoder, codebooks: MotionCodebooks, engine: QueryEngine
+) -> None:
+    """"Delete the pickup trucks": the two captioned pickups, not the box truck (a related style stands in only
+    where no node has the named one)."""
+    def parked(object_id: str, colour: str, style: str) -> ObjectSpec:
+        return ObjectSpec(object_id, "vehicle", vehicle_caption(colour, style),
+                          motion_label(object_id, voc.PARKED, voc.RIGHT_OF_EGO, voc.BY_THE_CURB))
+
+    pickups = [parked("red_pickup", "red", "pickup truck"), parked("white_pickup", "white", "pickup truck")]
+    scene = hand_built_scene([*pickups, parked("box_truck", "yellow", "truck"), parked("sedan", "blue", "sedan")],
+                             encoder, codebooks)
+    assert {m.object_id for m in engine.ground(scene, "the pickup trucks").matches} == {"red_pickup", "white_pickup"}
+    no_pickups = hand_built_scene([parked("box_truck", "yellow", "truck"), parked("sedan", "blue", "sedan")],
+                                  encoder, codebooks)
+    assert {m.object_id for m in engine.ground(no_pickups, "all the pickup trucks").matches} == {"box_truck"}
