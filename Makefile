@@ -27,6 +27,7 @@ install: $(STAMP)
 
 demo: $(STAMP)
 	$(VENV)/bin/simsplat run --store $(STORE) --sequences 2 --mine $(MINE) $(if $(ITERATIONS),--iterations $(ITERATIONS))
+	$(VENV)/bin/simsplat assets build --store $(STORE)
 	$(VENV)/bin/simsplat inspect $(STORE)/logs/synth-000000 --sheet $(STORE)/contact_sheet.png --frame 20
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --out $(STORE)/render_frame20.png
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --shift-left 1 \

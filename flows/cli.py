@@ -792,12 +792,7 @@ def eval_motion(
         raise typer.BadParameter(str(exc.args[0]) if exc.args else str(exc), param_hint="--predictor") from exc
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc), param_hint="--real") from exc
-    if as_json:
-        from dataclasses import asdict
-
-        typer.echo(json.dumps(asdict(result), default=float))
-        return
-    _print_motion(result)
+    _report(result, as_json, _print_motion)
 
 
 def _print_motion(result) -> None:

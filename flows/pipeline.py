@@ -344,8 +344,7 @@ def main_flow(
             grounding = evaluate_grounding_run.submit(store_root, evaluated, store_root, run_dir(run_id)).result()
             _publish_grounding_table(grounding)
     mined: list[MiningSummary] = []
-    to_mine = minable(language) if mining is not None else []
-    if mining is not None and to_mine:
+    if mining is not None and (to_mine := minable(language)):
         mined = mine_scenarios(store_root, to_mine, run_id, mining)
     result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans, mined)
     create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")

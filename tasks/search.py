@@ -21,8 +21,9 @@ import numpy as np
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.search_seeds import hit_variants
+from simsplat_core.scenario.agents import EGO_ID
 from simsplat_core.search.engine import SearchConfig, SearchHit
-from simsplat_core.search.frames import EGO_ID, log_frames
+from simsplat_core.search.frames import log_frames
 from simsplat_core.search.logs import SearchableLog, StoreSearch, search_logs
 from simsplat_core.viz.contact_sheet import bev_panel
 from simsplat_core.viz.grounding_view import grounding_picture

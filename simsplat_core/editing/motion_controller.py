@@ -436,8 +436,7 @@ def _crossing_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
         return _jaywalk_route(req, map_ctx)
     if map_ctx.crosswalks:
         start = req.start
-        near = min(min(float(np.linalg.norm(a - start.xy)), float(np.linalg.norm(b - start.xy)))
-                   for a, b in (crosswalk_ends(p) for p in map_ctx.crosswalks))
+        near = min(_crosswalk_distances(start.xy, map_ctx))
         on_one = -signed_polygon_distance(start.xy[None], list(map_ctx.crosswalks)).min() < 1.0
         speed = req.target_speed_mps if req.target_speed_mps else WALK_MPS
         left = float(req.times[-1] - req.times[start.step])
@@ -446,20 +445,25 @@ def _crossing_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
     return _jaywalk_route(req, map_ctx, keep_clear=False)
 
 
+def _crosswalk_distances(xy: np.ndarray, map_ctx: MapContext) -> list[float]:
+    """Per crosswalk of ``map_ctx``, the distance (m) from ``xy`` to its nearer end."""
+    return [min(float(np.linalg.norm(a - xy)), float(np.linalg.norm(b - xy)))
+            for a, b in (crosswalk_ends(p) for p in map_ctx.crosswalks)]
+
+
 def _crosswalk_route(req: PedestrianMotionRequest, map_ctx: MapContext) -> Route:
     """To the near end of the nearest crosswalk, across it and onto the far kerb."""
     start = req.start
     if not map_ctx.crosswalks:
         raise EditRefused(f"{req.label} cannot cross at a crosswalk: the map has none (ask to jaywalk instead)",
                           reason="infeasible_motion")
-    ends = [crosswalk_ends(p) for p in map_ctx.crosswalks]
-    dist = [min(np.linalg.norm(a - start.xy), np.linalg.norm(b - start.xy)) for a, b in ends]
+    dist = _crosswalk_distances(start.xy, map_ctx)
     k = int(np.argmin(dist))
     if dist[k] > CROSSWALK_REACH_M:
         raise EditRefused(f"{req.label} cannot cross at a crosswalk: the nearest is {dist[k]:.0f} m away "
                           f"(within {CROSSWALK_REACH_M:.0f} m needed; ask to jaywalk instead)",
                           reason="infeasible_motion")
-    a, b = ends[k]
+    a, b = crosswalk_ends(map_ctx.crosswalks[k])
     near, far = (a, b) if np.linalg.norm(a - start.xy) <= np.linalg.norm(b - start.xy) else (b, a)
     on_it = -signed_polygon_distance(start.xy[None], [map_ctx.crosswalks[k]])[0] < 1.0
     if on_it and np.dot(near - far, [np.cos(start.heading), np.sin(start.heading)]) > 0:

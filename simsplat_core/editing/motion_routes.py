@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.editing.speed_profile import SpeedCaps
-from simsplat_core.geometry import wrap_angle
 from simsplat_core.scenario.geometry import segment_distances
 from simsplat_core.scenario.lane_graph import LaneGraph, LanePath
 from simsplat_core.scenario.map_context import MapContext
@@ -269,7 +268,7 @@ def curvature_caps(route: Route, s_from: float, s_to: float, lateral_accel_mps2:
         return None
     s = np.arange(s_from, s_to + step_m, step_m)
     half = window_m / 2.0
-    kappa = np.abs(wrap_angle(route.heading(s + half) - route.heading(s - half))) / window_m
+    kappa = np.abs(route.heading(s + half) - route.heading(s - half)) / window_m
     v = np.sqrt(lateral_accel_mps2 / np.maximum(kappa, 1e-9))
     tight = v < 40.0
     if not tight.any():

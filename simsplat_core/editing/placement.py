@@ -523,9 +523,10 @@ def _clear(ctx: _Context, placed: PlacedPose, spot: _Spot, occupied: AgentStates
     assert occupied is not None
     first = occupied.object_ids[blocked[0]]
     what = f"{occupied.categories[blocked[0]]} {first!r}" if first != EGO_ID else "the ego vehicle"
-    unsaid_queue = ctx.placement.distance_m is None and spot.side in ("behind", "in_front_of")
-    limit = (QUEUE_REACH_M if unsaid_queue else NUDGE_M) if ctx.placement.distance_m is None else distance_slack(
-        ctx.placement.distance_m)
+    if ctx.placement.distance_m is not None:
+        limit = distance_slack(ctx.placement.distance_m)
+    else:
+        limit = QUEUE_REACH_M if spot.side in ("behind", "in_front_of") else NUDGE_M
     steps = np.arange(NUDGE_STEP_M, limit + NUDGE_STEP_M / 2.0, NUDGE_STEP_M)
     # no distance said: away from the anchor first, then closer to it (still clear of it and on its side)
     away = {"behind": -1.0, "in_front_of": 1.0}.get(spot.side or "", 1.0) if ctx.placement.distance_m is None else 1.0

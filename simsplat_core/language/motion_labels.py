@@ -276,6 +276,14 @@ def location_context(
     return voc.ON_THE_ROAD
 
 
+def motion_class(traj: ObjectTrajectory, ego_poses: np.ndarray, map_context: MapContext | None,
+                 thresholds: LabelThresholds) -> str:
+    """The motion class alone of ``label_trajectory`` (no sector or context: windows searched frame by frame)."""
+    if traj.kind == "pedestrian":
+        return pedestrian_motion(traj, ego_poses, map_context, thresholds)
+    return vehicle_motion(traj, map_context, thresholds)[0]
+
+
 def label_trajectory(
     traj: ObjectTrajectory,
     ego_poses: np.ndarray,

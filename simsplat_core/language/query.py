@@ -95,7 +95,7 @@ import numpy as np
 from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.query_config import QueryConfig
 from simsplat_core.language.query_lexicon import CONTEXT_KEYWORDS, SECTOR_KEYWORDS
-from simsplat_core.language.query_messages import grounding_message, no_images_message
+from simsplat_core.language.query_messages import grounding_message, nearest_colour_message, no_images_message
 from simsplat_core.language.query_parse import ParsedQuery, parse_query
 from simsplat_core.language.query_result import Grounding, NodeMatch
 from simsplat_core.language.query_scoring import (
@@ -363,17 +363,14 @@ class QueryEngine:
             matches = tuple(candidates[:1]) if candidates and candidates[0].score >= cfg.no_match_threshold else ()
         if not cfg.scored_parts(parsed):
             matches = ()
-        nearest = None if matches or parsed.group or not cfg.scored_parts(parsed) else self._nearest_colour(
-            scene, parsed, ranking)
+        nearest = None if matches or parsed.group else self._nearest_colour(scene, parsed, ranking)
         looks = looks_named(parsed)
         if cfg.use_appearance and looks and not scene_has_appearance(scene):
             matches = ()
             message = no_images_message(scene, looks)
         elif nearest is not None:
             matches = (nearest,)
-            node = scene.node(nearest.node_id)
-            message = (f"{nearest.object_id} (node {nearest.node_id}): {node.caption.text if node.caption else ''} "
-                       f"(no {parsed.subject()} fits the rest; this one's colour is the nearest)")
+            message = nearest_colour_message(scene, parsed, nearest)
         else:
             message = grounding_message(scene, parsed, ranking, matches, cfg)
         logger.debug("%s: %r -> %s (%s)", scene.seq_id, text, [m.node_id for m in matches], message)

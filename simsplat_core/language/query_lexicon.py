@@ -22,6 +22,9 @@ STATIONARY_CLASSES = (voc.PARKED, voc.STOPPED, voc.STANDING)
 
 #: Keyword priors: motion phrase regex -> the classes it names (``vocabulary.py`` names, "crossing" =
 #: any crossing); each query's prior is uniform over the named classes of the kinds it can refer to.
+#: Words that say whose lane or street a phrase means ("in *their* lane"), as a regex alternation.
+OWNER_WORDS = r"the|its|their|his|her"
+
 MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     (r"\bleft\b.*\bturn|\bturn\w*\b.*\bleft\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?left", (voc.TURNING_LEFT,)),
     (r"\bright\b.*\bturn|\bturn\w*\b.*\bright\b|(?:hang|swing|veer|bear|tak)\w* (?:a )?right", (voc.TURNING_RIGHT,)),
@@ -47,7 +50,7 @@ MOTION_KEYWORDS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ),
     (
         r"\bstopped\b|\bhalted\b|idling|queu|waiting|(?:standing still )?in traffic|\bstuck\b"
-        r"|sitting in (?:the|its|their|his|her) lane|in (?:its|the|their|his|her) lane",
+        rf"|(?:sitting )?in (?:{OWNER_WORDS}) lane",
         (voc.STOPPED, voc.STANDING),
     ),
     (r"\bparked\b|parking (?:spot|space|bay)", (voc.PARKED,)),

@@ -67,6 +67,14 @@ def grounding_message(
 
 
 
+def nearest_colour_message(scene: LanguageScene, parsed: ParsedQuery, match: NodeMatch) -> str:
+    """The message of a grounding that took a node of a neighbouring colour (``QueryEngine._nearest_colour``)."""
+    node = scene.node(match.node_id)
+    caption = node.caption.text if node.caption else ""
+    return (f"{match.object_id} (node {match.node_id}): {caption} (no {parsed.subject()} fits the rest; this one's "
+            "colour is the nearest)")
+
+
 def no_images_message(scene: LanguageScene, looks: str) -> str:
     """Why a query about looks (``looks``: "red, big") has no answer in a scene built without images."""
     return (f"{scene.seq_id} has no camera images: its objects' looks ({looks}) cannot be checked; "

@@ -43,6 +43,7 @@ import re
 from dataclasses import dataclass
 
 from simsplat_core.color_names import COLOR_NAMES
+from simsplat_core.language.query_lexicon import OWNER_WORDS
 from simsplat_core.scenario import vocabulary as voc
 
 # ---------------------------------------------------------------------------------------------- lexicons
@@ -250,7 +251,7 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("context", 1, r"(?:in (?:the|a) lane )?(?:driving|coming|heading|moving|going|travelling|traveling|approaching)"
                    r" towards? (?:us|me|ego|our car)"),
     ("context", 1, r"(?:approaching )?from the opposite direction"),
-    ("context", 1, r"(?:on|in|out on|along|down) (?:the |a |its |their |his |her )?"
+    ("context", 1, rf"(?:on|in|out on|along|down) (?:(?:a|{OWNER_WORDS}) )?"
                    r"(?:road|street|travel lane|lane|roadway|carriageway)"),
     ("sector", 1, r"(?:(?:on|to|at|off|in) (?:the |my |our |your )?)" + _SIDE
                   + r"(?:[- ]hand)?(?: side)?(?: lane)?(?: of (?:" + _EGO_ALT + r"|the (?:road|street)))?"),
@@ -274,7 +275,7 @@ _PATTERNS: tuple[tuple[str, int, str], ...] = (
     ("motion", 1, r"(?:(?:just |stuck )?(?:stopped|halted|idling|queuing|queueing|stationary|at a standstill"
                   r"|not moving|not going anywhere|standing still|sitting still|motionless|sitting|waiting)(?: around)?"
                   r"(?: to cross| at the (?:light|lights|red light|signal|stop line)"
-                  r"| in (?:the |its |their |his |her )?(?:lane|traffic|line|queue))?)"),
+                  rf"| in (?:(?:{OWNER_WORDS}) )?(?:lane|traffic|line|queue))?)"),
     ("motion", 1, r"(?:sitting )?parked(?: up)?|sitting in a parking (?:spot|space|bay)"),
     ("motion", 1, r"reversing|reverses|backing (?:up|out)|backs (?:up|out)|in reverse(?: gear)?"
                   r"|(?:driving|going|moving) backwards?"),

@@ -15,9 +15,9 @@ from __future__ import annotations
 from collections.abc import Iterable, Mapping
 
 from simsplat_core.mining.rule_proposals import Proposal
+from simsplat_core.scenario.agents import EGO_ID
 from simsplat_core.scenario.vocabulary import PEDESTRIAN, VEHICLE
 from simsplat_core.search.engine import SearchHit
-from simsplat_core.search.frames import EGO_ID
 
 #: ``(wording, edit category, safety critical)`` per agent kind, most telling first; ``{id}`` is the object id.
 VARIANTS: dict[str, tuple[tuple[str, str, bool], ...]] = {

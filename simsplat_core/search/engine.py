@@ -43,8 +43,9 @@ from simsplat_core.language.query_lexicon import CROSSING_CLASSES
 from simsplat_core.language.query_scoring import attribute_fit
 from simsplat_core.language.scene_language import NodeLanguage
 from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.agents import EGO_ID
 from simsplat_core.search.describe import BESIDE, FOLLOWING, LEADING, AgentClause, SearchQuery, parse_description
-from simsplat_core.search.frames import EGO_ID, ObjectFrames
+from simsplat_core.search.frames import ObjectFrames
 from simsplat_core.search.windows import frame_windows
 
 logger = logging.getLogger(__name__)
@@ -113,7 +114,7 @@ def _motion_ok(clause: AgentClause, of: ObjectFrames) -> np.ndarray:
     names = set(clause.motions)
     if voc.CROSSING in names:
         names |= set(CROSSING_CLASSES)
-    ok = np.array([m in names for m in of.motion], dtype=bool)
+    ok = np.isin(of.motion, list(names))
     if clause.crossing_direction and of.kind == voc.PEDESTRIAN:
         left_to_right = clause.crossing_direction == "left_to_right"
         wanted = voc.CROSSING_LEFT_TO_RIGHT if left_to_right else voc.CROSSING_RIGHT_TO_LEFT

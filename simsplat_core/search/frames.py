@@ -2,7 +2,7 @@
 
 For each object and log frame (``-1`` / ``False`` where the object is absent):
 
-* ``motion``: the auto-labeller's motion class (``language.motion_labels.label_trajectory``) of the
+* ``motion``: the auto-labeller's motion class (``language.motion_labels.motion_class``) of the
   trajectory window of ``±half_window_s`` around the frame, so a car that turns only in frames 20-35 is
   ``turning_*`` there and ``going_straight`` elsewhere. Windows use ``WINDOW_THRESHOLDS`` (a turn of a
   2 s window needs 30 degrees, not the whole log's 45);
@@ -28,11 +28,12 @@ import numpy as np
 from simsplat_core.geometry import wrap_angle
 from simsplat_core.language.motion_labels import (
     LabelThresholds,
-    label_trajectory,
     location_sector,
+    motion_class,
     vehicle_off_lane,
 )
 from simsplat_core.scenario import vocabulary as voc
+from simsplat_core.scenario.agents import EGO_ID
 from simsplat_core.scenario.geometry import segment_distances
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.trajectory import (
@@ -48,8 +49,6 @@ from simsplat_core.types import SceneLog
 WINDOW_THRESHOLDS = LabelThresholds(turn_deg=30.0, lane_change_m=1.0)
 #: Context classes, the column order of ``ObjectFrames.contexts``.
 CONTEXTS: tuple[str, ...] = voc.LOCATION_CONTEXT.names
-#: Object id of the ego in ``log_frames`` (no log object has it).
-EGO_ID = "ego"
 #: How far ahead the ego's path is followed, metres.
 EGO_PATH_M = 60.0
 
@@ -155,7 +154,7 @@ def _window_motion(traj: ObjectTrajectory, ego_poses: np.ndarray, map_context: M
         frac = (rows.stop - rows.start) / size
         th = WINDOW_THRESHOLDS if frac >= 1.0 else replace(
             WINDOW_THRESHOLDS, turn_deg=WINDOW_THRESHOLDS.turn_deg * max(frac, 0.5))
-        out[row] = label_trajectory(traj.window(rows), ego_poses, map_context, th).motion
+        out[row] = motion_class(traj.window(rows), ego_poses, map_context, th)
     return mark_halts(out, traj.speed) if traj.kind == voc.VEHICLE else out
 
 

@@ -5,13 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 
-def frame_windows(truth: np.ndarray, frames: np.ndarray | None = None, min_frames: int = 3,
-                  max_gap: int = 2) -> list[tuple[int, int]]:
+def frame_windows(truth: np.ndarray, min_frames: int = 3, max_gap: int = 2) -> list[tuple[int, int]]:
     """Windows of consecutive true frames.
 
     Args:
-        truth: ``[F]`` bool, one entry per log frame (row ``i`` is frame ``frames[i]``).
-        frames: ``[F]`` frame indices (``arange(F)`` when omitted).
+        truth: ``[F]`` bool, one entry per log frame.
         min_frames: windows shorter than this are dropped (a one-frame blip of a label is noise).
         max_gap: false runs of at most this many frames between two true runs are bridged first.
 
@@ -19,14 +17,13 @@ def frame_windows(truth: np.ndarray, frames: np.ndarray | None = None, min_frame
         ``[(first frame, last frame), ...]`` in frame order.
     """
     truth = np.asarray(truth, dtype=bool)
-    frames = np.arange(truth.shape[0]) if frames is None else np.asarray(frames)
     runs: list[list[int]] = []
     for i in np.flatnonzero(truth):
         if runs and i - runs[-1][1] <= max_gap + 1:
             runs[-1][1] = int(i)
         else:
             runs.append([int(i), int(i)])
-    return [(int(frames[a]), int(frames[b])) for a, b in runs if b - a + 1 >= min_frames]
+    return [(a, b) for a, b in runs if b - a + 1 >= min_frames]
 
 
 def covered(windows: list[tuple[int, int]], num_frames: int) -> np.ndarray:

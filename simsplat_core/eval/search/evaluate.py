@@ -35,8 +35,8 @@ def evaluate_queries(items: list[SearchableLog], queries: tuple[QueryCase, ...] 
     for case in queries:
         found = search_logs(items, case.text)
         truth = [query_truth(w, case.truth) for w in worlds]
-        by_seq = {r.seq_id: r for r in found.results}
-        predicted = [covered([h.window for h in by_seq[i.log.seq_id].hits], i.log.num_frames) for i in items]
+        # results come in the order of ``items`` (two stores may both hold a synth-000000)
+        predicted = [covered([h.window for h in r.hits], i.log.num_frames) for i, r in zip(items, found.results)]
         rows.append({
             "query": case.text,
             "negative": not any(t.any() for t in truth),

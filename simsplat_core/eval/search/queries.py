@@ -68,7 +68,7 @@ QUERIES: tuple[QueryCase, ...] = (
     # turning ego swept over oncoming parked cars for 2 frames in 2 logs before the ego lane followed the route)
     QueryCase("a stopped vehicle blocking our lane", (_v(behaviors=STILL_VEHICLE, phase="still", in_ego_lane=True),),
               negative=True),
-    QueryCase("the ego lane blocked by a parked truck", (_v(subtypes=("truck", "pickup truck"),
+    QueryCase("the ego lane blocked by a parked truck", (_v(subtypes=TRUCK,
                                                             behaviors=STILL_VEHICLE, phase="still",
                                                             in_ego_lane=True),)),
     QueryCase("a vehicle stopped on the crosswalk", (_v(phase="still", place="crosswalk"),)),
