@@ -5,7 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.motion.corridor import box_extents, group_min, in_corridor, nearest_ahead, nearest_behind, route_pairs
+from simsplat_core.motion.corridor import (
+    box_extents,
+    group_min,
+    in_corridor,
+    nearest_ahead,
+    nearest_behind,
+    route_pairs,
+)
 from simsplat_core.motion.route_grid import RouteGrid
 from simsplat_core.scenario.path import Path
 

@@ -47,7 +47,8 @@ def test_project_points_gives_arc_length_and_left_positive_offset() -> None:
 
 
 def test_agents_that_cannot_be_driven_are_named_with_the_reason() -> None:
-    reversing = {"xy": np.stack([20.0 - 3.0 * TIMES, np.zeros(T)], 1), "heading": np.zeros(T), "speed": np.full(T, -3.0)}
+    reversing = {"xy": np.stack([20.0 - 3.0 * TIMES, np.zeros(T)], 1), "heading": np.zeros(T),
+                 "speed": np.full(T, -3.0)}  # backs up at 3 m/s facing +x
     plan = _plan([("cone", "static", track(np.full(T, 30.0), -2.5), (0.4, 0.4, 0.7)),
                   ("late", "vehicle", track(10.0 * TIMES, 0.0), CAR),
                   ("gone", "vehicle", track(10.0 * TIMES, 3.5), CAR),

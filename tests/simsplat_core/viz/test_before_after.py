@@ -5,8 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.viz.before_after import GAP, LABEL_H, OUTLINE, FramePair, before_after_picture, pick_views, \
-    sample_steps
+from simsplat_core.viz.before_after import (
+    GAP,
+    LABEL_H,
+    OUTLINE,
+    FramePair,
+    before_after_picture,
+    pick_views,
+    sample_steps,
+)
 
 
 def test_sample_steps_spans_the_active_steps() -> None:
