@@ -25,3 +25,12 @@ def straight_agents(ids: tuple[str, ...], sources: tuple[str, ...], starts: list
 def color_mask(image: np.ndarray, color: tuple[int, int, int]) -> np.ndarray:
     """``[H, W]`` bool: pixels of exactly ``color``."""
     return np.all(image == np.array(color, np.uint8), axis=-1)
+
+
+def assert_tinted(pixel: np.ndarray, color: tuple[int, int, int], background: float) -> None:
+    """``pixel [3]`` is ``color`` anti-aliased over a grey ``background``: ``background + alpha (color -
+    background)`` with most of the colour (``alpha > 0.5``)."""
+    got = np.asarray(pixel, float) - background
+    want = np.asarray(color, float) - background
+    alpha = got @ want / (want @ want)
+    assert alpha > 0.5 and np.abs(got - alpha * want).max() < 6.0, (pixel, color)
