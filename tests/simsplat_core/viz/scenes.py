@@ -22,7 +22,7 @@ def straight_agents(ids: tuple[str, ...], sources: tuple[str, ...], starts: list
                        valid=np.ones((n, T), bool))
 
 
-def color_mask(image: np.ndarray, color: tuple[int, int, int]) -> np.ndarray:
+def color_mask(image: np.ndarray, color: tuple[int, ...]) -> np.ndarray:
     """``[H, W]`` bool: pixels of exactly ``color``."""
     return np.all(image == np.array(color, np.uint8), axis=-1)
 

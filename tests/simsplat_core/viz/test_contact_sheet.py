@@ -6,6 +6,8 @@ world -z), focal length 100 px, principal point (120, 80) of a 240 x 160 image.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import pytest
 
@@ -30,7 +32,7 @@ def _camera(name: str, frame: int = 0, image: np.ndarray | None = None) -> Camer
     return CameraImage(frame, frame * 100_000, name, K, CAM_TO_WORLD, W, H, image)
 
 
-def _log(objects: list[tuple[str, str, tuple[float, float, float]]] = (), *, ego_poses: np.ndarray | None = None,
+def _log(objects: Sequence[tuple[str, str, tuple[float, float, float]]] = (), *, ego_poses: np.ndarray | None = None,
          images: tuple[CameraImage, ...] | None = None) -> SceneLog:
     """Standing objects ``(id, category, centre)`` of size 4 x 2 x 1.6 m heading +x, present in every frame."""
     tracks = tuple(Track(oid, np.arange(F), np.tile(center, (F, 1)), np.tile([4.0, 2.0, 1.6], (F, 1)), np.zeros(F),
@@ -43,7 +45,8 @@ def _log(objects: list[tuple[str, str, tuple[float, float, float]]] = (), *, ego
 
 def _diff(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(rows, cols)`` of the pixels that differ."""
-    return np.nonzero(np.any(a != b, axis=-1))
+    rows, cols = np.nonzero(np.any(a != b, axis=-1))
+    return rows, cols
 
 
 def test_a_box_ahead_is_drawn_where_it_projects() -> None:

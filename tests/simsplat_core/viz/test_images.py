@@ -22,7 +22,9 @@ def test_png_round_trip_keeps_rgb_order() -> None:
     rgb[2, 3] = (0, 0, 255)  # one blue pixel
     data = encode_png(rgb)
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    back = cv2.cvtColor(cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+    decoded = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
+    assert decoded is not None
+    back = cv2.cvtColor(decoded, cv2.COLOR_BGR2RGB)
     np.testing.assert_array_equal(back, rgb)
 
 

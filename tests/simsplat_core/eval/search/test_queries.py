@@ -18,7 +18,8 @@ SECTORS = frozenset({"", "front", "behind", "left", "right"})
 
 def _specs(case: QueryCase) -> list[AgentSpec]:
     out = []
-    for spec in case.truth:
+    for first in case.truth:
+        spec: AgentSpec | None = first
         while spec is not None:
             out.append(spec)
             spec = spec.following

@@ -147,11 +147,13 @@ def test_count_and_together() -> None:
     w = _world([{"category": "pedestrian", "xy": (0.0, 0.0), "speed": walking},
                 {"category": "pedestrian", "xy": (0.0, 2.0), "speed": np.array([1.0, 0.0, 0.0])},
                 {"category": "pedestrian", "xy": (20.0, 0.0), "speed": np.array([1.0, 1.0, 1.0])}], 3)
-    spec = dict(categories=("pedestrian",), phase="move")
-    assert query_truth(w, (AgentSpec(**spec, count=2),)).tolist() == [True, True, False]  # any two at once
-    assert query_truth(w, (AgentSpec(**spec, count=3),)).tolist() == [True, False, False]
+    def walkers(count: int, together: bool = False) -> AgentSpec:
+        return AgentSpec(categories=("pedestrian",), phase="move", count=count, together=together)
+
+    assert query_truth(w, (walkers(2),)).tolist() == [True, True, False]  # any two at once
+    assert query_truth(w, (walkers(3),)).tolist() == [True, False, False]
     # together: only the side-by-side pair counts, and only while both walk
-    assert query_truth(w, (AgentSpec(**spec, count=2, together=True),)).tolist() == [True, False, False]
+    assert query_truth(w, (walkers(2, together=True),)).tolist() == [True, False, False]
 
 
 def test_route_coordinates_bend_with_the_ego_route() -> None:
