@@ -15,7 +15,7 @@ from tests.simsplat_core.viz.scenes import T, color_mask, straight_agents
 SIZE = 120
 
 
-def _scenario():
+def _scenario() -> tuple[AgentStates, AgentStates]:
     """The ego on y = 0 and a car on y = -6 (to the ego's right), both eastbound; the car reacts (refined) by
     stopping at step 5."""
     before = straight_agents(("ego", "car"), ("log", "log"), [(0.0, 0.0), (5.0, -6.0)])
