@@ -1000,17 +1000,17 @@ def ingest(
                      "~6 GB of RAM)."),
     ] = None,
 ) -> None:
-    """Decode a real driving log of SOURCE at PATH into OUT/logs/<seq_id>/, e.g. ``simsplat ingest av2 LOG_DIR
-    --out DIR`` or ``simsplat ingest auto PATH --out DIR``."""
+    """Decode a real driving log of SOURCE at PATH into OUT/logs/<seq_id>/, e.g. simsplat ingest av2 LOG_DIR
+    --out DIR, or simsplat ingest auto PATH --out DIR."""
     from flows.pipeline import ingest_flow
-    from simsplat_core.data.registry import UnknownLogSourceError, resolve_source
+    from simsplat_core.data.registry import AUTO_SOURCE, UnknownLogSourceError, resolve_source
 
     if not path.exists():
         raise typer.BadParameter(f"{path} does not exist", param_hint="PATH")
     try:
         chosen = resolve_source(source, path)
     except UnknownLogSourceError as exc:
-        raise typer.BadParameter(str(exc), param_hint="SOURCE") from exc
+        raise typer.BadParameter(str(exc), param_hint="PATH" if source == AUTO_SOURCE else "SOURCE") from exc
     scales = "image_scale" in chosen.options
     if image_scale is not None and not scales:
         raise typer.BadParameter(f"log source {chosen.name!r} has no camera images to scale",
