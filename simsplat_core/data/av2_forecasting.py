@@ -35,6 +35,7 @@ from __future__ import annotations
 import json
 import logging
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -86,10 +87,31 @@ TRACK_CATEGORIES: tuple[str, ...] = ("fragment", "unscored", "scored", "focal")
 END_TOLERANCE_NS = 1_000_000
 #: Map kinds whose vertices give the ground height.
 _GROUND_KINDS = frozenset({"lane", "crosswalk", "drivable_area"})
-#: Scenario-level columns (one value per file) and their readers' type groups.
+#: Scenario-level columns (one value per file) by type.
 _SCENARIO_STR = ("scenario_id", "focal_track_id", "city", "slice_id")
 _SCENARIO_FLOAT = ("start_timestamp", "end_timestamp")
 _SCENARIO_INT = ("num_timestamps", "map_id")
+
+
+@dataclass(frozen=True)
+class ScenarioHeader:
+    """The scenario-level columns of a scenario Parquet (the same value in every row).
+
+    Attributes:
+        scenario_id, focal_track_id, city, slice_id: as in the file.
+        start_ns, end_ns: ``start_timestamp`` / ``end_timestamp``, nanoseconds.
+        num_timestamps: steps of the scenario.
+        map_id: the map's id.
+    """
+
+    scenario_id: str
+    focal_track_id: str
+    city: str
+    slice_id: str
+    start_ns: float
+    end_ns: float
+    num_timestamps: int
+    map_id: int
 
 
 def scenario_parquet(path: Path) -> Path | None:
@@ -125,7 +147,7 @@ def _single_value(path: Path, name: str, values: np.ndarray) -> object:
     return distinct[0]
 
 
-def _read_scenario(path: Path) -> tuple[dict[str, np.ndarray], dict[str, object]]:
+def _read_scenario(path: Path) -> tuple[dict[str, np.ndarray], ScenarioHeader]:
     """Per-row columns (``[N]`` each) and the scenario-level values of a scenario Parquet."""
     cols = read_columns(
         path,
@@ -137,17 +159,23 @@ def _read_scenario(path: Path) -> tuple[dict[str, np.ndarray], dict[str, object]
     )
     if cols["track_id"].size == 0:
         raise CorruptLogError(path, "column 'track_id'", "no rows")
-    scenario = {name: _single_value(path, name, cols[name]) for name in (*_SCENARIO_STR, *_SCENARIO_FLOAT,
-                                                                          *_SCENARIO_INT)}
-    return cols, scenario
+    one = {name: _single_value(path, name, cols[name]) for name in (*_SCENARIO_STR, *_SCENARIO_FLOAT, *_SCENARIO_INT)}
+    header = ScenarioHeader(
+        **{name: str(one[name]) for name in _SCENARIO_STR},
+        start_ns=float(cols["start_timestamp"][0]),
+        end_ns=float(cols["end_timestamp"][0]),
+        num_timestamps=int(cols["num_timestamps"][0]),
+        map_id=int(cols["map_id"][0]),
+    )
+    return cols, header
 
 
-def _timestamps_us(path: Path, cols: dict[str, np.ndarray], scenario: dict[str, object]) -> np.ndarray:
+def _timestamps_us(path: Path, cols: dict[str, np.ndarray], scenario: ScenarioHeader) -> np.ndarray:
     """``[S]`` int64 step timestamps; checks ``num_timestamps``, ``end_timestamp`` and every ``timestep``."""
-    steps = int(scenario["num_timestamps"])  # type: ignore[call-overload]
+    steps = scenario.num_timestamps
     if steps < 2:
         raise CorruptLogError(path, "column 'num_timestamps'", f"{steps} steps; a scenario needs at least 2")
-    start_ns, end_ns = float(scenario["start_timestamp"]), float(scenario["end_timestamp"])  # type: ignore[arg-type]
+    start_ns, end_ns = scenario.start_ns, scenario.end_ns
     expected_end = start_ns + (steps - 1) * STEP_US * 1000.0
     if abs(end_ns - expected_end) > END_TOLERANCE_NS:
         raise CorruptLogError(
@@ -292,7 +320,7 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
         raise CorruptLogError(
             parquet, "column 'track_id'", f"the ego track {EGO_TRACK_ID!r} has {have} of {timestamps_us.size} steps"
         )
-    focal = str(scenario["focal_track_id"])
+    focal = scenario.focal_track_id
     if focal not in by_track:
         raise CorruptLogError(parquet, "column 'focal_track_id'", f"focal track {focal!r} has no rows")
 
@@ -315,10 +343,10 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
     metadata = {
         "source_file": str(parquet),
         "map_file": map_path.name,
-        "scenario_id": str(scenario["scenario_id"]),
-        "city_name": str(scenario["city"]),
-        "map_id": str(scenario["map_id"]),
-        "slice_id": str(scenario["slice_id"]),
+        "scenario_id": scenario.scenario_id,
+        "city_name": scenario.city,
+        "map_id": str(scenario.map_id),
+        "slice_id": scenario.slice_id,
         "focal_track_id": focal,
         "scored_track_ids": json.dumps(scored),
         "current_time_index": str(int(observed_steps.max())) if observed_steps.size else "-1",
@@ -330,7 +358,7 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
         LANE_SUCCESSORS_KEY: json.dumps(successors, sort_keys=True),
     }
     log = SceneLog(
-        seq_id=seq_id if seq_id is not None else safe_seq_id(str(scenario["scenario_id"])),
+        seq_id=seq_id if seq_id is not None else safe_seq_id(scenario.scenario_id),
         source=FORECASTING_SOURCE,
         timestamps_us=timestamps_us,
         ego_poses=ego_poses,
@@ -343,7 +371,7 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
     logger.info(
         "loaded %s: scenario %s, %d steps, %d objects, %d map features in %.2f s",
         parquet,
-        scenario["scenario_id"],
+        scenario.scenario_id,
         log.num_frames,
         len(log.objects),
         len(log.map_features),
