@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from prefect import task
 from prefect.cache_policies import NO_CACHE
@@ -121,7 +122,7 @@ def ingest_real_log(store_root: str, source: str, path: str, image_scale: float 
 
     started = time.perf_counter()
     chosen = resolve_source(source, path)
-    options = {"image_scale": image_scale} if "image_scale" in chosen.options else {}
+    options: dict[str, Any] = {"image_scale": image_scale} if "image_scale" in chosen.options else {}
     if not options and image_scale != 1.0:
         raise ValueError(f"log source {chosen.name!r} has no images to scale (image_scale {image_scale})")
     log = load_log(chosen.name, Path(path), **options)
