@@ -41,6 +41,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.language.alignment.feature_field import (
+    FeatureFitConfig,
+    feature_views,
+    fit_feature_field,
+    gaussian_features,
+    node_mean_features,
+)
+from simsplat_core.language.alignment.motion_training import MotionAligner
 from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
 from simsplat_core.language.appearance.captioner import AppearanceCaption, appearance_vocabulary
 from simsplat_core.language.appearance.crops import ObjectCrop
@@ -51,14 +59,6 @@ from simsplat_core.language.appearance.embedders import (
     aggregate_views,
     appearance_embedder,
 )
-from simsplat_core.language.feature_field import (
-    FeatureFitConfig,
-    feature_views,
-    fit_feature_field,
-    gaussian_features,
-    node_mean_features,
-)
-from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
 from simsplat_core.language.node_masks import (
     NodeIdMaps,
     NodeObject,
@@ -67,7 +67,7 @@ from simsplat_core.language.node_masks import (
     node_objects,
     render_node_id_maps,
 )
-from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
+from simsplat_core.language.scene_language import LanguageScene, NodeLanguage, ObjectMotionFeatures
 from simsplat_core.language.text import TextEncoder, l2_normalise
 from simsplat_core.render.types import BACKENDS
 from simsplat_core.scenario.trajectory import agent_kind
