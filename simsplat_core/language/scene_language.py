@@ -2,8 +2,10 @@
 
 ``LanguageScene`` is the contract between the alignment stage (which builds it from a scene graph, its
 log and the trained models) and the ``QueryEngine`` / grounding benchmark (which only read it). It holds
-per object node the language features of SIMSplat Sec. 3.2 and, per frame and camera, the node-id maps
-rendered from the scene's Gaussians, from which every per-frame pixel mask is cut.
+per object node the language features of SIMSplat Sec. 3.2 (``NodeLanguage``; its motion and location part,
+``ObjectMotionFeatures``, is what ``alignment.motion_training.MotionAligner.features`` returns) and, per frame
+and camera, the node-id maps rendered from the scene's Gaussians, from which every per-frame pixel mask is cut.
+Both ``language.alignment`` and ``language.grounding`` import this module; it imports neither.
 
 Shapes: ``D`` is the text space's width (384 for E5), ``F`` frames, ``C`` cameras, ``H x W`` pixels.
 
