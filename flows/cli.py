@@ -108,7 +108,7 @@ def _print_stages(stages, only: tuple[str, ...] | None = None) -> None:
 
 def _alignment_config(captioner: str):
     """The validated ``AlignmentConfig`` of ``--captioner`` (a VLM endpoint is checked now, not after hours)."""
-    from simsplat_core.language.scene_builder import AlignmentConfig, AlignmentConfigError
+    from simsplat_core.language.alignment.scene_builder import AlignmentConfig, AlignmentConfigError
     from simsplat_core.vlm import OpenAIChatConfig, VLMError
 
     try:

@@ -53,9 +53,9 @@ from simsplat_core.editing.parser import parse_prompt
 from simsplat_core.editing.reaction import react
 from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
 from simsplat_core.editing.room import ROOM_SHIFTS, changed_rows, searches_room, traffic_copes
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
+from simsplat_core.language.grounding.static_location import with_static_locations
 from simsplat_core.language.scene_language import LanguageScene
-from simsplat_core.language.static_location import with_static_locations
 from simsplat_core.motion.motion_map import motion_map_of
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor
 from simsplat_core.motion.registry import default_predictor
@@ -80,7 +80,7 @@ class EditContext:
         log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
         graph: the stored scene graph.
         language: the graph's language scene (what grounding reads), static objects' sectors filled in from the
-            log (``language.static_location``).
+            log (``language.grounding.static_location``).
         engine: the grounding engine (its text encoder also retrieves assets and parses prompts).
         bank: the asset bank (``None``: inserts and replacements are refused, naming ``simsplat assets build``).
         lanes: the log's lane graph.

@@ -31,7 +31,7 @@ from simsplat_core.editing.parser_predicate import INTENT_FIELDS, PredicateParse
 from simsplat_core.editing.parser_semantic import nearest_intent
 from simsplat_core.editing.parser_text import number_word
 from simsplat_core.editing.result import EditRefused
-from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS, parse_query
+from simsplat_core.language.grounding.parse import COLOR_SYNONYMS, NOUNS, parse_query
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 
 INDEFINITE = ("a", "an", "another", "some", "one more")

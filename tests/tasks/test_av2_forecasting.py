@@ -12,7 +12,7 @@ import pytest
 from simsplat_core.data.registry import UnknownLogSourceError
 from simsplat_core.eval.refinement.real import real_rows, scenario_of_log
 from simsplat_core.eval.refinement.real_edits import evaluate_real_edits
-from simsplat_core.language.motion_training import MotionAlignerConfig
+from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.motion.registry import make_predictor
 from storage import ArtifactStore, read_scene_log
 from tasks.align import align_scene, train_motion_aligner

@@ -6,7 +6,7 @@ Moving objects get their location (sector and map context) from the trajectory a
 distribution: the share of the steps at which it is within ``SIGHT_M`` of the ego (all its steps when it
 never is) spent in each ``LOCATION_SECTOR`` class (``motion_labels.location_sector``, the labeller's
 thresholds). It is derived from the log's geometry whenever a language scene meets its log (it is not
-stored), and ``query_scoring.location_score`` reads it for nodes without motion features.
+stored), and ``scoring.location_score`` reads it for nodes without motion features.
 
     scene = with_static_locations(scene, states)      # states: AgentStates of the scene's log
 """

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.language.query_parse import ParsedQuery
+from simsplat_core.language.grounding.parse import ParsedQuery
 from simsplat_core.language.scene_language import LanguageScene
 
 

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.static_location import SIGHT_M, sector_shares, with_static_locations
+from simsplat_core.language.grounding.engine import QueryEngine
+from simsplat_core.language.grounding.static_location import SIGHT_M, sector_shares, with_static_locations
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from tests.simsplat_core.language.language_scene_factory import ObjectSpec, hand_built_scene, vehicle_caption

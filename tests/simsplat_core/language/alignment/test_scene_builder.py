@@ -7,15 +7,15 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
-from simsplat_core.language.feature_field import background_latent, gaussian_features
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
-from simsplat_core.language.scene_builder import (
+from simsplat_core.language.alignment.feature_field import background_latent, gaussian_features
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.alignment.scene_builder import (
     AlignmentConfig,
     AlignmentConfigError,
     BuiltLanguageScene,
     build_language_scene,
 )
+from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.scene import SceneGraph
 from simsplat_core.types import SceneLog
@@ -155,8 +155,8 @@ def test_config_errors_name_the_field(field: str, value) -> None:
 
 
 def test_small_objects_fall_back_to_smaller_crops() -> None:
+    from simsplat_core.language.alignment.scene_builder import _select_crops
     from simsplat_core.language.appearance.crops import ObjectCrop
-    from simsplat_core.language.scene_builder import _select_crops
 
     def crop(oid: str, area: int) -> ObjectCrop:
         mask = np.zeros((10, 20), bool)

@@ -7,7 +7,7 @@
 * appearance: colour names people use interchangeably (``SIMILAR_COLORS``) and the caption subtypes a
   named subtype also fits (``SUBTYPE_FIT``).
 
-Class names are ``vocabulary.py``'s; ``query_scoring`` turns these tables into keyword priors and
+Class names are ``vocabulary.py``'s; ``scoring`` turns these tables into keyword priors and
 attribute factors.
 """
 

@@ -9,14 +9,15 @@ import numpy as np
 import pytest
 
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log, node_ids_of
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_config import QueryConfig
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.world import generate_log
+from tests.simsplat_core.language.grounding.look_alikes import ID, SPECS, ids
 from tests.simsplat_core.language.language_scene_factory import (
     SMALL_WORLD,
     ObjectSpec,
@@ -24,7 +25,6 @@ from tests.simsplat_core.language.language_scene_factory import (
     motion_label,
     vehicle_caption,
 )
-from tests.simsplat_core.language.look_alikes import ID, SPECS, ids
 
 
 @pytest.fixture(scope="module")

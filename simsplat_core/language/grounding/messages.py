@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from simsplat_core.language.query_config import QueryConfig
-from simsplat_core.language.query_parse import ParsedQuery
-from simsplat_core.language.query_result import NodeMatch
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.parse import ParsedQuery
+from simsplat_core.language.grounding.result import NodeMatch
 from simsplat_core.language.scene_language import LanguageScene
 
 

@@ -7,7 +7,7 @@
     engine.ground(scene, "all crossing pedestrians").node_ids      # every crossing pedestrian
     engine.ground(scene, "the purple bus").message                  # "no purple bus in this scene"
 
-**Parts.** ``query_parse.parse_query`` splits the text into an appearance part (subject noun,
+**Parts.** ``parse.parse_query`` splits the text into an appearance part (subject noun,
 colours, garment colours, the remaining appearance words), a motion phrase (with an explicit crossing
 direction) and a location phrase (ego-relative sector and map context). Each part is embedded on its
 own with the text encoder (query role), so "turning left" is compared with motion features without
@@ -77,9 +77,9 @@ is a stopped car or a standing pedestrian).
 ``bench/bench_grounding.py`` (``bench/results/grounding.{json,md}``: 5 unseen reconstructed scenes, the
 ablation, and the engine on ground-truth-built scenes).
 
-**Modules.** ``query`` (this one: the engine), ``query_parse`` (the parts of a query), ``query_lexicon``
-(keyword and colour tables), ``query_config`` (``QueryConfig``), ``query_scoring`` (the per-signal
-scores as functions), ``query_messages`` (the answer in words), ``query_result`` (``NodeMatch``,
+**Modules** (of ``language.grounding``). ``engine`` (this one), ``parse`` (the parts of a query), ``lexicon``
+(keyword and colour tables), ``config`` (``QueryConfig``), ``scoring`` (the per-signal
+scores as functions), ``messages`` (the answer in words), ``result`` (``NodeMatch``,
 ``Grounding``).
 """
 
@@ -93,12 +93,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.query_config import QueryConfig
-from simsplat_core.language.query_lexicon import CONTEXT_KEYWORDS, SECTOR_KEYWORDS
-from simsplat_core.language.query_messages import grounding_message, nearest_colour_message, no_images_message
-from simsplat_core.language.query_parse import ParsedQuery, parse_query
-from simsplat_core.language.query_result import Grounding, NodeMatch
-from simsplat_core.language.query_scoring import (
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.lexicon import CONTEXT_KEYWORDS, SECTOR_KEYWORDS
+from simsplat_core.language.grounding.messages import grounding_message, nearest_colour_message, no_images_message
+from simsplat_core.language.grounding.parse import ParsedQuery, parse_query
+from simsplat_core.language.grounding.result import Grounding, NodeMatch
+from simsplat_core.language.grounding.scoring import (
     attribute_fit,
     group_distribution,
     keyword_prior,

@@ -43,7 +43,7 @@ import re
 from dataclasses import dataclass
 
 from simsplat_core.color_names import COLOR_NAMES
-from simsplat_core.language.query_lexicon import OWNER_WORDS
+from simsplat_core.language.grounding.lexicon import OWNER_WORDS
 from simsplat_core.scenario import vocabulary as voc
 
 # ---------------------------------------------------------------------------------------------- lexicons

@@ -41,6 +41,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.language.alignment.feature_field import (
+    FeatureFitConfig,
+    feature_views,
+    fit_feature_field,
+    gaussian_features,
+    node_mean_features,
+)
+from simsplat_core.language.alignment.motion_training import MotionAligner
 from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
 from simsplat_core.language.appearance.captioner import AppearanceCaption, appearance_vocabulary
 from simsplat_core.language.appearance.crops import ObjectCrop
@@ -51,14 +59,6 @@ from simsplat_core.language.appearance.embedders import (
     aggregate_views,
     appearance_embedder,
 )
-from simsplat_core.language.feature_field import (
-    FeatureFitConfig,
-    feature_views,
-    fit_feature_field,
-    gaussian_features,
-    node_mean_features,
-)
-from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
 from simsplat_core.language.node_masks import (
     NodeIdMaps,
     NodeObject,
@@ -67,11 +67,12 @@ from simsplat_core.language.node_masks import (
     node_objects,
     render_node_id_maps,
 )
-from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
+from simsplat_core.language.scene_language import LanguageScene, NodeLanguage, ObjectMotionFeatures
 from simsplat_core.language.text import TextEncoder, l2_normalise
 from simsplat_core.render.types import BACKENDS
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scene.graph import SceneGraph
+from simsplat_core.stage_clock import StageClock
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -212,11 +213,171 @@ def _has_pixels(log: SceneLog) -> bool:
     return any(img.image is not None for img in log.images)
 
 
+def _check_autoencoder(autoencoder: FeatureAutoencoder | None, config: AlignmentConfig,
+                       text_encoder: TextEncoder) -> None:
+    """Raise ``ValueError`` unless a passed-in autoencoder maps the text space to ``config.feature_dim``."""
+    if autoencoder is None:
+        return
+    if autoencoder.latent_dim != config.feature_dim:
+        raise ValueError(f"autoencoder latent width {autoencoder.latent_dim} != AlignmentConfig.feature_dim "
+                         f"{config.feature_dim}")
+    if autoencoder.input_dim != text_encoder.dim:
+        raise ValueError(f"autoencoder input width {autoencoder.input_dim} != text encoder {text_encoder.name} "
+                         f"width {text_encoder.dim}")
+
+
+@dataclass(frozen=True)
+class _ObjectLooks:
+    """Step 3's result: what each object looks like, in words and in the text space.
+
+    Attributes:
+        captions: ``object_id -> caption`` of every object with crops.
+        features: ``object_id -> [D]`` text-space appearance feature (its views' embeddings, averaged).
+        background: ``[D]`` embedding of ``AlignmentConfig.background_passage`` (``None`` without one).
+    """
+
+    captions: dict[str, AppearanceCaption]
+    features: dict[str, np.ndarray]
+    background: np.ndarray | None
+
+
+@dataclass(frozen=True, eq=False)
+class _FittedField:
+    """Step 5's result.
+
+    Attributes:
+        graph: copy of the scene graph holding the fitted per-Gaussian latents and the background latent.
+        f_app: ``node_id -> [D]`` unit appearance feature decoded from the field (module docstring).
+        gaussian_features: ``[N, d]`` float32 fitted latents in the graph's canonical order.
+        metrics: the fit report (``fit_*``) and ``f_app_vs_caption_cosine``.
+    """
+
+    graph: SceneGraph
+    f_app: dict[int, np.ndarray]
+    gaussian_features: np.ndarray
+    metrics: dict[str, float]
+
+
+def _projected_mask_agreement(log: SceneLog, maps: NodeIdMaps, graph: SceneGraph,
+                              config: AlignmentConfig) -> dict[str, float]:
+    """``mask_*`` agreement of the node-id maps with the log's instance masks (empty without them, or when
+    ``config.measure_masks`` is off)."""
+    if config.measure_masks and any(img.instance is not None for img in log.images):
+        return mask_agreement(log, maps, graph, min_gt_pixels=config.min_area).summary()
+    return {}
+
+
 def _select_crops(crops: Sequence[ObjectCrop], config: AlignmentConfig) -> list[ObjectCrop]:
     """Per object its crops of at least ``min_area`` pixels, or, when it has none, all its crops (each of
     at least ``small_area``)."""
     large = {c.object_id for c in crops if c.area >= config.min_area}
     return [c for c in crops if c.area >= config.min_area or c.object_id not in large]
+
+
+def _crops_under_node_maps(log: SceneLog, maps: NodeIdMaps, graph: SceneGraph,
+                           config: AlignmentConfig) -> list[ObjectCrop]:
+    """Step 2: the log's pixels under each object node's projected mask, every ``crop_frame_stride``-th frame,
+    selected by ``_select_crops``."""
+    frames = maps.frame_indices[::config.crop_frame_stride]
+    return _select_crops(crops_from_node_maps(log, maps, graph, frames=frames, min_area=config.min_floor,
+                                              margin=config.crop_margin), config)
+
+
+def _crop_counts(crops: Sequence[ObjectCrop], config: AlignmentConfig) -> dict[str, float]:
+    """How many crops there are, and how many objects are described from small crops only."""
+    return {"objects_from_small_crops": float(len({c.object_id for c in crops if c.area < config.min_area})),
+            "crops": float(len(crops))}
+
+
+def _describe_objects(crops: Sequence[ObjectCrop], embedder: AppearanceEmbedder, text_encoder: TextEncoder,
+                      config: AlignmentConfig) -> _ObjectLooks:
+    """Step 3: one caption per object (an image-feature embedder still gets the built-in captioner's captions),
+    its text-space appearance feature (the embedder's view embeddings, averaged and renormalised), and the
+    background passage's embedding."""
+    caption_embedder = embedder if isinstance(embedder, CaptionEmbedder) else CaptionEmbedder(text_encoder)
+    captions = caption_embedder.track_captions(crops)
+    features: dict[str, np.ndarray] = {}
+    if crops:
+        rows = embedder.embed(crops, captions) if embedder is caption_embedder else embedder.embed(crops)
+        agg = aggregate_views([c.object_id for c in crops], rows)
+        features = {oid: agg.features[i] for i, oid in enumerate(agg.object_ids)}
+    background = (text_encoder.encode_passages([config.background_passage])[0]
+                  if config.background_passage is not None else None)
+    return _ObjectLooks(captions, features, background)
+
+
+def _fit_scene_autoencoder(looks: _ObjectLooks, text_encoder: TextEncoder,
+                           config: AlignmentConfig) -> tuple[FeatureAutoencoder, float]:
+    """Step 4: the scene's ``FeatureAutoencoder`` ``D -> d`` fitted on the objects' features, the background
+    passage and, with ``use_vocabulary``, the caption vocabulary. Returns it and its final loss."""
+    fit_rows = [looks.features[o] for o in sorted(looks.features)]
+    fit_rows += [looks.background] if looks.background is not None else []
+    if not fit_rows:
+        fit_rows = [np.zeros(text_encoder.dim, np.float32)]
+    vocabulary = (text_encoder.encode_passages(appearance_vocabulary()) if config.use_vocabulary else None)
+    autoencoder, report = FeatureAutoencoder.fit(np.stack(fit_rows), vocabulary, config.autoencoder_config(),
+                                                 text_space=text_encoder.name)
+    return autoencoder, report.final_loss
+
+
+def _fit_appearance_field(graph: SceneGraph, log: SceneLog, maps: NodeIdMaps, objects: Sequence[NodeObject],
+                          looks: _ObjectLooks, autoencoder: FeatureAutoencoder,
+                          config: AlignmentConfig) -> _FittedField:
+    """Step 5: per-Gaussian latents initialised from their node's latent (background Gaussians from the
+    background passage's) and fitted by rendering against the node-id maps of every ``fit_frame_stride``-th
+    frame; ``f_app`` per node decoded from the field as rendered on its own pixels (the Gaussians' mean for
+    nodes the fit views miss). The graph passed in is not changed."""
+    node_of = {o.object_id: o.node_id for o in objects}
+    fitted_ids = [oid for oid in sorted(looks.features) if oid in node_of]
+    latents = (autoencoder.encode(np.stack([looks.features[o] for o in fitted_ids])) if fitted_ids
+               else np.zeros((0, config.feature_dim), np.float32))
+    node_latents = {node_of[oid]: latents[i] for i, oid in enumerate(fitted_ids)}
+    bg_text = looks.background
+    z_bg = (autoencoder.encode(bg_text[None])[0] if bg_text is not None
+            else np.zeros(config.feature_dim, np.float32))
+    f_bg = bg_text if bg_text is not None else autoencoder.decode(z_bg[None])[0]
+    views = feature_views(log, maps, frames=maps.frame_indices[::config.fit_frame_stride])
+    fit = fit_feature_field(graph, views, node_latents, z_bg, config.fit_config(), autoencoder=autoencoder,
+                            node_targets={node_of[o]: looks.features[o] for o in fitted_ids},
+                            background_target=f_bg)
+    metrics = dict(fit.summary())
+    means = {**node_mean_features(fit.graph, set(node_latents) - set(fit.node_features)), **fit.node_features}
+    f_app: dict[int, np.ndarray] = {}
+    if means:
+        ids = sorted(means)
+        decoded = autoencoder.decode(np.stack([means[i] for i in ids]))
+        f_app = {i: l2_normalise(decoded[k][None])[0] for k, i in enumerate(ids)}
+        metrics["f_app_vs_caption_cosine"] = float(np.mean(
+            [float(f_app[node_of[o]] @ looks.features[o]) for o in fitted_ids]))
+    gaussian_feats = gaussian_features(fit.graph).cpu().numpy().astype(np.float32)
+    return _FittedField(fit.graph, f_app, gaussian_feats, metrics)
+
+
+def _motion_features(aligner: MotionAligner | None, log: SceneLog) -> dict[str, ObjectMotionFeatures]:
+    """Step 6: ``object_id -> ObjectMotionFeatures`` of the log's movable objects (none without an aligner)."""
+    return aligner.features(log) if aligner is not None else {}
+
+
+def _node_languages(objects: Sequence[NodeObject], captions: dict[str, AppearanceCaption],
+                    f_app: dict[int, np.ndarray], motion: dict[str, ObjectMotionFeatures]) -> tuple[NodeLanguage, ...]:
+    """One ``NodeLanguage`` per object node: ``f_app`` and caption for objects with crops, motion features for
+    movable ones."""
+    nodes = []
+    for obj in objects:
+        kind = agent_kind(obj.category) or ""
+        nodes.append(NodeLanguage(
+            node_id=obj.node_id, object_id=obj.object_id, category=obj.category, kind=kind,
+            f_app=f_app.get(obj.node_id) if obj.object_id in captions else None,
+            caption=captions.get(obj.object_id),
+            motion=motion.get(obj.object_id) if kind else None,
+        ))
+    return tuple(nodes)
+
+
+def _node_counts(nodes: Sequence[NodeLanguage]) -> dict[str, float]:
+    return {"object_nodes": float(len(nodes)),
+            "nodes_with_f_app": float(sum(n.f_app is not None for n in nodes)),
+            "nodes_with_motion": float(sum(n.motion is not None for n in nodes))}
 
 
 def build_language_scene(
@@ -250,18 +411,12 @@ def build_language_scene(
         ValueError: the log has pixels but no graph is given; the autoencoder's widths do not fit.
     """
     config.validate()
-    t_start = time.perf_counter()
-    times: dict[str, float] = {}
+    started = time.perf_counter()
+    clock = StageClock()  # seconds per stage: metrics time_<stage>_s
     metrics: dict[str, float] = {}
     objects = _object_nodes(graph, log)
     embedder = embedder or appearance_embedder(config.captioner, text_encoder)
-    if autoencoder is not None:
-        if autoencoder.latent_dim != config.feature_dim:
-            raise ValueError(f"autoencoder latent width {autoencoder.latent_dim} != AlignmentConfig.feature_dim "
-                             f"{config.feature_dim}")
-        if autoencoder.input_dim != text_encoder.dim:
-            raise ValueError(f"autoencoder input width {autoencoder.input_dim} != text encoder {text_encoder.name} "
-                             f"width {text_encoder.dim}")
+    _check_autoencoder(autoencoder, config, text_encoder)
     with_pixels = _has_pixels(log)
     if with_pixels and graph is None:
         raise ValueError(f"{log.seq_id}: the log has images but no scene graph was given")
@@ -273,105 +428,41 @@ def build_language_scene(
     metadata: dict[str, str] = {"embedder": embedder.name, "min_area": str(config.min_area)}
     if with_pixels:
         assert graph is not None
-        # 1. node-id maps of every frame
-        t = time.perf_counter()
-        maps = render_node_id_maps(graph, log, backend=config.backend)
-        times["node_maps"] = time.perf_counter() - t
-        if config.measure_masks and any(img.instance is not None for img in log.images):
-            metrics.update(mask_agreement(log, maps, graph, min_gt_pixels=config.min_area).summary())
-
-        # 2. crops under the projected masks
-        t = time.perf_counter()
-        frames = maps.frame_indices[::config.crop_frame_stride]
-        crops = _select_crops(crops_from_node_maps(log, maps, graph, frames=frames, min_area=config.min_floor,
-                                                   margin=config.crop_margin), config)
-        metrics["objects_from_small_crops"] = float(len({c.object_id for c in crops if c.area < config.min_area}))
-        times["crops"] = time.perf_counter() - t
-        metrics["crops"] = float(len(crops))
-
-        # 3. captions and text-space appearance features per object
-        t = time.perf_counter()
-        # one caption per object (an image-feature embedder still gets the built-in captioner's captions)
-        caption_embedder = embedder if isinstance(embedder, CaptionEmbedder) else CaptionEmbedder(text_encoder)
-        captions = caption_embedder.track_captions(crops)
-        object_feats: dict[str, np.ndarray] = {}
-        if crops:
-            rows = embedder.embed(crops, captions) if embedder is caption_embedder else embedder.embed(crops)
-            agg = aggregate_views([c.object_id for c in crops], rows)
-            object_feats = {oid: agg.features[i] for i, oid in enumerate(agg.object_ids)}
-        bg_text = (text_encoder.encode_passages([config.background_passage])[0]
-                   if config.background_passage is not None else None)
-        times["captions"] = time.perf_counter() - t
-
-        # 4. the scene's autoencoder
-        t = time.perf_counter()
-        if autoencoder is None:
-            fit_rows = [object_feats[o] for o in sorted(object_feats)] + ([bg_text] if bg_text is not None else [])
-            if not fit_rows:
-                fit_rows = [np.zeros(text_encoder.dim, np.float32)]
-            vocabulary = (text_encoder.encode_passages(appearance_vocabulary()) if config.use_vocabulary else None)
-            autoencoder, report = FeatureAutoencoder.fit(np.stack(fit_rows), vocabulary, config.autoencoder_config(),
-                                                         text_space=text_encoder.name)
-            metrics["autoencoder_final_loss"] = report.final_loss
-        times["autoencoder"] = time.perf_counter() - t
-
-        # 5. per-Gaussian feature field
-        t = time.perf_counter()
-        node_of = {o.object_id: o.node_id for o in objects}
-        fitted_ids = [oid for oid in sorted(object_feats) if oid in node_of]
-        latents = (autoencoder.encode(np.stack([object_feats[o] for o in fitted_ids])) if fitted_ids
-                   else np.zeros((0, config.feature_dim), np.float32))
-        node_latents = {node_of[oid]: latents[i] for i, oid in enumerate(fitted_ids)}
-        z_bg = (autoencoder.encode(bg_text[None])[0] if bg_text is not None
-                else np.zeros(config.feature_dim, np.float32))
-        f_bg = bg_text if bg_text is not None else autoencoder.decode(z_bg[None])[0]
-        views = feature_views(log, maps, frames=maps.frame_indices[::config.fit_frame_stride])
-        fit = fit_feature_field(graph, views, node_latents, z_bg, config.fit_config(), autoencoder=autoencoder,
-                                node_targets={node_of[o]: object_feats[o] for o in fitted_ids},
-                                background_target=f_bg)
-        graph = fit.graph  # the input graph is not changed: the fitted features live in this copy
-        metrics.update(fit.summary())
-        # the field as rendered on each node's own pixels; the Gaussians' mean for nodes the fit views miss
-        means = {**node_mean_features(graph, set(node_latents) - set(fit.node_features)), **fit.node_features}
-        if means:
-            ids = sorted(means)
-            decoded = autoencoder.decode(np.stack([means[i] for i in ids]))
-            f_app = {i: l2_normalise(decoded[k][None])[0] for k, i in enumerate(ids)}
-            metrics["f_app_vs_caption_cosine"] = float(np.mean(
-                [float(f_app[node_of[o]] @ object_feats[o]) for o in fitted_ids]))
-        gaussian_feats = gaussian_features(graph).cpu().numpy().astype(np.float32)
-        times["feature_field"] = time.perf_counter() - t
+        with clock.stage("node_maps"):
+            maps = render_node_id_maps(graph, log, backend=config.backend)
+        metrics.update(_projected_mask_agreement(log, maps, graph, config))
+        with clock.stage("crops"):
+            crops = _crops_under_node_maps(log, maps, graph, config)
+            metrics.update(_crop_counts(crops, config))
+        with clock.stage("captions"):
+            looks = _describe_objects(crops, embedder, text_encoder, config)
+            captions = looks.captions
+        with clock.stage("autoencoder"):
+            if autoencoder is None:
+                autoencoder, metrics["autoencoder_final_loss"] = _fit_scene_autoencoder(looks, text_encoder, config)
+        with clock.stage("feature_field"):
+            fitted = _fit_appearance_field(graph, log, maps, objects, looks, autoencoder, config)
+            graph, f_app, gaussian_feats = fitted.graph, fitted.f_app, fitted.gaussian_features
+            metrics.update(fitted.metrics)
         metadata.update({"autoencoder_latent_dim": str(autoencoder.latent_dim),
                          "background_passage": config.background_passage or ""})
 
-    # 6. motion
-    t = time.perf_counter()
-    motion: dict[str, ObjectMotionFeatures] = aligner.features(log) if aligner is not None else {}
-    times["motion"] = time.perf_counter() - t
+    with clock.stage("motion"):
+        motion = _motion_features(aligner, log)
     if aligner is not None:
         metadata["aligner"] = type(aligner).__name__
 
-    nodes = []
-    for obj in objects:
-        kind = agent_kind(obj.category) or ""
-        nodes.append(NodeLanguage(
-            node_id=obj.node_id, object_id=obj.object_id, category=obj.category, kind=kind,
-            f_app=f_app.get(obj.node_id) if obj.object_id in captions else None,
-            caption=captions.get(obj.object_id),
-            motion=motion.get(obj.object_id) if kind else None,
-        ))
+    nodes = _node_languages(objects, captions, f_app, motion)
     if maps is not None:
         frame_indices, cameras, node_maps = maps.frame_indices, maps.cameras, maps.maps
     else:
         frame_indices, cameras, node_maps = np.arange(log.num_frames, dtype=np.int64), (), None
-    scene = LanguageScene(seq_id=log.seq_id, scene_hash=scene_hash, nodes=tuple(nodes), frame_indices=frame_indices,
+    scene = LanguageScene(seq_id=log.seq_id, scene_hash=scene_hash, nodes=nodes, frame_indices=frame_indices,
                           cameras=tuple(cameras), node_id_maps=node_maps, text_encoder=text_encoder.name,
                           metadata=metadata)
-    times["total"] = time.perf_counter() - t_start
+    times = {**clock.seconds, "total": time.perf_counter() - started}
     metrics.update({f"time_{k}_s": float(v) for k, v in times.items()})
-    metrics["object_nodes"] = float(len(nodes))
-    metrics["nodes_with_f_app"] = float(sum(n.f_app is not None for n in nodes))
-    metrics["nodes_with_motion"] = float(sum(n.motion is not None for n in nodes))
+    metrics.update(_node_counts(nodes))
     logger.info("%s: language scene of %d object nodes (%d with appearance, %d with motion) in %.1f s",
                 log.seq_id, len(nodes), int(metrics["nodes_with_f_app"]), int(metrics["nodes_with_motion"]),
                 times["total"])

@@ -8,8 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
-from simsplat_core.language.feature_field import (
+from simsplat_core.language.alignment.feature_field import (
     BACKGROUND_LATENT_KEY,
     FeatureFieldError,
     FeatureFitConfig,
@@ -23,6 +22,7 @@ from simsplat_core.language.feature_field import (
     set_gaussian_features,
     similarity_map,
 )
+from simsplat_core.language.appearance.autoencoder import AutoencoderConfig, FeatureAutoencoder
 from simsplat_core.language.node_masks import NodeIdMaps, object_node_ids, render_node_id_maps
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.scene import SceneGraph

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from simsplat_core.language.query_parse import crossing_direction, find_spans, normalise, parse_query
+from simsplat_core.language.grounding.parse import crossing_direction, find_spans, normalise, parse_query
 from simsplat_core.scenario import vocabulary as voc
 
 

@@ -1,16 +1,16 @@
-"""``QueryConfig``: the switches, weights and thresholds of the ``QueryEngine`` (``query`` module docstring)."""
+"""``QueryConfig``: the switches, weights and thresholds of the ``QueryEngine`` (``engine`` module docstring)."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
 
-from simsplat_core.language.query_parse import ParsedQuery
+from simsplat_core.language.grounding.parse import ParsedQuery
 
 
 @dataclass(frozen=True)
 class QueryConfig:
-    """Switches, weights and thresholds of the ``QueryEngine`` (``query`` module docstring).
+    """Switches, weights and thresholds of the ``QueryEngine`` (``engine`` module docstring).
 
     Attributes:
         use_appearance, use_motion, use_location: which signals are used at all (ablations).

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.language.alignment.motion_encoder import InputConfig, trajectory_inputs
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.motion_encoder import InputConfig, trajectory_inputs
 from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_trajectory
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.trajectory import AGENT_KINDS, ObjectTrajectory, log_trajectories

@@ -5,19 +5,19 @@
     q = encoder.encode_queries(["the car turning left"])[0]
     mot_sim, loc_sim = aligner.score(q, feats)          # [N] each, in the order of feats
 
-Per object the encoder gives convex weights over fixed text prototypes (``codebooks.py``):
+Per object the encoder gives convex weights over fixed text prototypes (``language.codebooks``):
 ``f_mot = sum_k w_k p_k`` over the motion codebook of its kind (vehicle / pedestrian) and
 ``f_loc = 1/2 sum_s w_s p_s + 1/2 sum_c w_c p_c`` over the location sector and context prototypes,
 all in the text encoder's space (384-d for E5).
 
-Loss, per sample with auto-labels ``(y_mot, y_sector, y_context)`` (``motion_labels.py``)::
+Loss, per sample with auto-labels ``(y_mot, y_sector, y_context)`` (``language.motion_labels``)::
 
     L = lambda_align * (L_mot + L_loc) + lambda_commit * L_commit
     L_mot = 1 - cos_c(f_mot, p_{y_mot})
     L_loc = 1 - cos_c(f_loc, 1/2 (p_{y_sector} + p_{y_context}))
     L_commit = C(w_mot, y_mot) + 1/2 (C(w_sector, y_sector) + C(w_context, y_context))
 
-``cos_c`` is the cosine after subtracting the group's prototype mean (see ``codebooks.py``: raw E5
+``cos_c`` is the cosine after subtracting the group's prototype mean (see ``language.codebooks``: raw E5
 cosines between these phrases sit in 0.8-0.95 and give almost no gradient).
 
 The commitment ``C`` keeps the convex combination close to one vertex of the simplex, so ``f_mot``
@@ -56,10 +56,11 @@ import numpy as np
 import torch
 
 from simsplat_core.compute_threads import compute_threads_limited
+from simsplat_core.language.alignment.motion_dataset import RealismConfig, SampleConfig, TrainingSamples, build_samples
+from simsplat_core.language.alignment.motion_encoder import HEADS, InputConfig, TrajectoryEncoder, trajectory_inputs
 from simsplat_core.language.codebooks import MotionCodebooks, centred_cosine, convex_combination, cosine_scores
-from simsplat_core.language.motion_dataset import RealismConfig, SampleConfig, TrainingSamples, build_samples
-from simsplat_core.language.motion_encoder import HEADS, InputConfig, TrajectoryEncoder, trajectory_inputs
-from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_trajectory
+from simsplat_core.language.motion_labels import LabelThresholds, label_trajectory
+from simsplat_core.language.scene_language import ObjectMotionFeatures
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.trajectory import AGENT_KINDS, log_trajectories
@@ -115,33 +116,6 @@ class MotionAlignerConfig:
             thresholds=LabelThresholds(**data.pop("thresholds")),
             **data,
         )
-
-
-@dataclass(frozen=True)
-class ObjectMotionFeatures:
-    """Motion/location language features of one object.
-
-    Attributes:
-        object_id, kind: the object and its motion codebook (``"vehicle"`` / ``"pedestrian"``).
-        f_mot: ``[D]`` float32 convex combination of the kind's motion prototypes.
-        f_loc: ``[D]`` float32 convex combination of the location prototypes.
-        motion_probs: convex weights by motion class (sum 1).
-        location_probs: convex weights by location class, sectors then contexts (sum 1; each group 1/2).
-        labels: the auto-labels of the object's whole trajectory.
-    """
-
-    object_id: str
-    kind: str
-    f_mot: np.ndarray
-    f_loc: np.ndarray
-    motion_probs: dict[str, float]
-    location_probs: dict[str, float]
-    labels: MotionLabel
-
-    @property
-    def motion(self) -> str:
-        """Most likely motion class."""
-        return max(self.motion_probs, key=self.motion_probs.__getitem__)
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,8 @@
-"""The scores of the ``QueryEngine`` (``query`` module docstring), as pure functions of a config.
+"""The scores of the ``QueryEngine`` (``engine`` module docstring), as pure functions of a config.
 
 Text side: a query part's membership over codebook classes (``group_distribution`` for the sector and
 context parts, ``motion_distribution`` for the motion part, crossing classes merged), each mixing a
-softmax of centred prototype cosines with a keyword prior (``keyword_prior`` over ``query_lexicon``).
+softmax of centred prototype cosines with a keyword prior (``keyword_prior`` over ``lexicon``).
 Node side: the appearance factors of a node's caption (``color_fit``, ``subtype_fit``,
 ``attribute_fit``) and the motion and location match scores of a node's features (``motion_score``,
 ``location_score``), all in ``[0, 1]``.
@@ -18,8 +18,8 @@ import numpy as np
 
 from simsplat_core.language.appearance.colors import UNKNOWN
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.query_config import QueryConfig
-from simsplat_core.language.query_lexicon import (
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.lexicon import (
     CROSSING_CLASSES,
     MOTION_KEYWORDS,
     PEDESTRIAN_MERGED,
@@ -27,7 +27,7 @@ from simsplat_core.language.query_lexicon import (
     STATIONARY_CLASSES,
     SUBTYPE_FIT,
 )
-from simsplat_core.language.query_parse import ParsedQuery
+from simsplat_core.language.grounding.parse import ParsedQuery
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import l2_normalise
 from simsplat_core.scenario import vocabulary as voc
@@ -132,7 +132,7 @@ def motion_distribution(
 
 # ---------------------------------------------------------------------------------------------- node side
 def color_fit(query: str, node: str | None, config: QueryConfig) -> float:
-    """Factor for a named colour against one of the caption's colours (``query`` module docstring)."""
+    """Factor for a named colour against one of the caption's colours (``engine`` module docstring)."""
     if node is None or node == UNKNOWN:
         return config.missing_appearance
     if query == node:

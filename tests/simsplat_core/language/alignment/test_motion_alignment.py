@@ -7,8 +7,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.motion_dataset import (
+from simsplat_core.language.alignment.motion_dataset import (
     RealismConfig,
     SampleConfig,
     TrainingSamples,
@@ -16,8 +15,9 @@ from simsplat_core.language.motion_dataset import (
     mirror_log,
     realistic_log,
 )
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig, MotionAlignerState
+from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.motion_labels import label_log
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig, MotionAlignerState
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, PEDESTRIAN_MOTION, VEHICLE_MOTION
 
