@@ -2,7 +2,7 @@
 
 * ``store``: ``ArtifactStore`` over ``pyarrow.fs`` (local paths or object-store URIs), atomic puts.
 * ``schemas``: every Parquet table's ``pyarrow.schema`` with its version, validated on read.
-* ``parquet_io``, ``exr``, ``png``: table, EXR (OpenImageIO, zip) and PNG I/O.
+* ``parquet_io``, ``exr``, ``pictures``: table, EXR (OpenImageIO, zip) and PNG / MP4 I/O.
 * ``keys``, ``markers``: content keys of stage inputs/configs and the ``_SUCCESS.json`` manifests that
   mark finished work (a re-run skips it).
 * ``logs``, ``scenes``: scene logs (``logs/<seq_id>``) and reconstructed scenes (``scenes/<seq_id>/<hash>``).
