@@ -68,11 +68,12 @@ def require_sequences(store: ArtifactStore, seq_ids: Sequence[str] | None = None
     that artifact.
 
     Raises:
-        MissingInputError: the store holds no log at all (for ``LOG``: saying how to add one), no sequence has the
-            artifact, or a chosen one lacks it (naming them, those that have it and the command that makes it).
+        MissingInputError: the store holds no log at all (for ``LOG`` without ``seq_ids``: saying how to add one), no
+            sequence has the artifact, or a chosen one lacks it (naming them, those that have it and the command
+            that makes it).
     """
     logs = list_logs(store)
-    if needs is LOG and not logs:
+    if needs is LOG and not logs and not seq_ids:
         raise MissingInputError(f"no driving log in {store.uri(LOG.directory)}: {ADD_LOGS}")
     chosen = list(seq_ids) if seq_ids else [s for s in logs if needs.has(store, s, logs)]
     missing = [s for s in chosen if not needs.has(store, s, logs)]
