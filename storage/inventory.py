@@ -29,14 +29,15 @@ class Requirement:
     """An artifact a stage needs per sequence.
 
     Attributes:
-        name: what it is, in messages ("language scene").
+        lacking: the message's start, ``{which}`` replaced by the sequences that lack it ("no language scene of
+            {which}").
         directory: where the store keeps it (``logs``, ``scenes``, ``alignment``).
         holders: how the sequences that have it are called in messages ("aligned").
         makes: the command that makes it (``{store}`` is replaced by the store root).
         present: whether a sequence that has a complete log has it (``None``: the log itself is the artifact).
     """
 
-    name: str
+    lacking: str
     directory: str
     holders: str
     makes: str
@@ -47,11 +48,11 @@ class Requirement:
         return seq_id in logs and (self.present is None or self.present(store, seq_id))
 
 
-LOG = Requirement("complete log", "logs", "available", ADD_LOGS)
-SCENE = Requirement("reconstructed scene", "scenes", "reconstructed",
+LOG = Requirement("no complete log {which}", "logs", "available", ADD_LOGS)
+SCENE = Requirement("no reconstructed scene of {which}", "scenes", "reconstructed",
                     "run `simsplat reconstruct --store {store}` or `simsplat run`",
                     lambda store, seq_id: bool(list_scenes(store, seq_id)))
-LANGUAGE_SCENE = Requirement("language scene", "alignment", "aligned",
+LANGUAGE_SCENE = Requirement("no language scene of {which}", "alignment", "aligned",
                              "run `simsplat run` or the alignment stage first: `simsplat align --store {store}`",
                              lambda store, seq_id: bool(list_language_scenes(store, seq_id)))
 
@@ -79,8 +80,8 @@ def require_sequences(store: ArtifactStore, seq_ids: Sequence[str] | None = None
     missing = [s for s in chosen if not needs.has(store, s, logs)]
     if missing or not chosen:
         having = [s for s in logs if needs.has(store, s, logs)]
-        what = str(missing) if missing else "any log"
-        raise MissingInputError(f"no {needs.name} of {what} in "
+        which = str(missing) if missing else "any log"
+        raise MissingInputError(f"{needs.lacking.format(which=which)} in "
                                 f"{store.uri(needs.directory)}; {needs.holders}: {having} "
                                 f"({needs.makes.format(store=store.root)})")
     return chosen
