@@ -28,7 +28,6 @@ from prefect.artifacts import create_progress_artifact, update_progress_artifact
 from rich.progress import Progress
 
 from flows.bars import new_bar, want_bar
-from storage import ArtifactStore
 from tasks.progress import RELAY_ENV, Listener, listening, read_step_reports
 
 logger = logging.getLogger(__name__)
@@ -123,7 +122,7 @@ class RelayedSteps:
     def poll(self) -> int:
         """Pass the reports that changed since the last poll to the listener; returns how many."""
         changed = 0
-        for report in read_step_reports(ArtifactStore(self.folder)):
+        for report in read_step_reports(self.folder):
             state = (report.step, report.total)
             if self._seen.get(report.label) == state:
                 continue

@@ -9,6 +9,8 @@
 * ``alignment``, ``language_scenes``: the motion aligner models and language scenes (``alignment/``).
 * ``runs``: run directories and evaluation tables (``runs/<run_id>/tables``).
 * ``assets``: asset banks for scene editing (``assets/<bank_hash>``).
+* ``inventory``: whether a sequence has a complete log / reconstructed scene / language scene (and the store an
+  asset bank), else one ``MissingInputError`` naming the command that makes it; imported on use.
 * ``edits``: language edits (``edits/<run_id>/<seq_id>/<edit_id>``, the run's ``edits`` table); imported on
   use (it loads the editing core), not re-exported here.
 

@@ -57,14 +57,15 @@ def _report_name(label: str) -> str:
     return hashlib.sha256(label.encode("utf-8")).hexdigest()[:16] + ".json"
 
 
-def write_step_report(relay: ArtifactStore, report: StepReport) -> None:
-    """Replace ``report.label``'s file in the relay folder with ``report`` (atomically)."""
-    relay.write_json(_report_name(report.label), {"label": report.label, "step": report.step, "total": report.total,
-                                                   "metrics": dict(report.metrics)})
+def write_step_report(folder: str, report: StepReport) -> None:
+    """Replace ``report.label``'s file in the relay ``folder`` (a local path or a URI) with ``report`` (atomically)."""
+    body = {"label": report.label, "step": report.step, "total": report.total, "metrics": dict(report.metrics)}
+    ArtifactStore(folder).write_json(_report_name(report.label), body)
 
 
-def read_step_reports(relay: ArtifactStore) -> list[StepReport]:
-    """The latest report of every label in the relay folder (a file being replaced or unreadable is skipped)."""
+def read_step_reports(folder: str) -> list[StepReport]:
+    """The latest report of every label in the relay ``folder`` (a file being replaced or unreadable is skipped)."""
+    relay = ArtifactStore(folder)
     reports = []
     for name in relay.listdir(""):
         if not name.endswith(".json"):
@@ -136,7 +137,7 @@ class StepProgress:
         if not folder:
             return
         try:
-            write_step_report(ArtifactStore(folder), report)
+            write_step_report(folder, report)
         except Exception:  # progress must never break the work
             logger.debug("could not relay progress of %s to %s", self.label, folder, exc_info=True)
 

@@ -32,17 +32,16 @@ def test_step_bars_do_nothing_without_a_terminal(monkeypatch):
 
 
 def test_step_reports_are_relayed_through_a_folder_throttled(tmp_path, monkeypatch):
-    from storage import ArtifactStore
     from tasks.progress import StepReport, read_step_reports
 
     monkeypatch.setenv(RELAY_ENV, str(tmp_path))
     step = StepProgress("reconstruct a")
     step(3, 10, {"psnr": 21.0})
     step(4, 10, {"psnr": 21.5})  # within the relay interval: not written
-    assert read_step_reports(ArtifactStore(str(tmp_path))) == [StepReport("reconstruct a", 3, 10, {"psnr": 21.0})]
+    assert read_step_reports(str(tmp_path)) == [StepReport("reconstruct a", 3, 10, {"psnr": 21.0})]
     step(10, 10, {})  # the last step always is
     StepProgress("reconstruct b")(1, 5)
-    assert read_step_reports(ArtifactStore(str(tmp_path))) == [StepReport("reconstruct a", 10, 10, {}),
+    assert read_step_reports(str(tmp_path)) == [StepReport("reconstruct a", 10, 10, {}),
                                                                 StepReport("reconstruct b", 1, 5, {})]
 
 
