@@ -9,7 +9,9 @@ Every stored log is aligned (motion and location language come from its tracks a
   real logs skip it.
 
 A skipped stage is a decision with a reason that the flows report ("skipped: no camera images"),
-never an error. Not a Prefect task: it reads a manifest per log and takes milliseconds.
+never an error; a missing input is (``resolve_seq_ids``: the store's logs, scenes or language scenes,
+checked by ``storage.inventory``). ``plan_alignment`` decides what the alignment flow does. Not Prefect
+tasks: they read a manifest per log and take milliseconds, so the CLI checks them before starting a flow.
 """
 
 from __future__ import annotations
