@@ -43,7 +43,8 @@ def main() -> None:
     from simsplat_core.compute_threads import set_compute_threads
     from storage import ArtifactStore
     from storage.runs import new_run_id
-    from tasks.edit import load_edit_context, run_edit
+    from tasks.edit import run_edit
+    from tasks.stored_edits import load_edit_context
 
     set_compute_threads(args.threads)
     imports_s = time.perf_counter() - started

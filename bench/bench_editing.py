@@ -53,7 +53,7 @@ from simsplat_core.language.text import default_text_encoder  # noqa: E402
 from storage import ArtifactStore, list_logs, read_scene_log  # noqa: E402
 from storage.assets import read_asset_bank  # noqa: E402
 from storage.language_scenes import list_language_scenes  # noqa: E402
-from tasks.edit import load_edit_context  # noqa: E402
+from tasks.stored_edits import load_edit_context  # noqa: E402
 
 logger = logging.getLogger("bench.editing")
 

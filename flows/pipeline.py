@@ -19,7 +19,6 @@ from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
-from storage import ArtifactStore, list_scenes
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
 from tasks.assets import BuiltBank, build_asset_bank
@@ -27,7 +26,7 @@ from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task
 from tasks.reconstruct import StoredScene, reconstruct_scene
-from tasks.stages import STAGES, LogStages, decide_stages, plan_stages, resolve_seq_ids
+from tasks.stages import STAGES, LogStages, decide_stages, plan_alignment, plan_stages, resolve_seq_ids
 
 logger = logging.getLogger(__name__)
 
@@ -90,7 +89,7 @@ def store_logs(store_root: str, generated: list[StoredLog]) -> tuple[list[Stored
     stages each goes through; publishes the stages table.
 
     Raises:
-        ValueError: the store holds no log (the message says how to add one).
+        MissingInputError: the store holds no log (the message says how to add one).
     """
     seq_ids = resolve_seq_ids(store_root)
     produced = {s.summary.seq_id: s for s in generated}
@@ -327,7 +326,7 @@ def main_flow(
             first when missing; ``None``: no mining).
 
     Raises:
-        ValueError: the store holds no log and ``seeds`` is empty.
+        MissingInputError: the store holds no log and ``seeds`` is empty.
     """
     generated = generate_logs(store_root, seeds, config) if seeds else []
     logs, plans = store_logs(store_root, generated)
@@ -352,45 +351,6 @@ def main_flow(
 
 
 @dataclass(frozen=True)
-class AlignmentPlan:
-    """What the alignment flow will do: the aligner's training logs and the ``(seq_id, scene_hash)`` targets.
-
-    Attributes:
-        training_seq_ids: every log in the store (the aligner trains on all of them).
-        stages: the stages of the chosen logs.
-        targets: per chosen log its newest reconstructed scene, ``None`` for a log without camera images.
-    """
-
-    training_seq_ids: list[str]
-    stages: list[LogStages]
-    targets: list[tuple[str, str | None]]
-
-
-def plan_alignment(store_root: str, seq_ids: list[str] | None = None) -> AlignmentPlan:
-    """The ``AlignmentPlan`` of aligning ``seq_ids`` (default: every log) in the store; no Prefect needed,
-    so the CLI checks it before starting a flow.
-
-    Raises:
-        ValueError: no log in the store, or a chosen log is unknown or has camera images but no
-            reconstructed scene (named, with the command that makes one).
-    """
-    store = ArtifactStore(store_root)
-    every = resolve_seq_ids(store_root)
-    stages = plan_stages(store_root, resolve_seq_ids(store_root, seq_ids))
-    targets: list[tuple[str, str | None]] = []
-    for plan in stages:
-        if not plan.reconstructs:
-            targets.append((plan.seq_id, None))
-            continue
-        stored = list_scenes(store, plan.seq_id)
-        if not stored:
-            raise ValueError(f"{plan.seq_id}: the log has camera images but no reconstructed scene in "
-                             f"{store_root}/scenes (run simsplat reconstruct --store {store_root} --seq {plan.seq_id})")
-        targets.append((plan.seq_id, stored[-1]))
-    return AlignmentPlan(every, stages, targets)
-
-
-@dataclass(frozen=True)
 class AlignResult:
     """What the alignment flow produced: the aligner (trained on every stored log), the language scenes
     of the chosen logs, and their stages."""
@@ -408,7 +368,7 @@ def align_flow(store_root: str, seq_ids: list[str] | None = None, alignment: Ali
     with camera images through its newest reconstructed scene, a log without from its tracks and map.
 
     Raises:
-        ValueError: see ``plan_alignment``.
+        MissingInputError: see ``tasks.stages.plan_alignment``.
     """
     plan = plan_alignment(store_root, seq_ids)
     _report_stages(plan.stages, ("reconstruct",))  # a log without a reconstruction is aligned from its tracks

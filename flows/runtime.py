@@ -80,9 +80,13 @@ def make_task_runner(kind: RunnerKind, num_cpus: int | None = None):
     from prefect_ray import RayTaskRunner
 
     os.environ.setdefault("RAY_AUTH_MODE", "disabled")
+    from tasks.progress import RELAY_ENV
+
     address = os.environ.get("RAY_ADDRESS")
-    if address:
-        return RayTaskRunner(address=address)
+    if address:  # a running cluster's workers do not inherit this process's environment: hand them the relay
+        relay = os.environ.get(RELAY_ENV)
+        return RayTaskRunner(address=address,
+                             init_kwargs={"runtime_env": {"env_vars": {RELAY_ENV: relay}}} if relay else None)
     init_kwargs = {"num_cpus": num_cpus or os.cpu_count() or 1, "include_dashboard": False, "log_to_driver": True}
     return RayTaskRunner(init_kwargs=init_kwargs)
 

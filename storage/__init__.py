@@ -2,13 +2,15 @@
 
 * ``store``: ``ArtifactStore`` over ``pyarrow.fs`` (local paths or object-store URIs), atomic puts.
 * ``schemas``: every Parquet table's ``pyarrow.schema`` with its version, validated on read.
-* ``parquet_io``, ``exr``, ``png``: table, EXR (OpenImageIO, zip) and PNG I/O.
+* ``parquet_io``, ``exr``, ``pictures``: table, EXR (OpenImageIO, zip) and PNG / MP4 I/O.
 * ``keys``, ``markers``: content keys of stage inputs/configs and the ``_SUCCESS.json`` manifests that
   mark finished work (a re-run skips it).
 * ``logs``, ``scenes``: scene logs (``logs/<seq_id>``) and reconstructed scenes (``scenes/<seq_id>/<hash>``).
 * ``alignment``, ``language_scenes``: the motion aligner models and language scenes (``alignment/``).
 * ``runs``: run directories and evaluation tables (``runs/<run_id>/tables``).
 * ``assets``: asset banks for scene editing (``assets/<bank_hash>``).
+* ``inventory``: whether a sequence has a complete log / reconstructed scene / language scene (and the store an
+  asset bank), else one ``MissingInputError`` naming the command that makes it; imported on use.
 * ``edits``: language edits (``edits/<run_id>/<seq_id>/<edit_id>``, the run's ``edits`` table); imported on
   use (it loads the editing core), not re-exported here.
 

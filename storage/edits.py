@@ -45,10 +45,11 @@ from simsplat_core.editing.commands import EditProgram, program_from_json, progr
 from simsplat_core.editing.result import AddedNode, EditDelta
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene.pose_track import Extrapolation, PoseTrack
-from simsplat_core.viz.images import encode_mp4, encode_png
+from simsplat_core.viz.images import encode_png
 from storage.errors import CorruptArtifactError
 from storage.exr import render_channels, write_exr
 from storage.markers import mark_done, read_marker
+from storage.pictures import encode_mp4
 from storage.schemas import (
     EDIT_POSE_TRACKS_SCHEMA,
     EDITS_MINING_COLUMNS,

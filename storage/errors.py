@@ -20,3 +20,10 @@ class SchemaError(StorageError, ValueError):
 
 class CorruptArtifactError(StorageError, ValueError):
     """A file exists but cannot be decoded (truncated Parquet, broken EXR, invalid JSON)."""
+
+
+class MissingInputError(StorageError, FileNotFoundError, ValueError):
+    """A stage's input is not in the store; the message names what is missing and the command that makes it.
+
+    A ``FileNotFoundError`` (the artifact is not there) and a ``ValueError`` (the sequences asked for cannot be
+    used): callers that catch either catch it."""

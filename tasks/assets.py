@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import asdict, dataclass, field
+from typing import Any
 
 from prefect import task
 from prefect.cache_policies import NO_CACHE
@@ -21,9 +22,19 @@ from simsplat_core.editing.procedural_assets import STATIC_KINDS, procedural_ass
 from simsplat_core.scene import SceneGraph
 from simsplat_core.viz.asset_sheet import asset_contact_sheet
 from simsplat_core.viz.images import encode_png
-from storage import ArtifactStore, config_settings, content_key, list_logs, list_scenes, read_scene, read_scene_log
-from storage.assets import ASSET_BANK_FORMAT_VERSION, bank_dir, read_bank_manifest, write_asset_bank
+from storage import ArtifactStore, config_settings, content_key, list_scenes, read_scene, read_scene_log
+from storage.assets import (
+    ASSET_BANK_FORMAT_VERSION,
+    bank_dir,
+    list_asset_banks,
+    read_asset_bank,
+    read_asset_index,
+    read_bank_manifest,
+    write_asset_bank,
+)
+from storage.inventory import SCENE, require_sequences, sequences_with
 from storage.language_scenes import list_language_scenes, read_language_manifest, read_language_scene
+from storage.pictures import write_png
 from tasks.progress import StepProgress
 
 logger = logging.getLogger(__name__)
@@ -81,13 +92,9 @@ def asset_sources(store: ArtifactStore, seq_ids: list[str] | None = None) -> lis
     with a reconstructed scene).
 
     Raises:
-        ValueError: a chosen sequence has no complete reconstructed scene (naming it and those that do).
+        MissingInputError: a chosen sequence has no complete reconstructed scene (naming it and those that do).
     """
-    with_scene = [s for s in list_logs(store) if list_scenes(store, s)]
-    chosen = list(seq_ids) if seq_ids else with_scene
-    missing = [s for s in chosen if s not in with_scene]
-    if missing:
-        raise ValueError(f"no reconstructed scene of {missing} in {store.uri('scenes')}; reconstructed: {with_scene}")
+    chosen = require_sequences(store, seq_ids, SCENE) if seq_ids else sequences_with(store, SCENE)
     sources = []
     for seq_id in chosen:
         scene_hash = list_scenes(store, seq_id)[-1]
@@ -136,7 +143,7 @@ def build_asset_bank(store_root: str, seq_ids: list[str] | None = None, config: 
     Progress (``tasks.progress``): ``"asset bank: cut out"`` per scene, ``"asset bank: contact sheet"`` per tile.
 
     Raises:
-        ValueError: a chosen sequence has no reconstructed scene.
+        MissingInputError: a chosen sequence has no reconstructed scene.
     """
     store = ArtifactStore(store_root)
     config = config or CutoutConfig()
@@ -170,4 +177,57 @@ def build_asset_bank(store_root: str, seq_ids: list[str] | None = None, config: 
                      False, report, built.sheet_uri, seconds)
 
 
-__all__ = ["BANK_VERSION", "AssetSource", "BuiltBank", "asset_sources", "bank_key", "build_asset_bank"]
+@dataclass(frozen=True)
+class AssetListing:
+    """The store's asset banks and the assets of one (what ``simsplat assets list`` shows).
+
+    Attributes:
+        banks: per bank, oldest first: ``bank_hash``, ``assets``, ``by_category``, ``written_at`` (from its manifest).
+        bank_hash: the bank listed (the newest unless one was asked for).
+        assets: one dict per asset of that bank (``storage.assets.read_asset_index``).
+        uri: where the store keeps its banks (``<store>/assets``).
+    """
+
+    banks: list[dict[str, Any]]
+    bank_hash: str
+    assets: list[dict[str, Any]]
+    uri: str
+
+
+def list_assets(store_root: str, bank_hash: str | None = None) -> AssetListing:
+    """The store's banks and the assets of ``bank_hash`` (a unique prefix is enough; default: the newest).
+
+    Raises:
+        FileNotFoundError, ValueError: no (such) complete bank (naming ``simsplat assets build``), an ambiguous prefix.
+    """
+    store = ArtifactStore(store_root)
+    full, rows = read_asset_index(store, bank_hash)
+    banks = [{"bank_hash": h, **{k: (read_bank_manifest(store, h) or {}).get(k) for k in
+                                  ("assets", "by_category", "written_at")}} for h in list_asset_banks(store)]
+    return AssetListing(banks, full, rows, store.uri("assets"))
+
+
+@dataclass(frozen=True)
+class AssetSheet:
+    """A drawn contact sheet: where it went, of which bank, how many assets."""
+
+    uri: str
+    bank_hash: str
+    assets: int
+
+
+def draw_asset_sheet(store_root: str, out: str, bank_hash: str | None = None, columns: int = 8) -> AssetSheet:
+    """Draw a bank's contact sheet (every asset rendered alone from the same 3/4 view, with its caption;
+    ``columns`` tiles per row) to ``out`` (a ``.png`` path or URI). Progress: ``"contact sheet"`` per tile.
+
+    Raises:
+        FileNotFoundError, ValueError: no (such) complete bank, an ambiguous prefix; ``out`` is not a ``.png``.
+    """
+    bank = read_asset_bank(ArtifactStore(store_root), bank_hash)
+    tiles = StepProgress("contact sheet", headline="")
+    picture = asset_contact_sheet(bank.assets, columns=columns, progress=lambda done, n: tiles(done, n))
+    return AssetSheet(write_png(out, picture), bank.bank_hash, len(bank))
+
+
+__all__ = ["BANK_VERSION", "AssetListing", "AssetSheet", "AssetSource", "BuiltBank", "asset_sources", "bank_key",
+           "build_asset_bank", "draw_asset_sheet", "list_assets"]

@@ -1,7 +1,7 @@
 """Task: evaluate language editing on the stored synthetic scenes (SIMSplat Table 3 and edit fidelity).
 
 Thin: load each sequence's log (with its ground-truth images), the editor's context (stored scene graph,
-language scene, asset bank: ``tasks.edit.load_edit_context``) and the world that generated the log; build
+language scene, asset bank: ``tasks.stored_edits.load_edit_context``) and the world that generated the log; build
 the prompt set from ground truth (inserts ask for the looks the bank holds); run every method on every
 prompt and check it (``simsplat_core.eval.editing``); write the run's tables into ``OUT``:
 ``tables/editing.{parquet,md}``, ``tables/editing_infeasible``, ``tables/edit_fidelity``,

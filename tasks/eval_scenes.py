@@ -17,7 +17,7 @@ from simsplat_core.eval.editing.truth import SceneTruth
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.motion.predictor import MotionPredictor
 from storage import ArtifactStore, read_scene_log
-from tasks.edit import LoadedEdit, load_edit_context
+from tasks.stored_edits import LoadedEdit, load_edit_context
 
 
 @dataclass(frozen=True)
@@ -30,7 +30,7 @@ class TruthScene:
 
 def load_truth_scene(store: ArtifactStore, seq_id: str, *, engine: QueryEngine | None = None,
                      bank: AssetBank | None = None, predictor: MotionPredictor | None = None) -> TruthScene:
-    """The editing context of ``seq_id`` (``tasks.edit.load_edit_context``) and its :class:`SceneTruth` with the
+    """The editing context of ``seq_id`` (``tasks.stored_edits.load_edit_context``) and its :class:`SceneTruth` with the
     reconstructed graph's node ids.
 
     Raises:

@@ -1,11 +1,11 @@
 """Mine one stored sequence for scenarios and store them (what ``simsplat mine`` runs per sequence).
 
-Thin: load the sequence's edit context (``tasks.edit.load_edit_context``), build the VLM client (the rule-based
+Thin: load the sequence's edit context (``tasks.stored_edits.load_edit_context``), build the VLM client (the rule-based
 one of the seed, or the OpenAI-compatible one from ``SIMSPLAT_VLM_URL`` / ``SIMSPLAT_VLM_MODEL`` /
 ``SIMSPLAT_VLM_API_KEY``), call ``simsplat_core.mining.mine_sequence``, then store:
 
 * every accepted scenario as an edit directory ``edits/<run_id>/<seq_id>/<edit_id>/``, exactly as ``simsplat edit``
-  writes one (``tasks.edit.write_edit``; a scenario already stored under the same key is not re-rendered);
+  writes one (``tasks.stored_edits.write_edit``; a scenario already stored under the same key is not re-rendered);
 * one row per attempt in the run's ``edits`` table, all rows of the sequence appended in one atomic rewrite
   (``storage.edits.append_edit_records``), with the mining columns (``mining_status``, ``category``,
   ``plausibility``, ``export``, stage seconds, ...).
@@ -36,9 +36,10 @@ from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.vlm_protocol import VLMClient
 from storage import ArtifactStore
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
+from storage.inventory import require_asset_bank
 from storage.schemas import EDITS_MINING_COLUMNS
-from tasks.edit import LoadedEdit, edit_key, load_edit_context, write_edit
 from tasks.progress import StepProgress, publish_table
+from tasks.stored_edits import LoadedEdit, edit_key, load_edit_context, write_edit
 
 logger = logging.getLogger(__name__)
 
@@ -164,10 +165,8 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     if threads:
         set_compute_threads(threads)
     store = ArtifactStore(store_root)
+    require_asset_bank(store, f"to mine {seq_id!r} with")
     loaded = load_edit_context(store, seq_id)
-    if not loaded.bank_hash:
-        raise FileNotFoundError(f"{store.uri('assets')}: no asset bank to mine {seq_id!r} with "
-                                "(run `simsplat assets build` first)")
     config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed,
                           category_offset=category_offset)
     client = client if client is not None else make_client(vlm, loaded, config)

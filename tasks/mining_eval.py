@@ -43,8 +43,8 @@ from storage import ArtifactStore
 from storage.edits import read_edit_delta, read_edit_records, read_trajectories
 from storage.runs import RunTable, new_run_id, write_run_tables
 from storage.schemas import mining_table_schema
-from tasks.edit import LoadedEdit, load_edit_context
 from tasks.mine import VLM_KINDS, MiningSummary, mine_sequence_task
+from tasks.stored_edits import LoadedEdit, load_edit_context
 
 logger = logging.getLogger(__name__)
 

@@ -6,19 +6,28 @@ callback. Each call
 * notifies the listeners registered in *this process* (``listening``) — the CLI uses this to draw a
   live bar per sequence when tasks run in threads; tasks on Ray workers have no listeners;
 * updates a Prefect progress artifact (created on the first call, only inside a task or flow run),
-  at most every ``min_interval_s`` seconds and always on the last step.
+  at most every ``min_interval_s`` seconds and always on the last step;
+* when ``SIMSPLAT_PROGRESS_RELAY`` names a folder (the CLI sets it around a Ray run: Ray workers inherit it),
+  writes the latest report there as one small JSON file per label, at most every ``RELAY_INTERVAL_S`` seconds
+  and always on the last step; the driver polls the folder (``read_step_reports``) and draws the bars that
+  in-process listeners draw for the threads runner.
 
 Progress reporting never raises: a failing listener or an unreachable API is logged and ignored.
 """
 
 from __future__ import annotations
 
+import hashlib
 import logging
+import os
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
+from dataclasses import dataclass, field
 from typing import Any
+
+from storage import ArtifactStore, CorruptArtifactError
 
 logger = logging.getLogger(__name__)
 
@@ -27,6 +36,47 @@ Listener = Callable[[str, int, int, Mapping[str, float]], None]
 
 _listeners: list[Listener] = []
 _lock = threading.Lock()
+
+#: Folder (a local path or a URI) where step reports are relayed to a driver in another process.
+RELAY_ENV = "SIMSPLAT_PROGRESS_RELAY"
+#: Minimum time between two relayed reports of one label.
+RELAY_INTERVAL_S = 0.5
+
+
+@dataclass(frozen=True)
+class StepReport:
+    """One progress report: ``step`` of ``total`` of the work ``label`` names, with its latest ``metrics``."""
+
+    label: str
+    step: int
+    total: int
+    metrics: dict[str, float] = field(default_factory=dict)
+
+
+def _report_name(label: str) -> str:
+    return hashlib.sha256(label.encode("utf-8")).hexdigest()[:16] + ".json"
+
+
+def write_step_report(folder: str, report: StepReport) -> None:
+    """Replace ``report.label``'s file in the relay ``folder`` (a local path or a URI) with ``report`` (atomically)."""
+    body = {"label": report.label, "step": report.step, "total": report.total, "metrics": dict(report.metrics)}
+    ArtifactStore(folder).write_json(_report_name(report.label), body)
+
+
+def read_step_reports(folder: str) -> list[StepReport]:
+    """The latest report of every label in the relay ``folder`` (a file being replaced or unreadable is skipped)."""
+    relay = ArtifactStore(folder)
+    reports = []
+    for name in relay.listdir(""):
+        if not name.endswith(".json"):
+            continue
+        try:
+            body = relay.read_json(name)
+            reports.append(StepReport(str(body["label"]), int(body["step"]), int(body["total"]),
+                                      {str(k): float(v) for k, v in dict(body.get("metrics", {})).items()}))
+        except (CorruptArtifactError, FileNotFoundError, KeyError, TypeError, ValueError):
+            logger.debug("skipping progress report %s", name, exc_info=True)
+    return sorted(reports, key=lambda r: r.label)
 
 
 @contextmanager
@@ -63,6 +113,7 @@ class StepProgress:
         self._artifact_id: Any = None
         self._artifact_failed = False
         self._last_update = float("-inf")
+        self._last_relay = float("-inf")
 
     def __call__(self, step: int, total: int, metrics: Mapping[str, float] | None = None) -> None:
         metrics = dict(metrics or {})
@@ -77,6 +128,18 @@ class StepProgress:
         if step >= total or now - self._last_update >= self.min_interval_s:
             self._last_update = now
             self._publish(step, total, metrics)
+        if step >= total or now - self._last_relay >= RELAY_INTERVAL_S:
+            self._last_relay = now
+            self._relay(StepReport(self.label, step, total, metrics))
+
+    def _relay(self, report: StepReport) -> None:
+        folder = os.environ.get(RELAY_ENV)
+        if not folder:
+            return
+        try:
+            write_step_report(folder, report)
+        except Exception:  # progress must never break the work
+            logger.debug("could not relay progress of %s to %s", self.label, folder, exc_info=True)
 
     def _describe(self, step: int, total: int, metrics: Mapping[str, float]) -> str:
         text = f"{self.label}: {step}/{total}"

@@ -6,16 +6,14 @@ Not a Prefect task: a query is interactive and takes well under a second once th
 from __future__ import annotations
 
 import logging
-import math
 import re
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
 from simsplat_core.language.alignment.feature_field import similarity_map
 from simsplat_core.language.grounding.engine import QueryEngine
-from simsplat_core.language.grounding.result import Grounding, NodeMatch
+from simsplat_core.language.grounding.result import Grounding
 from simsplat_core.language.grounding.static_location import with_static_locations
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import default_text_encoder
@@ -25,7 +23,7 @@ from simsplat_core.viz.grounding_view import grounding_picture
 from storage import ArtifactStore, read_scene_log
 from storage.language_scenes import read_language_scene
 from storage.logs import read_image_rgb
-from storage.png import write_png
+from storage.pictures import write_png
 
 logger = logging.getLogger(__name__)
 
@@ -45,54 +43,6 @@ class QueryAnswer:
     grounding: Grounding
     frame: int | None
     png_uri: str
-
-
-def _finite(value: float) -> float | None:
-    """``value`` as a JSON number, ``None`` for a signal the query did not use (``nan``)."""
-    return round(float(value), 6) if math.isfinite(value) else None
-
-
-def _match_dict(scene: LanguageScene, match: NodeMatch, chosen: bool) -> dict[str, Any]:
-    node = scene.node(match.node_id)
-    motion = node.motion
-    return {
-        "node_id": match.node_id,
-        "object_id": match.object_id,
-        "category": node.category,
-        "caption": node.caption.text if node.caption is not None else None,
-        "motion": motion.motion if motion is not None else None,
-        "motion_label": motion.labels.motion if motion is not None else None,
-        "location_label": f"{motion.labels.sector} {motion.labels.context}" if motion is not None else None,
-        "scores": {"score": _finite(match.score), "appearance": _finite(match.appearance),
-                   "motion": _finite(match.motion), "location": _finite(match.location)},
-        "candidate": match.candidate,
-        "chosen": chosen,
-    }
-
-
-def answer_as_dict(answer: QueryAnswer, top: int | None = None) -> dict[str, Any]:
-    """The answer as plain JSON-able data (``simsplat query --json``).
-
-    Keys: ``seq_id``, ``query``, ``matches`` (the chosen nodes, best first), ``ranking`` (the first ``top``
-    scored nodes; all when ``None``), ``message``, ``group``, ``frame`` and ``png`` (``None`` when nothing was
-    drawn). Each node: ``node_id``, ``object_id``, ``category``, ``caption`` (``None`` without images),
-    ``motion`` (the aligner's class), ``motion_label`` / ``location_label`` (the auto-labels), ``scores``
-    (``score``, ``appearance``, ``motion``, ``location``; ``None`` for a signal the query did not use),
-    ``candidate`` and ``chosen``.
-    """
-    grounding, scene = answer.grounding, answer.scene
-    chosen = set(grounding.node_ids)
-    ranking = grounding.ranking if top is None else grounding.ranking[:top]
-    return {
-        "seq_id": scene.seq_id,
-        "query": grounding.query,
-        "matches": [_match_dict(scene, m, True) for m in grounding.matches],
-        "ranking": [_match_dict(scene, m, m.node_id in chosen) for m in ranking],
-        "message": grounding.message,
-        "group": grounding.group,
-        "frame": answer.frame,
-        "png": answer.png_uri or None,
-    }
 
 
 def default_png_path(store: ArtifactStore, seq_id: str, text: str) -> str:

@@ -14,7 +14,6 @@ from __future__ import annotations
 import logging
 import re
 from dataclasses import replace
-from typing import Any
 
 import numpy as np
 
@@ -28,9 +27,10 @@ from simsplat_core.search.logs import SearchableLog, StoreSearch, search_logs
 from simsplat_core.viz.contact_sheet import bev_panel
 from simsplat_core.viz.grounding_view import grounding_picture
 from storage import ArtifactStore, read_scene_log
+from storage.inventory import require_sequences
 from storage.language_scenes import read_language_scene
-from storage.logs import list_logs, read_image_rgb
-from storage.png import write_png
+from storage.logs import read_image_rgb
+from storage.pictures import write_png
 
 logger = logging.getLogger(__name__)
 
@@ -53,12 +53,7 @@ def load_store(store_root: str, seq_ids: list[str] | None = None) -> list[Search
         FileNotFoundError: the store has no logs, or a named sequence is missing (naming it).
     """
     store = ArtifactStore(store_root)
-    available = list_logs(store)
-    wanted = seq_ids or available
-    missing = [s for s in wanted if s not in available]
-    if missing or not wanted:
-        raise FileNotFoundError(f"{store_root}: no log {', '.join(missing) or '(none stored under logs/)'}")
-    return [load_searchable(store, s) for s in wanted]
+    return [load_searchable(store, s) for s in require_sequences(store, seq_ids)]
 
 
 def _slug(text: str) -> str:
@@ -105,20 +100,6 @@ def search_store(store_root: str, text: str, *, seq_ids: list[str] | None = None
             kinds[uri] = kind
     logger.info("search %r: %s", text, found.message)
     return StoreSearch(found.query, tuple(hits), found.results, found.seconds, kinds)
-
-
-def search_as_dict(found: StoreSearch) -> dict[str, Any]:
-    """``simsplat search --json``: ``query``, ``clauses``, ``hits`` (``seq_id``, ``object_ids``, ``window``
-    [start, end], ``score``, ``picture`` or ``None``, ``picture_kind``), ``message``, ``seconds``."""
-    return {
-        "query": found.query.text,
-        "clauses": [c.text for c in found.query.clauses],
-        "hits": [{"seq_id": h.seq_id, "object_ids": list(h.object_ids), "window": list(h.window),
-                  "score": round(h.score, 6), "picture": h.picture or None,
-                  "picture_kind": found.picture_kinds.get(h.picture)} for h in found.hits],
-        "message": found.message,
-        "seconds": round(found.seconds, 4),
-    }
 
 
 def search_seeds(store_root: str, text: str, *, seq_ids: list[str] | None = None,

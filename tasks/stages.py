@@ -9,7 +9,9 @@ Every stored log is aligned (motion and location language come from its tracks a
   real logs skip it.
 
 A skipped stage is a decision with a reason that the flows report ("skipped: no camera images"),
-never an error. Not a Prefect task: it reads a manifest per log and takes milliseconds.
+never an error; a missing input is (``resolve_seq_ids``: the store's logs, scenes or language scenes,
+checked by ``storage.inventory``). ``plan_alignment`` decides what the alignment flow does. Not Prefect
+tasks: they read a manifest per log and take milliseconds, so the CLI checks them before starting a flow.
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from simsplat_core.types import SYNTHETIC_SOURCE
-from storage import ArtifactStore, list_logs, require_log_manifest
+from storage import ArtifactStore, list_scenes, require_log_manifest
+from storage.inventory import LOG, SCENE, Requirement, require_sequences
 
 #: The per-log stages a flow may skip (alignment is never skipped: every log gets motion and location).
 STAGES: tuple[str, ...] = ("reconstruct", "evaluate")
@@ -66,22 +69,15 @@ def decide_stages(seq_id: str, source: str, images: int) -> LogStages:
     return LogStages(seq_id, source, images, skip_reconstruct, skip_evaluate)
 
 
-def resolve_seq_ids(store_root: str, seq_ids: list[str] | None = None) -> list[str]:
-    """``seq_ids`` (default: every complete log in the store), checked against the store.
+def resolve_seq_ids(store_root: str, seq_ids: list[str] | None = None, needs: Requirement = LOG) -> list[str]:
+    """``seq_ids`` (default: every sequence of the store with ``needs``' artifact: a complete log, a reconstructed
+    scene, a language scene), checked against the store (``storage.inventory.require_sequences``).
 
     Raises:
-        ValueError: the store holds no log (saying how to add one), or a chosen log is not in it (naming
-            it and the available ones).
+        MissingInputError: the store holds no log (saying how to add one), or a chosen sequence lacks the artifact
+            (naming it, those that have it and the command that makes it).
     """
-    available = list_logs(ArtifactStore(store_root))
-    if not available:
-        raise ValueError(f"no driving log in {store_root}/logs: generate synthetic ones (simsplat run --sequences N) "
-                         "or ingest real ones (simsplat ingest SOURCE PATH, or simsplat ingest auto PATH)")
-    chosen = list(seq_ids) if seq_ids else available
-    unknown = [s for s in chosen if s not in available]
-    if unknown:
-        raise ValueError(f"no complete log {unknown} in {store_root}/logs; available: {available}")
-    return chosen
+    return require_sequences(ArtifactStore(store_root), seq_ids, needs)
 
 
 def plan_stages(store_root: str, seq_ids: list[str]) -> list[LogStages]:
@@ -97,3 +93,36 @@ def plan_stages(store_root: str, seq_ids: list[str]) -> list[LogStages]:
         images = int(manifest.get("images", {}).get("count", 0))
         plans.append(decide_stages(seq_id, str(manifest.get("source", "")), images))
     return plans
+
+
+@dataclass(frozen=True)
+class AlignmentPlan:
+    """What the alignment flow will do: the aligner's training logs and the ``(seq_id, scene_hash)`` targets.
+
+    Attributes:
+        training_seq_ids: every log in the store (the aligner trains on all of them).
+        stages: the stages of the chosen logs.
+        targets: per chosen log its newest reconstructed scene, ``None`` for a log without camera images.
+    """
+
+    training_seq_ids: list[str]
+    stages: list[LogStages]
+    targets: list[tuple[str, str | None]]
+
+
+def plan_alignment(store_root: str, seq_ids: list[str] | None = None) -> AlignmentPlan:
+    """The ``AlignmentPlan`` of aligning ``seq_ids`` (default: every log) in the store; no Prefect needed,
+    so the CLI checks it before starting a flow.
+
+    Raises:
+        MissingInputError: no log in the store, or a chosen log is unknown or has camera images but no
+            reconstructed scene (named, with the command that makes one).
+    """
+    store = ArtifactStore(store_root)
+    every = resolve_seq_ids(store_root)
+    stages = plan_stages(store_root, resolve_seq_ids(store_root, seq_ids))
+    with_images = [p.seq_id for p in stages if p.reconstructs]
+    if with_images:  # aligned through their reconstructed scene: it must be there
+        require_sequences(store, with_images, SCENE)
+    targets = [(p.seq_id, list_scenes(store, p.seq_id)[-1] if p.reconstructs else None) for p in stages]
+    return AlignmentPlan(every, stages, targets)

@@ -1,7 +1,7 @@
 """A short bird's-eye animation of an edit: the log on the left, the edited and refined scenario on the right.
 
     frames = bev_animation_frames(log.map_features, edited.original_states, edited.states, title=prompt)
-    video = encode_mp4(frames, fps=bev_fps(edited.states))   # simsplat_core.viz.images
+    video = encode_mp4(frames, fps=bev_fps(edited.states))   # storage.pictures
 
 Both panels share one view (``viz.bev.bev_extent``) and step together, so a person sees who yielded to whom:
 an agent that reacted to the edit is green on the right and where the log had it on the left.

@@ -9,7 +9,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 from typer.testing import CliRunner
 
-from flows.cli import app, default_real_logs
+from flows.cli import app
+from flows.cli.evaluate import default_real_logs
 
 runner = CliRunner()
 

@@ -1,10 +1,15 @@
-"""Step progress reported by tasks in this process drives one live bar per unit of work."""
+"""Step progress reported by tasks drives one live bar per unit of work: reports made in this process through a
+listener, those of other processes (Ray workers) relayed through a folder."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import flows.progress
 from flows.progress import StepBars
-from tasks.progress import StepProgress
+from tasks.progress import RELAY_ENV, StepProgress
 
 
 def test_step_bars_draw_one_bar_per_label_from_task_reports(monkeypatch):
@@ -24,3 +29,41 @@ def test_step_bars_do_nothing_without_a_terminal(monkeypatch):
     with StepBars() as bars:
         StepProgress("x")(1, 2, {})
     assert bars._bar is None and flows.progress._shared_bar is None
+
+
+def test_step_reports_are_relayed_through_a_folder_throttled(tmp_path, monkeypatch):
+    from tasks.progress import StepReport, read_step_reports
+
+    monkeypatch.setenv(RELAY_ENV, str(tmp_path))
+    step = StepProgress("reconstruct a")
+    step(3, 10, {"psnr": 21.0})
+    step(4, 10, {"psnr": 21.5})  # within the relay interval: not written
+    assert read_step_reports(str(tmp_path)) == [StepReport("reconstruct a", 3, 10, {"psnr": 21.0})]
+    step(10, 10, {})  # the last step always is
+    StepProgress("reconstruct b")(1, 5)
+    assert read_step_reports(str(tmp_path)) == [StepReport("reconstruct a", 10, 10, {}),
+                                                                StepReport("reconstruct b", 1, 5, {})]
+
+
+def test_relayed_steps_pass_each_change_once():
+    from flows.progress import RelayedSteps
+
+    heard = []
+    with RelayedSteps(lambda *report: heard.append(report), interval_s=60.0) as relay:
+        StepProgress("x")(1, 2, {})  # this process inherits the folder too
+        assert relay.poll() == 1 and relay.poll() == 0
+        folder = relay.folder
+    assert heard == [("x", 1, 2, {})]
+    assert not os.path.exists(folder) and RELAY_ENV not in os.environ
+
+
+def test_step_bars_draw_the_reports_of_another_process(monkeypatch):
+    """What the Ray runner needs: a worker process (inheriting the environment) reports, the driver draws."""
+    monkeypatch.setenv("SIMSPLAT_PROGRESS", "1")
+    worker = "from tasks.progress import StepProgress; StepProgress('reconstruct w')(7, 20, {'psnr': 18.5})"
+    with StepBars(relay=True) as bars:
+        subprocess.run([sys.executable, "-c", worker], check=True, env=dict(os.environ), timeout=120)
+        bars._relayed.poll()
+        shown = {t.description: (t.completed, t.total) for t in bars._bar.tasks}
+    assert shown == {"reconstruct w psnr 18.50": (7, 20)}
+    assert RELAY_ENV not in os.environ

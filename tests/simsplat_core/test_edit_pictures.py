@@ -11,7 +11,7 @@ from simsplat_core.types import MapFeature
 from simsplat_core.viz.before_after import OUTLINE, FramePair, before_after_picture, pick_views, sample_steps
 from simsplat_core.viz.bev import EDITED_COLOR, INSERTED_COLOR, REFINED_COLOR, REMOVED_COLOR, edit_bev
 from simsplat_core.viz.bev_animation import bev_animation_frames, bev_fps
-from simsplat_core.viz.images import encode_mp4
+from storage.pictures import encode_mp4
 
 T = 20
 

@@ -180,7 +180,8 @@ def test_a_malformed_command_file_is_a_schema_error_naming_the_field(store_root,
 
 
 def test_the_stored_delta_rebuilds_the_edited_graph(store_root, target):
-    from tasks.edit import rebuild_edit, run_edit
+    from tasks.edit import run_edit
+    from tasks.stored_edits import rebuild_edit
 
     commands = json.dumps({"commands": [
         {"op": "insert", "asset": {"description": "orange traffic cones", "count": 2},

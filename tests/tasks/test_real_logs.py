@@ -10,14 +10,14 @@ import pytest
 from typer.testing import CliRunner
 
 from flows.cli import app
-from flows.pipeline import align_targets, plan_alignment
+from flows.pipeline import align_targets
 from simsplat_core.data.av2 import load_av2_log
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from storage import ArtifactStore, write_scene_log
 from storage.language_scenes import read_language_scene
 from tasks.align import align_scene, train_motion_aligner
 from tasks.query import answer_query
-from tasks.stages import NO_IMAGES, decide_stages, plan_stages
+from tasks.stages import NO_IMAGES, decide_stages, plan_alignment, plan_stages
 
 pytestmark = pytest.mark.shared_data
 

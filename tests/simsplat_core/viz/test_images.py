@@ -6,7 +6,8 @@ import cv2
 import numpy as np
 import pytest
 
-from simsplat_core.viz.images import encode_mp4, encode_png, to_uint8
+from simsplat_core.viz.images import encode_png, to_uint8
+from storage.pictures import encode_mp4
 
 
 def test_to_uint8_rounds_and_clips() -> None:

@@ -1,0 +1,97 @@
+"""What several ``simsplat`` command groups share: option types, running a flow with progress bars, turning the
+user's settings into configs, and checking the store before any work starts (a bad parameter, not a traceback)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Any
+
+import typer
+
+from flows.runtime import RunnerKind
+
+VLMOption = Annotated[str, typer.Option(help="VLM client of the mining loop: rule (built-in, offline) or openai "
+                                        "(SIMSPLAT_VLM_URL, SIMSPLAT_VLM_MODEL, SIMSPLAT_VLM_API_KEY).")]
+RunnerOption = Annotated[RunnerKind, typer.Option(help="Where per-sequence tasks run: a local Ray cluster or threads.")]
+WorkersOption = Annotated[int | None, typer.Option(help="Parallel workers (default: all CPUs).")]
+IterationsOption = Annotated[int | None, typer.Option(min=1, help="Reconstruction iterations per sequence "
+                                                         "(default: the ReconstructionConfig default).")]
+CaptionerOption = Annotated[str, typer.Option(
+    help="Object captioner of the alignment: 'builtin' (offline) or 'vlm' (an OpenAI-compatible server "
+         "from SIMSPLAT_VLM_URL / SIMSPLAT_VLM_MODEL; key in SIMSPLAT_VLM_API_KEY).")]
+
+
+def run_flow(flow_fn: Any, runner: RunnerKind, workers: int | None, **params: Any) -> Any:
+    """Run ``flow_fn`` with the chosen task runner against one shared Prefect API.
+
+    Tasks' step progress (e.g. reconstruction iterations) is drawn live for either runner: reports of tasks in
+    this process (threads) through a listener, those of Ray workers relayed through a folder
+    (``flows.progress.RelayedSteps``).
+    """
+    from flows.progress import StepBars
+    from flows.runtime import make_task_runner, prefect_api
+
+    with prefect_api(), StepBars(relay=runner == RunnerKind.ray):
+        return flow_fn.with_options(task_runner=make_task_runner(runner, workers))(**params)
+
+
+def world_config(frames: int, width: int, height: int) -> Any:
+    """The ``WorldConfig`` of synthetic sequences of ``frames`` frames at ``width`` x ``height``."""
+    from simsplat_core.world import WorldConfig
+
+    return WorldConfig(num_frames=frames, width=width, height=height)
+
+
+def alignment_config(captioner: str) -> Any:
+    """The validated ``AlignmentConfig`` of ``--captioner`` (a VLM endpoint is checked now, not after hours)."""
+    from simsplat_core.language.alignment.scene_builder import AlignmentConfig, AlignmentConfigError
+    from simsplat_core.vlm import OpenAIChatConfig, VLMError
+
+    try:
+        alignment = AlignmentConfig(captioner=captioner).validate()
+        if captioner == "vlm":
+            OpenAIChatConfig.from_env()
+    except (AlignmentConfigError, VLMError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--captioner") from exc
+    return alignment
+
+
+def check_vlm(vlm: str) -> None:
+    """``--vlm`` names a known client, and ``openai`` has its endpoint configured (else a BadParameter)."""
+    from simsplat_core.vlm.openai_chat import OpenAIChatConfig, VLMError
+    from tasks.mine import VLM_KINDS
+
+    if vlm not in VLM_KINDS:
+        raise typer.BadParameter(f"unknown VLM client {vlm!r}; choose one of {list(VLM_KINDS)}", param_hint="--vlm")
+    if vlm == "openai":
+        try:
+            OpenAIChatConfig.from_env()
+        except VLMError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--vlm") from exc
+
+
+def stored_sequences(store: str, seq: list[str] | None = None, needs: str = "log",
+                     param_hint: str = "--seq") -> list[str]:
+    """``seq`` (default: every sequence of ``store`` that has what ``needs`` names: ``"log"``, ``"scene"``,
+    ``"language"``), checked before any work starts; a bad parameter naming the missing ones and the command that
+    makes them (``storage.inventory``)."""
+    from storage.errors import MissingInputError
+    from storage.inventory import LANGUAGE_SCENE, LOG, SCENE
+    from tasks.stages import resolve_seq_ids
+
+    requirement = {"log": LOG, "scene": SCENE, "language": LANGUAGE_SCENE}[needs]
+    try:
+        return resolve_seq_ids(store, list(seq) if seq else None, requirement)
+    except MissingInputError as exc:
+        raise typer.BadParameter(str(exc), param_hint=param_hint) from exc
+
+
+def stored_asset_bank(store: str) -> str:
+    """The hash of ``store``'s newest asset bank; a bad parameter naming ``simsplat assets build`` when it has none."""
+    from storage import ArtifactStore
+    from storage.errors import MissingInputError
+    from storage.inventory import require_asset_bank
+
+    try:
+        return require_asset_bank(ArtifactStore(store))
+    except MissingInputError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--store") from exc

@@ -1,0 +1,179 @@
+"""``simsplat eval grounding | editing | mining | motion | search``: evaluate stored results and write the run's
+tables (``OUT/tables/*.parquet`` + ``*.md`` + ``manifest.json``)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+import typer
+
+from flows.cli.common import stored_sequences
+from flows.cli.printers import print_editing, print_grounding, print_mining_eval, print_motion, print_text, report
+
+commands = typer.Typer(help="Evaluate stored results and write the run's tables.", no_args_is_help=True)
+
+
+@commands.command("grounding")
+def eval_grounding(
+    store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs and aligned scenes.")],
+    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+) -> None:
+    """Grounding benchmark (SIMSplat Tables 2 and 3): paraphrased queries from the logs' ground truth,
+    accuracy and vIoU per category for the baselines, this method and its feature ablation."""
+    from tasks.grounding_eval import evaluate_grounding_run
+
+    seq_ids = stored_sequences(store, seq, "language")
+    try:
+        result = evaluate_grounding_run.fn(store, seq_ids, out)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    print_grounding(result)
+
+
+@commands.command("editing")
+def eval_editing(
+    store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs, aligned scenes and an asset "
+                                       "bank (`simsplat assets build`).")],
+    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    per_category: Annotated[int, typer.Option(min=1, help="Prompts per category of Table 3, over all sequences.")] = 30,
+    infeasible: Annotated[int, typer.Option(min=0, help="Infeasible prompts (they must be refused).")] = 20,
+    methods: Annotated[list[str] | None, typer.Option(help="ours / chatsim-like / omnire-like (repeatable or comma "
+                                                      "separated; default: all).")] = None,
+    render_all: Annotated[bool, typer.Option("--render-all", help="Render every frame of every edit (default: the "
+                                             "test frames and the frames where the edit is seen).")] = False,
+    seed: Annotated[int, typer.Option(help="Seed of the prompt set.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Language editing benchmark (SIMSplat Table 3): prompts written from the synthetic worlds' ground truth,
+    each edit checked against ground truth (trajectories, renders, captions), completion per category for this
+    editor and the ChatSim-like / OmniRe-like variants, infeasible prompts refused, and edit fidelity against the
+    world's own rendering of each edit."""
+    from flows.progress import StepBars
+    from tasks.editing_eval import evaluate_editing_run
+
+    seq_ids = stored_sequences(store, seq, "language")
+    names = [n.strip() for m in methods or () for n in m.split(",") if n.strip()] or None
+    try:
+        with StepBars(headline=""):
+            result = evaluate_editing_run.fn(store, seq_ids, out, per_category=per_category, infeasible=infeasible,
+                                             methods=names, render_all=render_all, seed=seed)
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    report(result, as_json, print_editing)
+
+
+@commands.command("mining")
+def eval_mining(
+    store: Annotated[str, typer.Option(help="Artifact store root with aligned scenes and an asset bank; the mined "
+                                       "scenarios are stored in it under edits/evalmine-<client>-<time>/.")],
+    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    per_sequence: Annotated[int, typer.Option(min=1, help="Accepted scenarios wanted per sequence.")] = 3,
+    max_attempts: Annotated[int, typer.Option(min=1, help="Attempts per proposal.")] = 3,
+    clients: Annotated[str, typer.Option(help="VLM clients, comma separated: rule, openai (run only when "
+                                         "SIMSPLAT_VLM_URL and SIMSPLAT_VLM_MODEL are set).")] = "rule,openai",
+    seed: Annotated[int, typer.Option(help="Seed of the mining loop (and of the rule-based client).")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Mining benchmark (SIMSplat Table 5 analogue): mine every sequence per VLM client; completion, mean attempts
+    to acceptance, mean plausibility, accepted scenarios re-checked for collisions and off-road agents, acceptance
+    by edit category, where the time goes (accepted scenarios per hour per core), and the search benchmark of the same
+    sequences (tables/search: RefAV timestamp and log balanced accuracy per query)."""
+    from flows.progress import StepBars
+    from tasks.mining_eval import evaluate_mining_run
+    from tasks.search_eval import search_run_table
+
+    seq_ids = stored_sequences(store, seq, "language")
+    names = [n.strip() for n in clients.split(",") if n.strip()]
+    try:
+        with StepBars(headline=""):
+            result = evaluate_mining_run.fn(store, seq_ids, out, clients=names, per_sequence=per_sequence,
+                                            max_attempts=max_attempts, seed=seed, search_table=search_run_table)
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    report(result, as_json, print_mining_eval)
+
+
+#: Real driving-log samples beside the repository (``../shared/data``), the default of ``eval motion --real``.
+SHARED_REAL_LOGS: tuple[str, ...] = ("waymo/motion_data_one_scenario.tfrecord", "av2/sensor-log-7fab2350")
+
+
+def default_real_logs(root: Path | None = None) -> list[Path]:
+    """The real-log samples under ``<repo>/../shared/data`` that exist (none when it is absent)."""
+    base = (root if root is not None else Path(__file__).resolve().parents[2]).parent / "shared" / "data"
+    return [base / rel for rel in SHARED_REAL_LOGS if (base / rel).exists()]
+
+
+@commands.command("motion")
+def eval_motion(
+    out: Annotated[str, typer.Option(help="Run directory: tables/motion.{parquet,md}, "
+                                     "tables/motion_outcomes.{parquet,md} + manifest.json.")],
+    store: Annotated[str | None, typer.Option(help="Artifact store root with aligned synthetic scenes and an asset "
+                                              "bank: the edit-based (synthetic) rows.")] = None,
+    seq: Annotated[list[str] | None, typer.Option(help="Scene of --store (repeatable; default: every aligned "
+                                                  "log).")] = None,
+    real: Annotated[list[Path] | None, typer.Option(help="A Waymo Open Motion scenario TFRecord or an Argoverse 2 "
+                                                    "log directory (repeatable; default: the samples under "
+                                                    "../shared/data when present).")] = None,
+    predictor: Annotated[list[str] | None, typer.Option(help="Predictors rolled out on the real logs: reactive / "
+                                                        "constant-velocity / log (repeatable or comma separated; "
+                                                        "default: every available one).")] = None,
+    edit_predictor: Annotated[str, typer.Option(help="Predictor that refines the edits (synthetic and scripted "
+                                                "real edits).")] = "reactive",
+    no_real_edits: Annotated[bool, typer.Option("--no-real-edits", help="Skip the scripted edits of the real "
+                                                "logs.")] = False,
+    per_category: Annotated[int, typer.Option(min=1, help="Editing-benchmark prompts per category (insert / "
+                                              "modify), over all scenes.")] = 30,
+    per_kind: Annotated[int, typer.Option(min=0, help="Interaction prompts of each kind per scene.")] = 3,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Multi-agent refinement: the ``motion`` table. Synthetic rows: the editing benchmark's insert /
+    modify prompts and interaction prompts applied to the store's scenes with refinement none / single-agent /
+    full; real rows: the predictors rolled out on real logs (the ego replays its log, every other agent is
+    predicted from 1.1 s of history) against the logged future; real edit rows: scripted edits of the real logs
+    (lead vehicle brakes, stopped truck, jaywalker) in every mode. Columns: collision, off-road, kinematic and
+    overall failure rates (per scenario and per agent), progress, stopped agents, ADE at 3 s and 8 s."""
+    from flows.progress import StepBars
+    from simsplat_core.data.errors import CorruptLogError
+    from simsplat_core.motion.registry import available_predictors
+    from tasks.motion_eval import evaluate_motion_run
+
+    names = [n.strip() for p in predictor or () for n in p.split(",") if n.strip()] or [
+        n for n in available_predictors() if n != "log"]
+    seq_ids = stored_sequences(store, seq, "language") if store is not None else []
+    if seq and store is None:
+        raise typer.BadParameter("--seq needs --store", param_hint="--seq")
+    paths = list(real) if real else default_real_logs()
+    if not paths and not seq_ids:
+        raise typer.BadParameter("no real logs given and no samples under ../shared/data", param_hint="--real")
+    try:
+        with StepBars(headline=""):
+            result = evaluate_motion_run.fn(out, paths, names, store_root=store, seq_ids=seq_ids,
+                                            edit_predictor=edit_predictor, real_edits=not no_real_edits,
+                                            per_category=per_category, per_kind=per_kind)
+    except CorruptLogError as exc:
+        raise typer.BadParameter(f"damaged log: {exc}", param_hint="--real") from exc
+    except KeyError as exc:
+        raise typer.BadParameter(str(exc.args[0]) if exc.args else str(exc), param_hint="--predictor") from exc
+    except (FileNotFoundError, ValueError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--real") from exc
+    report(result, as_json, print_motion)
+
+
+@commands.command("search")
+def eval_search_command(
+    store: Annotated[list[str], typer.Option(help="Store(s) of synthetic logs (repeatable: several stores give the "
+                                                 "log-level figure more logs).")],
+    out: Annotated[str, typer.Option(help="Where tables/search.{parquet,md} go.")],
+) -> None:
+    """Search's RefAV balanced accuracies (timestamp and log level) on the query set over synthetic logs."""
+    from tasks.search_eval import evaluate_search
+
+    try:
+        summary = evaluate_search(store, out)
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        raise typer.BadParameter(str(exc)) from exc
+    print_text(summary)

@@ -1,0 +1,135 @@
+"""``simsplat run | reconstruct | align``: make scenes from the store's logs (the main job and its stages)."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import typer
+
+from flows.cli.common import (
+    CaptionerOption,
+    IterationsOption,
+    RunnerOption,
+    VLMOption,
+    WorkersOption,
+    alignment_config,
+    check_vlm,
+    run_flow,
+    stored_sequences,
+    world_config,
+)
+from flows.cli.printers import (
+    print_artifacts,
+    print_grounding,
+    print_language,
+    print_logs,
+    print_mining,
+    print_scenes,
+    print_stages,
+)
+from flows.runtime import RunnerKind
+
+commands = typer.Typer()
+
+
+@commands.command()
+def run(
+    store: Annotated[
+        str, typer.Option(help="Artifact store root: a local directory or an object-store URI.")
+    ] = "artifacts",
+    sequences: Annotated[
+        int,
+        typer.Option(
+            min=0,
+            help="Synthetic sequences to generate into the store first "
+            "(0: only the logs already there; `make demo` asks for 2).",
+        ),
+    ] = 0,
+    seed: Annotated[int, typer.Option(help="Seed of the first sequence; sequence i uses seed + i.")] = 0,
+    frames: Annotated[int, typer.Option(min=2, help="Frames per sequence (10 Hz).")] = 40,
+    width: Annotated[int, typer.Option(min=16)] = 240,
+    height: Annotated[int, typer.Option(min=16)] = 160,
+    runner: RunnerOption = RunnerKind.ray,
+    workers: WorkersOption = None,
+    iterations: IterationsOption = None,
+    align: Annotated[bool, typer.Option(help="Run the language-alignment stage after reconstruction.")] = True,
+    captioner: CaptionerOption = "builtin",
+    mine: Annotated[int, typer.Option(min=0, help="After alignment, mine this many accepted scenarios per sequence "
+                                      "with a reconstructed scene (0: no mining; the asset bank is built first "
+                                      "when missing).")] = 0,
+    vlm: VLMOption = "rule",
+) -> None:
+    """Run the main job over every log in the store (ingested real logs included), after generating
+    --sequences synthetic ones: one reconstructed scene per log with camera images, then language
+    alignment (motion aligner trained on every log + one queryable language scene per log; a log without
+    images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K,
+    scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/)."""
+    from flows.pipeline import MiningPlan, main_flow, reconstruction_config
+    from tasks.answers import mining_as_dict
+
+    alignment = alignment_config(captioner)
+    check_vlm(vlm)
+    if sequences == 0:
+        stored_sequences(store, param_hint="--sequences")
+    result = run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
+                      config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
+                      alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None)
+    print_logs(result.logs)
+    print_stages(result.stages)
+    if result.scenes:
+        print_scenes(result.scenes)
+    if result.language:
+        print_language(result.aligner, result.language)
+    if result.grounding is not None:
+        print_grounding(result.grounding)
+    if result.mining:
+        print_mining(mining_as_dict(result.run_id, result.mining))
+    print_artifacts(store)
+
+
+@commands.command("align")
+def align_command(
+    store: Annotated[
+        str, typer.Option(help="Artifact store root holding logs/<seq_id>/ (and scenes of logs with images).")
+    ],
+    seq: Annotated[list[str] | None, typer.Option(help="Sequence to align (repeatable; default: every log).")] = None,
+    runner: RunnerOption = RunnerKind.threads,
+    workers: WorkersOption = None,
+    captioner: CaptionerOption = "builtin",
+) -> None:
+    """Align language to stored logs: train (or reuse) the motion aligner on every log in the store, then
+    build one queryable language scene per chosen log (through its newest reconstructed scene; a log without
+    camera images from its tracks and map: motion and location language, no appearance)."""
+    from flows.pipeline import align_flow
+    from tasks.stages import plan_alignment
+
+    alignment = alignment_config(captioner)
+    try:
+        plan_alignment(store, list(seq) if seq else None)  # fail before starting Prefect
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--seq") from exc
+    result = run_flow(align_flow, runner, workers, store_root=store, seq_ids=list(seq) if seq else None,
+                      alignment=alignment)
+    print_stages(result.stages, ("reconstruct",))
+    print_language(result.aligner, result.language)
+
+
+@commands.command()
+def reconstruct(
+    store: Annotated[str, typer.Option(help="Artifact store root holding logs/<seq_id>/.")],
+    seq: Annotated[
+        list[str] | None, typer.Option(help="Sequence to reconstruct (repeatable; default: every log).")
+    ] = None,
+    iterations: IterationsOption = None,
+    runner: RunnerOption = RunnerKind.threads,
+    workers: WorkersOption = None,
+) -> None:
+    """Reconstruct stored logs into scene-graph Gaussian scenes under STORE/scenes/<seq_id>/<scene_hash>/."""
+    from flows.pipeline import reconstruct_flow, reconstruction_config
+    from tasks.stages import plan_stages
+
+    seq_ids = stored_sequences(store, seq)
+    scenes = run_flow(reconstruct_flow, runner, workers, store_root=store, seq_ids=seq_ids,
+                      config=reconstruction_config(iterations))
+    print_stages(plan_stages(store, seq_ids), ("reconstruct",))
+    print_scenes(scenes)
