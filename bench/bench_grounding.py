@@ -70,7 +70,7 @@ from simsplat_core.eval.grounding.gt_scene import language_scene_from_log  # noq
 from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, engine_variants  # noqa: E402
 from simsplat_core.eval.grounding.metrics import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
 from simsplat_core.eval.motion import grounding_accuracy, split_objects  # noqa: E402
-from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table  # noqa: E402
+from simsplat_core.eval.grounding.tables import ablation_table, grounding_markdown, grounding_table
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402

@@ -36,7 +36,7 @@ from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.vlm_protocol import VLMClient
 from storage import ArtifactStore
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
-from storage.schemas import EDITS_MINING_COLUMNS
+from storage.schemas.edits import EDITS_MINING_COLUMNS
 from tasks.edit import LoadedEdit, edit_key, load_edit_context, write_edit
 from tasks.progress import StepProgress, publish_table
 

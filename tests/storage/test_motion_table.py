@@ -13,7 +13,8 @@ from simsplat_core.eval.refinement.table import motion_markdown, motion_table
 from storage import ArtifactStore
 from storage.errors import SchemaError
 from storage.runs import read_motion_table, write_motion_table
-from storage.schemas import motion_table_schema, schema_version
+from storage.schemas import motion_table_schema
+from storage.schemas.base import schema_version
 
 COLUMNS = ["dataset", "method", "predictor", "scenarios", "refused", "collision_vehicle", "collision_pedestrian",
            "offroad", "kinematic", "failure", "progress", "stopped_share", "ade_3s", "ade_8s", "agent_collision",

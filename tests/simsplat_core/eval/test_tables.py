@@ -8,13 +8,8 @@ import pyarrow as pa
 import pytest
 
 from simsplat_core.eval.grounding.metrics import CategoryScore
-from simsplat_core.eval.tables import (
-    GROUNDING_COLUMNS,
-    ablation_table,
-    grounding_markdown,
-    grounding_table,
-    markdown,
-)
+from simsplat_core.eval.grounding.tables import GROUNDING_COLUMNS, ablation_table, grounding_markdown, grounding_table
+from simsplat_core.eval.table_spec import markdown
 
 
 def _summary() -> dict:

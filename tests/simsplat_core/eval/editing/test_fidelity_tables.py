@@ -20,7 +20,8 @@ from simsplat_core.eval.editing.outcomes import (
     outcomes_table,
 )
 from simsplat_core.eval.editing.prompts import CATEGORIES, EditPrompt
-from storage.schemas import EDITING_TABLES, editing_table_schema, validate_table
+from storage.schemas import EDITING_TABLES, editing_table_schema
+from storage.schemas.validation import validate_table
 
 
 def _views(rgb: np.ndarray) -> ViewSet:
