@@ -69,8 +69,8 @@ from simsplat_core.eval.grounding.benchmark import (  # noqa: E402
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log  # noqa: E402
 from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, engine_variants  # noqa: E402
 from simsplat_core.eval.grounding.metrics import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
+from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC, ablation_table, grounding_table  # noqa: E402
 from simsplat_core.eval.motion import grounding_accuracy, split_objects  # noqa: E402
-from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC, ablation_table, grounding_table
 from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402

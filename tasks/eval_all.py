@@ -2,7 +2,8 @@
 
 Thin: read what the store holds (:func:`store_contents`), let ``simsplat_core.eval.plan`` choose the evaluations
 (a skipped one is logged with what the store lacks), run each through its own task (``tasks.*_eval``; the
-reconstruction and throughput tables from the figures the stages recorded), and write
+reconstruction and throughput tables from the figures the stages recorded), publish each table as a Prefect table
+artifact (inside a flow or task run) and write
 
     <run>/tables/<name>.{parquet,md}     every table (declared in simsplat_core.eval.table_registry)
     <run>/summary.md                     every table with its title, and the skipped evaluations with reasons
@@ -47,6 +48,7 @@ from storage.language_scenes import list_language_scenes
 from storage.runs import new_run_id, read_run_table, run_dir, run_table, write_run_tables
 from storage.scenes import metrics_from_json
 from storage.store import join_relpath
+from tasks.progress import publish_table
 
 logger = logging.getLogger(__name__)
 
@@ -272,6 +274,8 @@ def evaluate_all(store_root: str, out_root: str | None = None, run_id: str | Non
                 written[name] = read_run_table(out, rel, table_spec(name))
             except FileNotFoundError:
                 logger.info("eval all: %s wrote no %s table", step.group, name)
+                continue
+            publish_table(table_spec(name), written[name])
         logger.info("eval all: %s done in %.1f s", step.group, seconds[step.group])
     summary = join_relpath(rel, SUMMARY_NAME)
     out.write_bytes(summary, summary_markdown(run_id, written, skipped, seconds).encode("utf-8"))

@@ -20,6 +20,10 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from typing import Any
 
+import pyarrow as pa
+
+from simsplat_core.eval.table_spec import TableSpec
+
 logger = logging.getLogger(__name__)
 
 #: ``listener(label, step, total, metrics)``.
@@ -104,7 +108,7 @@ class StepProgress:
             logger.warning("could not publish Prefect progress for %s", self.label, exc_info=True)
 
 
-def publish_table(rows: list[dict[str, Any]], key: str, description: str) -> bool:
+def publish_rows(rows: list[dict[str, Any]], key: str, description: str) -> bool:
     """Publish ``rows`` as a Prefect table artifact named ``key`` (lowercase letters, digits and dashes) when
     inside a task or flow run; returns whether it was published. Never raises (logged and ignored)."""
     try:
@@ -117,3 +121,11 @@ def publish_table(rows: list[dict[str, Any]], key: str, description: str) -> boo
     except Exception:  # the API may be unreachable; publishing must never break the work
         logger.warning("could not publish the Prefect table %s", key, exc_info=True)
         return False
+
+
+def publish_table(spec: TableSpec, table: pa.Table, description: str = "") -> bool:
+    """Publish a declared evaluation table as the Prefect table artifact ``eval-<name>`` (its printed columns and
+    rows, as on the console; ``description`` defaults to the spec's title). Never raises."""
+    header, cells = spec.rows_for_console(table)
+    rows = [dict(zip(header, row)) for row in cells]
+    return publish_rows(rows, f"eval-{spec.name.replace('_', '-')}", description or spec.title)

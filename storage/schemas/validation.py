@@ -148,3 +148,4 @@ def _json_type(t: pa.DataType) -> dict:
         return {"type": "object", "additionalProperties": _json_type(t.item_type)}
     if pa.types.is_list(t) or pa.types.is_large_list(t):
         return {"type": "array", "items": _json_type(t.value_type)}
+    raise TypeError(f"no JSON Schema mapping for arrow type {t}")

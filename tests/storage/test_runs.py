@@ -1,10 +1,10 @@
 import pyarrow as pa
 import pytest
 
+from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC
 from storage import ArtifactStore
 from storage.errors import SchemaError
 from storage.runs import RunTable, new_run_id, run_dir, write_run_tables
-from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC
 
 
 def grounding_table_schema(first):

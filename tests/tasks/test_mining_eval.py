@@ -13,14 +13,14 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
+from simsplat_core.eval.mining import MINING_BY_CATEGORY_SPEC, MINING_SPEC, MINING_STAGES_SPEC
+from simsplat_core.eval.search.evaluate import SEARCH_SPEC
 from simsplat_core.eval.search.queries import ALL_QUERIES
 from simsplat_core.mining.openai_vlm import OpenAIVLMClient
 from simsplat_core.mining.vlm_prompts import COMMAND_TOOL, JUDGE_TOOL, PROPOSE_TOOL
 from simsplat_core.scenario.agents import EGO_ID
 from storage import ArtifactStore
 from storage.edits import read_edit_records
-from simsplat_core.eval.mining import MINING_BY_CATEGORY_SPEC, MINING_SPEC, MINING_STAGES_SPEC
-from simsplat_core.eval.search.evaluate import SEARCH_SPEC
 from tasks.mine import mine_sequence_task
 from tasks.mining_eval import evaluate_mining_run
 from tasks.search_eval import search_run_table
