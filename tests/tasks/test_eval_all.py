@@ -73,3 +73,13 @@ def test_inside_the_store_the_run_lands_under_runs(logs_only: str) -> None:
 def test_a_store_without_logs_is_an_error(tmp_path) -> None:
     with pytest.raises(ValueError, match="no driving log"):
         evaluate_all(str(tmp_path))
+
+
+def test_load_run_tables_reads_the_declared_tables_back(logs_only: str, tmp_path) -> None:
+    from tasks.run_tables import load_run_tables
+
+    evaluate_all(logs_only, out_root=str(tmp_path), config=EvalAllConfig(groups=("search",)))
+    (spec, table), = load_run_tables(str(tmp_path))
+    assert spec is SEARCH_SPEC and table.num_rows > 0
+    header, rows = spec.rows_for_console(table)
+    assert header[0] == "query" and len(rows) == table.num_rows
