@@ -82,18 +82,24 @@ class EvalAllResult:
     """What :func:`evaluate_all` returns (small).
 
     Attributes:
+        run_id: the run's id.
         run_dir: URI of the run directory.
         tables: table name -> Parquet URI, in the order written.
         skipped: evaluation -> why it was skipped.
         seconds: evaluation -> wall time.
         summary: URI of ``summary.md``.
+        out_root, out_relpath: where the run directory is (``tasks.run_tables.load_run_tables(out_root,
+            out_relpath)`` reads its tables back).
     """
 
+    run_id: str
     run_dir: str
     tables: dict[str, str]
     skipped: dict[str, str]
     seconds: dict[str, float] = field(default_factory=dict)
     summary: str = ""
+    out_root: str = ""
+    out_relpath: str = ""
 
 
 def code_version(root: Path | None = None) -> str:
@@ -289,8 +295,9 @@ def evaluate_all(store_root: str, out_root: str | None = None, run_id: str | Non
         "evaluations": parts,
     }
     out.write_json(join_relpath(rel, "manifest.json"), manifest)
-    return EvalAllResult(out.uri(rel), {name: out.uri(join_relpath(rel, "tables", f"{name}.parquet"))
-                                        for name in written}, skipped, seconds, out.uri(summary))
+    return EvalAllResult(run_id, out.uri(rel), {name: out.uri(join_relpath(rel, "tables", f"{name}.parquet"))
+                                                for name in written}, skipped, seconds, out.uri(summary),
+                         out_root_used, rel)
 
 
 __all__ = ["EvalAllConfig", "EvalAllResult", "code_version", "content_keys", "evaluate_all", "reconstruction_rows",

@@ -66,7 +66,7 @@ def test_a_store_of_image_less_logs_gets_the_search_table_and_reasons_for_the_re
 def test_inside_the_store_the_run_lands_under_runs(logs_only: str) -> None:
     result = evaluate_all(logs_only, run_id="eval-inside", config=EvalAllConfig(groups=("reconstruction",)))
     assert result.tables == {} and result.skipped == {"reconstruction": "no reconstructed scene"}
-    assert result.run_dir.endswith("runs/eval-inside")
+    assert result.run_dir.endswith("runs/eval-inside") and result.out_relpath == "runs/eval-inside"
     assert ArtifactStore(logs_only).read_json("runs/eval-inside/manifest.json")["tables"] == []
 
 
