@@ -1,4 +1,4 @@
-"""The search evaluation (issue 12): RefAV's scenario-mining metrics of ``simsplat search`` on synthetic logs.
+"""The search evaluation: RefAV's scenario-mining metrics of ``simsplat search`` on synthetic logs.
 
 Over every log of the given stores (several stores: two logs a store are too few for a log-level figure), each
 query of ``simsplat_core.eval.search.queries.ALL_QUERIES`` is answered and scored by
