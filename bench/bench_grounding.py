@@ -69,8 +69,13 @@ from simsplat_core.eval.grounding.benchmark import (  # noqa: E402
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log  # noqa: E402
 from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, engine_variants  # noqa: E402
 from simsplat_core.eval.grounding.metrics import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
+from simsplat_core.eval.grounding.tables import (  # noqa: E402
+    ABLATION_SPEC,
+    GROUNDING_SPEC,
+    ablation_table,
+    grounding_table,
+)
 from simsplat_core.eval.motion import grounding_accuracy, split_objects  # noqa: E402
-from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table  # noqa: E402
 from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402
@@ -479,18 +484,18 @@ def main() -> None:
         "",
         "## Table 2: methods",
         "",
-        grounding_markdown(table2),
+        GROUNDING_SPEC.render_markdown(table2),
         "## Table 3: feature ablation",
         "",
-        grounding_markdown(table3),
+        ABLATION_SPEC.render_markdown(table3),
         "## Diagnostics",
         "",
-        grounding_markdown(diagnostics),
+        GROUNDING_SPEC.render_markdown(diagnostics),
     ]
     (args.out / "grounding.md").write_text("\n".join(md))
-    logger.info("Table 2\n%s", grounding_markdown(table2))
-    logger.info("Table 3\n%s", grounding_markdown(table3))
-    logger.info("Diagnostics\n%s", grounding_markdown(diagnostics))
+    logger.info("Table 2\n%s", GROUNDING_SPEC.render_markdown(table2))
+    logger.info("Table 3\n%s", ABLATION_SPEC.render_markdown(table3))
+    logger.info("Diagnostics\n%s", GROUNDING_SPEC.render_markdown(diagnostics))
     logger.info("wrote %s and %s", args.out / "grounding.json", args.out / "grounding.md")
 
 

@@ -56,31 +56,13 @@ from storage.scenes import (
     scene_exists,
     write_scene,
 )
-from storage.schemas import (
-    ASSETS_SCHEMA,
-    DEFORMATIONS_SCHEMA,
-    EDITS_SCHEMA,
-    EGO_POSES_SCHEMA,
-    FRAMES_SCHEMA,
-    MAP_FEATURES_SCHEMA,
-    METRICS_SCHEMA,
-    NODE_POSES_SCHEMA,
-    OBJECTS_SCHEMA,
-    TABLES,
-    TRACKS_SCHEMA,
-    TRAJECTORIES_SCHEMA,
-    TableSpec,
-    arrow_to_vectors,
-    gaussians_schema,
-    json_schema,
-    nodes_schema,
-    schema_from_metadata,
-    schema_name,
-    schema_version,
-    validate_table,
-    vec,
-    vectors_to_arrow,
-)
+from storage.schemas.base import arrow_to_vectors, schema_name, schema_version, vec, vectors_to_arrow
+from storage.schemas.edits import ASSETS_SCHEMA, EDITS_SCHEMA, TRAJECTORIES_SCHEMA
+from storage.schemas.logs import EGO_POSES_SCHEMA, FRAMES_SCHEMA, MAP_FEATURES_SCHEMA, OBJECTS_SCHEMA, TRACKS_SCHEMA
+from storage.schemas.registry import TABLES, StoredTable, schema_from_metadata
+from storage.schemas.runs import METRICS_SCHEMA
+from storage.schemas.scenes import DEFORMATIONS_SCHEMA, NODE_POSES_SCHEMA, gaussians_schema, nodes_schema
+from storage.schemas.validation import json_schema, validate_table
 from storage.store import ArtifactStore, join_relpath, normalize_relpath
 
 __all__ = [
@@ -106,7 +88,7 @@ __all__ = [
     "CorruptArtifactError",
     "SchemaError",
     "StorageError",
-    "TableSpec",
+    "StoredTable",
     "UnsafePathError",
     "arrow_to_vectors",
     "canonical",

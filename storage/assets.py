@@ -28,7 +28,9 @@ import pyarrow as pa
 from storage.errors import CorruptArtifactError
 from storage.markers import mark_done, read_marker
 from storage.scenes import deformation_table, gaussian_columns, gaussians_table, read_deformation_table
-from storage.schemas import ASSETS_SCHEMA, DEFORMATIONS_SCHEMA, arrow_to_vectors, schema_version, vectors_to_arrow
+from storage.schemas.base import arrow_to_vectors, schema_version, vectors_to_arrow
+from storage.schemas.edits import ASSETS_SCHEMA
+from storage.schemas.scenes import DEFORMATIONS_SCHEMA
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)

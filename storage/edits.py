@@ -50,14 +50,8 @@ from storage.errors import CorruptArtifactError
 from storage.exr import render_channels, write_exr
 from storage.markers import mark_done, read_marker
 from storage.pictures import encode_mp4
-from storage.schemas import (
-    EDIT_POSE_TRACKS_SCHEMA,
-    EDITS_MINING_COLUMNS,
-    EDITS_SCHEMA,
-    TRAJECTORIES_SCHEMA,
-    arrow_to_vectors,
-    vectors_to_arrow,
-)
+from storage.schemas.base import arrow_to_vectors, vectors_to_arrow
+from storage.schemas.edits import EDIT_POSE_TRACKS_SCHEMA, EDITS_MINING_COLUMNS, EDITS_SCHEMA, TRAJECTORIES_SCHEMA
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)

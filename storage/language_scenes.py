@@ -40,7 +40,8 @@ from storage.errors import CorruptArtifactError
 from storage.exr import read_exr, render_channels, write_exr
 from storage.markers import mark_done, read_marker
 from storage.scenes import gaussian_columns, gaussians_table, nodes_table, read_scene
-from storage.schemas import NODE_LANGUAGE_SCHEMA, arrow_to_vectors
+from storage.schemas.base import arrow_to_vectors
+from storage.schemas.language import NODE_LANGUAGE_SCHEMA
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)

@@ -36,17 +36,8 @@ from simsplat_core.types import CameraImage, MapFeature, ObjectInfo, SceneLog, T
 from storage.exr import read_exr, render_channels, write_exr
 from storage.keys import content_key
 from storage.markers import is_done, mark_done, read_marker
-from storage.schemas import (
-    EGO_POSES_SCHEMA,
-    FRAMES_SCHEMA,
-    MAP_FEATURES_SCHEMA,
-    OBJECTS_SCHEMA,
-    TRACKS_SCHEMA,
-    arrow_to_vectors,
-    schema_name,
-    schema_version,
-    vectors_to_arrow,
-)
+from storage.schemas.base import arrow_to_vectors, schema_name, schema_version, vectors_to_arrow
+from storage.schemas.logs import EGO_POSES_SCHEMA, FRAMES_SCHEMA, MAP_FEATURES_SCHEMA, OBJECTS_SCHEMA, TRACKS_SCHEMA
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)

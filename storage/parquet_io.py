@@ -13,7 +13,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from storage.errors import CorruptArtifactError
-from storage.schemas import fill_added_columns, schema_from_metadata, schema_name, validate_table
+from storage.schemas.base import schema_name
+from storage.schemas.registry import schema_from_metadata
+from storage.schemas.validation import fill_added_columns, validate_table
 
 logger = logging.getLogger(__name__)
 

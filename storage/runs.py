@@ -1,11 +1,17 @@
 """A run's evaluation outputs: ``tables/<name>.parquet`` + ``tables/<name>.md`` and ``manifest.json``.
 
     runs/<run_id>/manifest.json           what the run evaluated (inputs, counts, timings)
-    runs/<run_id>/tables/<name>.parquet   one table (schema from ``storage.schemas``)
+    runs/<run_id>/tables/<name>.parquet   one table (schema from its declaration, ``DeclaredTable``)
     runs/<run_id>/tables/<name>.md        the same table as Markdown, for people
 
 ``run_dir`` names the place inside a store; ``simsplat eval ... --out DIR`` uses ``DIR`` itself as the
 run directory (relpath ``""``). Every file is written atomically.
+
+Any declared table (an object with ``name``, ``schema`` and ``render_markdown(table)``: the evaluation tables'
+``simsplat_core.eval.table_spec.TableSpec``) is written and read generically:
+
+    write_run_tables(store, rel, {spec.name: run_table(spec, table)}, manifest)
+    table = read_run_table(store, rel, spec)      # validated; SchemaError names the file and the column
 """
 
 from __future__ import annotations
@@ -14,15 +20,27 @@ import datetime
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol
 
 import pyarrow as pa
 
-from storage.schemas import motion_outcomes_schema, motion_table_schema
 from storage.store import ArtifactStore, join_relpath
 
 RUNS_DIR = "runs"
 _RUN_ID = re.compile(r"^[A-Za-z0-9][A-Za-z0-9._-]{0,127}$")
+
+
+class DeclaredTable(Protocol):
+    """What storage needs of a table declaration: its name (file stem), its schema (with ``schema_name`` and
+    ``schema_version`` metadata) and its Markdown."""
+
+    @property
+    def name(self) -> str: ...
+
+    @property
+    def schema(self) -> pa.Schema: ...
+
+    def render_markdown(self, table: pa.Table) -> str: ...
 
 
 @dataclass(frozen=True)
@@ -52,7 +70,7 @@ def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, Ru
     lists them); returns ``name -> Parquet URI``."""
     uris = {}
     for name, item in tables.items():
-        parquet = join_relpath(relpath, "tables", f"{name}.parquet")
+        parquet = run_table_relpath(relpath, name)
         store.write_table(parquet, item.table, item.schema)
         store.write_bytes(join_relpath(relpath, "tables", f"{name}.md"),
                           (item.markdown.rstrip("\n") + "\n").encode("utf-8"))
@@ -63,24 +81,25 @@ def write_run_tables(store: ArtifactStore, relpath: str, tables: Mapping[str, Ru
     return uris
 
 
-def write_motion_table(store: ArtifactStore, relpath: str, table: pa.Table, markdown: str,
-                       manifest: Mapping[str, Any] | None = None,
-                       outcomes: tuple[pa.Table, str] | None = None) -> str:
-    """Write the ``motion`` table as ``<relpath>/tables/motion.{parquet,md}`` (validated, atomic), the
-    per-case ``outcomes`` (table, Markdown) as ``motion_outcomes.{parquet,md}`` when given, and the manifest;
-    returns the ``motion`` Parquet URI."""
-    tables = {"motion": RunTable(table, motion_table_schema(), markdown)}
-    if outcomes is not None:
-        tables["motion_outcomes"] = RunTable(outcomes[0], motion_outcomes_schema(), outcomes[1])
-    uris = write_run_tables(store, relpath, tables, manifest)
-    return uris["motion"]
+def run_table(spec: DeclaredTable, table: pa.Table, markdown: str | None = None) -> RunTable:
+    """``table`` of the declared ``spec`` with its Markdown (``spec.render_markdown(table)`` unless given)."""
+    return RunTable(table, spec.schema, spec.render_markdown(table) if markdown is None else markdown)
 
 
-def read_motion_table(store: ArtifactStore, relpath: str) -> pa.Table:
-    """``<relpath>/tables/motion.parquet``, validated (``SchemaError`` names the file and the column)."""
-    return store.read_table(join_relpath(relpath, "tables", "motion.parquet"), motion_table_schema())
+def run_table_relpath(relpath: str, name: str) -> str:
+    """``<relpath>/tables/<name>.parquet``."""
+    return join_relpath(relpath, "tables", f"{name}.parquet")
 
 
-def read_motion_outcomes(store: ArtifactStore, relpath: str) -> pa.Table:
-    """``<relpath>/tables/motion_outcomes.parquet``, validated."""
-    return store.read_table(join_relpath(relpath, "tables", "motion_outcomes.parquet"), motion_outcomes_schema())
+def read_run_table(store: ArtifactStore, relpath: str, spec: DeclaredTable) -> pa.Table:
+    """``<relpath>/tables/<spec.name>.parquet``, validated against the declaration (``SchemaError`` names the file
+    and the column; ``FileNotFoundError`` when absent)."""
+    return store.read_table(run_table_relpath(relpath, spec.name), spec.schema)
+
+
+def list_run_tables(store: ArtifactStore, relpath: str) -> list[str]:
+    """Names of the tables written under ``<relpath>/tables`` (sorted)."""
+    base = join_relpath(relpath, "tables")
+    if not store.is_dir(base):
+        return []
+    return sorted(name[: -len(".parquet")] for name in store.listdir(base) if name.endswith(".parquet"))

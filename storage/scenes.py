@@ -43,16 +43,9 @@ import pyarrow as pa
 from storage.errors import CorruptArtifactError
 from storage.exr import read_exr, render_channels, write_exr
 from storage.markers import is_done, mark_done, read_marker
-from storage.schemas import (
-    DEFORMATIONS_SCHEMA,
-    METRICS_SCHEMA,
-    NODE_POSES_SCHEMA,
-    arrow_to_vectors,
-    gaussians_schema,
-    nodes_schema,
-    schema_version,
-    vectors_to_arrow,
-)
+from storage.schemas.base import arrow_to_vectors, schema_version, vectors_to_arrow
+from storage.schemas.runs import METRICS_SCHEMA
+from storage.schemas.scenes import DEFORMATIONS_SCHEMA, NODE_POSES_SCHEMA, gaussians_schema, nodes_schema
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)

@@ -19,25 +19,26 @@ from dataclasses import dataclass
 from typing import Any
 
 import pyarrow as pa
-import pyarrow.compute as pc
 from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.eval.editing.evaluate import EvalConfig, EvalScene, editing_methods, evaluate_editing
 from simsplat_core.eval.editing.outcomes import (
+    EDITING_SPEC,
+    FIDELITY_SPEC,
+    INFEASIBLE_SPEC,
+    OUTCOMES_SPEC,
     completion_table,
     fidelity_table,
     infeasible_table,
     outcomes_table,
 )
 from simsplat_core.eval.editing.prompts import INFEASIBLE, PromptConfig, build_prompt_set, prompt_counts
-from simsplat_core.eval.tables import markdown
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from storage import ArtifactStore
 from storage.assets import read_asset_bank
-from storage.runs import RunTable, write_run_tables
-from storage.schemas import editing_table_schema
+from storage.runs import run_table, write_run_tables
 from tasks.eval_scenes import asset_pools, load_truth_scene
 from tasks.progress import StepProgress
 
@@ -106,14 +107,8 @@ def evaluate_editing_run(store_root: str, seq_ids: Sequence[str], out_root: str,
     refusals = infeasible_table(outcomes)
     fidelity = fidelity_table(outcomes, unedited)
     every = outcomes_table(outcomes)
-    failed = every.filter(pc.invert(every["completed"]))
-    tables = {
-        "editing": RunTable(editing, editing_table_schema("editing"), markdown(editing)),
-        "editing_infeasible": RunTable(refusals, editing_table_schema("editing_infeasible"), markdown(refusals)),
-        "edit_fidelity": RunTable(fidelity, editing_table_schema("edit_fidelity"), markdown(fidelity, digits=2)),
-        "editing_outcomes": RunTable(every, editing_table_schema("editing_outcomes"), markdown(
-            failed, columns=("method", "category", "text", "refusal", "reason"))),
-    }
+    tables = {spec.name: run_table(spec, table) for spec, table in (
+        (EDITING_SPEC, editing), (INFEASIBLE_SPEC, refusals), (FIDELITY_SPEC, fidelity), (OUTCOMES_SPEC, every))}
     edit_seconds = {}
     for method in chosen:
         times = [o.seconds for o in outcomes if o.method == method.name and not o.refusal]

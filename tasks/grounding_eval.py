@@ -13,21 +13,25 @@ import logging
 import time
 from dataclasses import dataclass
 
-import pyarrow as pa
-import pyarrow.compute as pc
 from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.eval.grounding.benchmark import BenchmarkConfig, build_benchmark
 from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, COMPARISON_ROWS, grounding_methods
-from simsplat_core.eval.grounding.metrics import GroundingResults, evaluate_grounding
-from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table, markdown
+from simsplat_core.eval.grounding.metrics import evaluate_grounding
+from simsplat_core.eval.grounding.tables import (
+    ABLATION_SPEC,
+    GROUNDING_SPEC,
+    OUTCOMES_SPEC,
+    ablation_table,
+    grounding_outcomes_table,
+    grounding_table,
+)
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from storage import ArtifactStore, read_scene_log
 from storage.language_scenes import read_language_scene
-from storage.runs import RunTable, write_run_tables
-from storage.schemas import GROUNDING_OUTCOMES_SCHEMA, grounding_table_schema
+from storage.runs import run_table, write_run_tables
 
 logger = logging.getLogger(__name__)
 
@@ -49,15 +53,6 @@ class GroundingEvaluation:
     scores: dict[str, dict[str, dict[str, float]]]
     tables: dict[str, str]
     seconds: float
-
-
-def outcomes_table(results: GroundingResults) -> pa.Table:
-    """Every method's answer to every query (``GROUNDING_OUTCOMES_SCHEMA``)."""
-    rows = [{"method": o.method, "seq_id": o.query.seq_id, "query_id": o.query.query_id, "text": o.query.text,
-             "style": o.query.style, "kind": o.query.kind, "category": o.query.category,
-             "targets": list(o.query.target_ids), "predicted": list(o.predicted), "correct": bool(o.correct),
-             "viou": float(o.viou), "seconds": float(o.seconds)} for o in results.outcomes]
-    return pa.Table.from_pylist(rows, schema=GROUNDING_OUTCOMES_SCHEMA)
 
 
 @task(name="evaluate-grounding", retries=0, cache_policy=NO_CACHE)
@@ -92,14 +87,11 @@ def evaluate_grounding_run(store_root: str, seq_ids: list[str], out_root: str, o
     summary = results.summary()
     table2 = grounding_table(summary, COMPARISON_ROWS)
     table3 = ablation_table(summary, ABLATION_ROW_METHODS)
-    outcomes = outcomes_table(results)
+    outcomes = grounding_outcomes_table(results)
     latency = results.latency("ours")
     tables = {
-        "grounding": RunTable(table2, grounding_table_schema("method"), grounding_markdown(table2)),
-        "grounding_ablation": RunTable(table3, grounding_table_schema("features"), grounding_markdown(table3)),
-        "grounding_outcomes": RunTable(outcomes, GROUNDING_OUTCOMES_SCHEMA,
-                                       markdown(outcomes.filter(pc.equal(outcomes["method"], "ours")),
-                                                columns=("seq_id", "text", "kind", "correct", "viou"))),
+        spec.name: run_table(spec, table)
+        for spec, table in ((GROUNDING_SPEC, table2), (ABLATION_SPEC, table3), (OUTCOMES_SPEC, outcomes))
     }
     manifest = {"stage": "grounding", "sequences": sorted(logs), "skipped_without_ground_truth": without_truth,
                 "queries": len(bench.queries), "query_counts": bench.counts(), "latency_ours_s": latency}

@@ -37,8 +37,8 @@ from simsplat_core.mining.vlm_protocol import VLMClient
 from storage import ArtifactStore
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
 from storage.inventory import require_asset_bank
-from storage.schemas import EDITS_MINING_COLUMNS
-from tasks.progress import StepProgress, publish_table
+from storage.schemas.edits import EDITS_MINING_COLUMNS
+from tasks.progress import StepProgress, publish_rows
 from tasks.stored_edits import LoadedEdit, edit_key, load_edit_context, write_edit
 
 logger = logging.getLogger(__name__)
@@ -202,7 +202,7 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
 
     table = [{"prompt": s.prompt, "category": s.category, "attempts": s.attempts, "plausibility": s.plausibility,
               "edit_dir": s.edit_dir} for s in scenarios]
-    publish_table(table, _artifact_key(seq_id), f"Scenarios mined in {seq_id} (run {run_id}, {client.name})")
+    publish_rows(table, _artifact_key(seq_id), f"Scenarios mined in {seq_id} (run {run_id}, {client.name})")
     summary = MiningSummary(
         seq_id=seq_id, run_id=run_id, client=client.name, attempts=len(result.records), accepted=len(scenarios),
         statuses=dict(Counter(r.status for r in result.records)),

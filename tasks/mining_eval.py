@@ -27,7 +27,10 @@ from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.compute_threads import compute_threads
 from simsplat_core.eval.mining import (
+    MINING_BY_CATEGORY_SPEC,
+    MINING_SPEC,
     MINING_STAGES,
+    MINING_STAGES_SPEC,
     ProposalOutcome,
     collides_or_offroad,
     mining_by_category_table,
@@ -36,13 +39,11 @@ from simsplat_core.eval.mining import (
     proposal_outcomes,
     stored_failure,
 )
-from simsplat_core.eval.tables import markdown
 from simsplat_core.mining.vlm_protocol import VLMClient
 from simsplat_core.vlm.openai_chat import OpenAIChatConfig, VLMError
 from storage import ArtifactStore
 from storage.edits import read_edit_delta, read_edit_records, read_trajectories
-from storage.runs import RunTable, new_run_id, write_run_tables
-from storage.schemas import mining_table_schema
+from storage.runs import RunTable, new_run_id, run_table, write_run_tables
 from tasks.mine import VLM_KINDS, MiningSummary, mine_sequence_task
 from tasks.stored_edits import LoadedEdit, load_edit_context
 
@@ -167,12 +168,8 @@ def evaluate_mining_run(store_root: str, seq_ids: Sequence[str], out_root: str, 
     mining = mining_table(outcomes, failures, notes)
     by_category = mining_by_category_table(outcomes, [c for c, note in notes.items() if not note])
     stages = mining_stages_table(seconds, accepted, cores)
-    tables = {
-        "mining": RunTable(mining, mining_table_schema("mining"), markdown(mining)),
-        "mining_by_category": RunTable(by_category, mining_table_schema("mining_by_category"),
-                                       markdown(by_category)),
-        "mining_stages": RunTable(stages, mining_table_schema("mining_stages"), markdown(stages, digits=2)),
-    }
+    tables = {spec.name: run_table(spec, table) for spec, table in (
+        (MINING_SPEC, mining), (MINING_BY_CATEGORY_SPEC, by_category), (MINING_STAGES_SPEC, stages))}
     if search_table is not None:  # tasks.search_eval plugs in here
         search = search_table(store_root, seq_ids)
         if search is not None:

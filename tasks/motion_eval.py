@@ -1,8 +1,8 @@
-"""Task: the multi-agent refinement evaluation (issue 11): ``tables/motion.{parquet,md}``,
+"""Task: the multi-agent refinement evaluation: ``tables/motion.{parquet,md}``,
 ``tables/motion_outcomes.{parquet,md}`` and ``manifest.json``.
 
 Thin: load inputs, call ``simsplat_core.eval.refinement``, write the tables into ``OUT``
-(``storage.runs.write_motion_table``). Rows, in this order:
+(``storage.runs.write_run_tables``). Rows, in this order:
 
 * the synthetic (edit-based) rows on the store's aligned scenes (:func:`synthetic_rows`): the editing
   benchmark's insert / modify prompts and the interaction prompts, applied by the editor in every refinement
@@ -44,10 +44,10 @@ from simsplat_core.eval.refinement.synthetic import (
 )
 from simsplat_core.eval.refinement.synthetic import synthetic_rows as rows_of_outcomes
 from simsplat_core.eval.refinement.table import (
-    motion_markdown,
+    MOTION_SPEC,
+    OUTCOMES_SPEC,
     motion_rows,
     motion_table,
-    outcomes_markdown,
     outcomes_table,
 )
 from simsplat_core.language.grounding.engine import QueryEngine
@@ -55,7 +55,7 @@ from simsplat_core.language.text import default_text_encoder
 from simsplat_core.motion.registry import DEFAULT_PREDICTOR, make_predictor
 from storage import ArtifactStore
 from storage.assets import read_asset_bank
-from storage.runs import write_motion_table
+from storage.runs import run_table, write_run_tables
 from tasks.eval_scenes import asset_pools, load_truth_scene
 from tasks.progress import StepProgress
 
@@ -174,8 +174,8 @@ def evaluate_motion_run(out_root: str, real: Sequence[str | Path], predictors: S
                 "real_edits": edited.applied if edited is not None else {},
                 "per_type": evaluation.per_type, "replayed": replayed_summary(evaluation.scores),
                 "seconds": round(time.perf_counter() - started, 3)}
-    uri = write_motion_table(ArtifactStore(out_root), out_relpath, table, motion_markdown(table), manifest,
-                             outcomes=(outcomes, outcomes_markdown(outcomes)))
+    tables = {spec.name: run_table(spec, t) for spec, t in ((MOTION_SPEC, table), (OUTCOMES_SPEC, outcomes))}
+    uri = write_run_tables(ArtifactStore(out_root), out_relpath, tables, manifest)[MOTION_SPEC.name]
     seconds = round(time.perf_counter() - started, 3)
     logger.info("motion on %d scenes, %d real logs, predictors %s: %s (%.1f s)", len(synthetic.seq_ids),
                 len(scenarios), list(predictors), uri, seconds)

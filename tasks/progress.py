@@ -27,6 +27,9 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Any
 
+import pyarrow as pa
+
+from simsplat_core.eval.table_spec import TableSpec
 from storage import ArtifactStore, CorruptArtifactError
 
 logger = logging.getLogger(__name__)
@@ -167,7 +170,7 @@ class StepProgress:
             logger.warning("could not publish Prefect progress for %s", self.label, exc_info=True)
 
 
-def publish_table(rows: list[dict[str, Any]], key: str, description: str) -> bool:
+def publish_rows(rows: list[dict[str, Any]], key: str, description: str) -> bool:
     """Publish ``rows`` as a Prefect table artifact named ``key`` (lowercase letters, digits and dashes) when
     inside a task or flow run; returns whether it was published. Never raises (logged and ignored)."""
     try:
@@ -180,3 +183,11 @@ def publish_table(rows: list[dict[str, Any]], key: str, description: str) -> boo
     except Exception:  # the API may be unreachable; publishing must never break the work
         logger.warning("could not publish the Prefect table %s", key, exc_info=True)
         return False
+
+
+def publish_table(spec: TableSpec, table: pa.Table, description: str = "") -> bool:
+    """Publish a declared evaluation table as the Prefect table artifact ``eval-<name>`` (its printed columns and
+    rows, as on the console; ``description`` defaults to the spec's title). Never raises."""
+    header, cells = spec.rows_for_console(table)
+    rows = [dict(zip(header, row)) for row in cells]
+    return publish_rows(rows, f"eval-{spec.name.replace('_', '-')}", description or spec.title)

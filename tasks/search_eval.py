@@ -1,10 +1,10 @@
-"""The search evaluation (issue 12): RefAV's scenario-mining metrics of ``simsplat search`` on synthetic logs.
+"""The search evaluation: RefAV's scenario-mining metrics of ``simsplat search`` on synthetic logs.
 
 Over every log of the given stores (several stores: two logs a store are too few for a log-level figure), each
 query of ``simsplat_core.eval.search.queries.ALL_QUERIES`` is answered and scored by
 ``simsplat_core.eval.search.evaluate`` (no pictures) against the ground truth that the synthetic world
 scripted (``simsplat_core.eval.search.truth``): per (log, frame) predicted = a hit window covers the frame; per log
-predicted = any hit. Writes ``OUT/tables/search.parquet`` (``storage.schemas.search_table_schema``) and
+predicted = any hit. Writes ``OUT/tables/search.parquet`` (``simsplat_core.eval.search.evaluate.SEARCH_SPEC``) and
 ``search.md``; returns the summary (means over queries).
 """
 
@@ -15,25 +15,13 @@ import time
 from collections.abc import Sequence
 from typing import Any
 
-import pyarrow as pa
-
-from simsplat_core.eval.search.evaluate import evaluate_queries, summarise
+from simsplat_core.eval.search.evaluate import SEARCH_SPEC, evaluate_queries, search_markdown, summarise
 from simsplat_core.eval.search.queries import ALL_QUERIES, QueryCase
-from simsplat_core.eval.tables import markdown
 from storage import ArtifactStore
-from storage.runs import RunTable
-from storage.schemas import search_table_schema
+from storage.runs import RunTable, run_table
 from tasks.search import load_store
 
 logger = logging.getLogger(__name__)
-
-
-def _search_markdown(table: pa.Table, summary: dict[str, Any], logs: int, stores: int) -> str:
-    return (f"# Search: RefAV balanced accuracies\n\n{logs} logs from {stores} store(s), "
-            f"{table.num_rows} queries ({summary['negatives']} hold nowhere).\n\n{markdown(table)}\n\n"
-            f"Mean timestamp BA {summary['timestamp_ba']}, log BA {summary['log_ba']} "
-            f"(positives: {summary['timestamp_ba_positives']}, {summary['log_ba_positives']}); "
-            f"negatives without a hit: {summary['negatives_without_hits']}/{summary['negatives']}.\n")
 
 
 def search_run_table(store_root: str, seq_ids: Sequence[str]) -> RunTable | None:
@@ -43,9 +31,8 @@ def search_run_table(store_root: str, seq_ids: Sequence[str]) -> RunTable | None
         return None
     items = load_store(store_root, list(seq_ids))
     rows = evaluate_queries(items)
-    schema = search_table_schema()
-    table = pa.Table.from_pylist(rows, schema=schema)
-    return RunTable(table, schema, _search_markdown(table, summarise(rows), len(items), 1))
+    table = SEARCH_SPEC.table(rows)
+    return run_table(SEARCH_SPEC, table, search_markdown(table, summarise(rows), len(items), 1))
 
 
 def evaluate_search(stores: list[str], out_root: str, *, queries: tuple[QueryCase, ...] = ALL_QUERIES,
@@ -62,12 +49,11 @@ def evaluate_search(stores: list[str], out_root: str, *, queries: tuple[QueryCas
     items = [item for root in stores for item in load_store(root)]
     load_s = time.perf_counter() - t0
     rows = evaluate_queries(items, queries)
-    schema = search_table_schema()
-    table = pa.Table.from_pylist(rows, schema=schema)
+    table = SEARCH_SPEC.table(rows)
     out = ArtifactStore(out_root)
-    out.write_table(f"{out_relpath}/search.parquet", table, schema)
+    out.write_table(f"{out_relpath}/search.parquet", table, SEARCH_SPEC.schema)
     summary = summarise(rows)
-    out.write_bytes(f"{out_relpath}/search.md", _search_markdown(table, summary, len(items), len(stores)).encode())
+    out.write_bytes(f"{out_relpath}/search.md", search_markdown(table, summary, len(items), len(stores)).encode())
     logger.info("search evaluation: %s", summary)
     return {**summary, "logs": len(items), "load_seconds": round(load_s, 3),
             "table": out.uri(f"{out_relpath}/search.parquet")}

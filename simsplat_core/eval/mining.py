@@ -35,24 +35,48 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from simsplat_core.eval.table_spec import Column, TableSpec
 from simsplat_core.mining.rule_proposals import EDIT_CATEGORIES
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.map_context import MapContext
 from simsplat_core.scenario.rollout_metrics import ScenarioFailures, scenario_failures
 
-#: ``mining`` table: one row per client.
-MINING_COLUMNS: tuple[tuple[str, pa.DataType], ...] = (
-    ("client", pa.string()), ("ran", pa.bool_()), ("sequences", pa.int64()), ("prompts", pa.int64()),
-    ("accepted", pa.int64()), ("completion", pa.float64()), ("attempts_mean", pa.float64()),
-    ("plausibility_mean", pa.float64()), ("accepted_with_failure", pa.int64()), ("note", pa.string()))
-#: ``mining_by_category`` table: one row per (client, edit category), categories then ``total``.
-MINING_BY_CATEGORY_COLUMNS: tuple[tuple[str, pa.DataType], ...] = (
-    ("client", pa.string()), ("category", pa.string()), ("prompts", pa.int64()), ("accepted", pa.int64()),
-    ("completion", pa.float64()), ("attempts_mean", pa.float64()))
-#: ``mining_stages`` table: one row per (client, stage), then a ``total`` row per client.
-MINING_STAGES_COLUMNS: tuple[tuple[str, pa.DataType], ...] = (
-    ("client", pa.string()), ("stage", pa.string()), ("seconds", pa.float64()), ("share", pa.float64()),
-    ("seconds_per_accepted", pa.float64()), ("accepted_per_hour_per_core", pa.float64()))
+#: ``tables/mining``: one row per VLM client (module docstring for the definitions).
+MINING_SPEC = TableSpec("mining", "Mining: completion, attempts, plausibility per VLM client", "VLM client", (
+    Column("client", pa.string(), "the VLM client (rule, openai)"),
+    Column("ran", pa.bool_(), "the client was run (false: no endpoint configured)"),
+    Column("sequences", pa.int64(), "sequences the client mined", "count"),
+    Column("prompts", pa.int64(), "proposals tried", "count"),
+    Column("accepted", pa.int64(), "proposals accepted", "count"),
+    Column("completion", pa.float64(), "accepted / prompts", "share"),
+    Column("attempts_mean", pa.float64(), "mean attempt number at which proposals were accepted", "count"),
+    Column("plausibility_mean", pa.float64(), "mean judged plausibility of the accepted scenarios (1..4)", ""),
+    Column("accepted_with_failure", pa.int64(), "accepted scenarios that collide or leave the road on re-check",
+           "count"),
+    Column("note", pa.string(), "why the client was not run (\"\": it ran)"),
+), keys=("client",))
+#: ``tables/mining_by_category``: one row per (client, edit category), categories then ``total``.
+MINING_BY_CATEGORY_SPEC = TableSpec("mining_by_category", "Mining: acceptance by edit category",
+                                    "(client, edit category)", (
+    Column("client", pa.string(), "the VLM client"),
+    Column("category", pa.string(), "the edit category (unknown: none known; total: all)"),
+    Column("prompts", pa.int64(), "proposals tried", "count"),
+    Column("accepted", pa.int64(), "proposals accepted", "count"),
+    Column("completion", pa.float64(), "accepted / prompts", "share"),
+    Column("attempts_mean", pa.float64(), "mean attempt number at which proposals were accepted", "count"),
+), keys=("client", "category"))
+#: ``tables/mining_stages``: one row per (client, stage), then a ``total`` row per client.
+MINING_STAGES_SPEC = TableSpec("mining_stages", "Mining: where the time goes", "(client, stage)", (
+    Column("client", pa.string(), "the VLM client"),
+    Column("stage", pa.string(), "a stage of the mining loop (MINING_STAGES), or total"),
+    Column("seconds", pa.float64(), "wall time of the stage summed over the sequences", "s"),
+    Column("share", pa.float64(), "seconds / the client's total seconds", "share"),
+    Column("seconds_per_accepted", pa.float64(), "seconds per accepted scenario", "s"),
+    Column("accepted_per_hour_per_core", pa.float64(), "accepted scenarios per hour per core (total row only)",
+           "1/h/core"),
+), keys=("client", "stage"), digits=2)
+#: The mining evaluation's tables, in the order they are written.
+MINING_SPECS: tuple[TableSpec, ...] = (MINING_SPEC, MINING_BY_CATEGORY_SPEC, MINING_STAGES_SPEC)
 #: Stages of ``mining_stages``, in the order of the loop: loading the sequence, proposing (scene facts, views,
 #: the client's call), turning prompts into commands, the editor (grounding, applying, refinement, validation),
 #: rendering the judge's views, judging, rendering the accepted scenarios for storage (every frame and camera),
@@ -190,14 +214,10 @@ def _rate(num: float, den: float) -> float:
     return num / den if den else math.nan
 
 
-def _schema(columns: tuple[tuple[str, pa.DataType], ...]) -> pa.Schema:
-    return pa.schema([pa.field(n, t) for n, t in columns])
-
-
 def mining_table(outcomes: Sequence[ProposalOutcome], failures: Mapping[tuple[str, str, str], bool],
                  clients: Mapping[str, str]) -> pa.Table:
     """One row per client of ``clients`` (name -> ``""`` when it ran, else why it was not run), in that order
-    (:data:`MINING_COLUMNS`; module docstring for the definitions).
+    (:data:`MINING_SPEC`; module docstring for the definitions).
 
     Args:
         outcomes: every proposal of every client.
@@ -206,7 +226,7 @@ def mining_table(outcomes: Sequence[ProposalOutcome], failures: Mapping[tuple[st
     Raises:
         KeyError: an accepted scenario without its re-check (named).
     """
-    data: dict[str, list[Any]] = {name: [] for name, _ in MINING_COLUMNS}
+    data: dict[str, list[Any]] = {name: [] for name in MINING_SPEC.column_names}
     for client, note in clients.items():
         mine = [o for o in outcomes if o.client == client]
         accepted = [o for o in mine if o.accepted]
@@ -224,14 +244,14 @@ def mining_table(outcomes: Sequence[ProposalOutcome], failures: Mapping[tuple[st
         data["plausibility_mean"].append(_mean([o.plausibility for o in accepted if o.plausibility is not None]))
         data["accepted_with_failure"].append(sum(failures[(client, o.seq_id, o.edit_id)] for o in accepted))
         data["note"].append(note)
-    return pa.Table.from_pydict(data, schema=_schema(MINING_COLUMNS))
+    return pa.Table.from_pydict(data, schema=MINING_SPEC.schema)
 
 
 def mining_by_category_table(outcomes: Sequence[ProposalOutcome], clients: Sequence[str]) -> pa.Table:
     """Per client (in order) and edit category (``EDIT_CATEGORIES``, then others seen -- e.g.
     :data:`UNKNOWN_CATEGORY` --, then ``total``): proposals, accepted, completion and mean attempts to acceptance
-    (:data:`MINING_BY_CATEGORY_COLUMNS`). A client that proposed nothing has only its ``total`` row."""
-    data: dict[str, list[Any]] = {name: [] for name, _ in MINING_BY_CATEGORY_COLUMNS}
+    (:data:`MINING_BY_CATEGORY_SPEC`). A client that proposed nothing has only its ``total`` row."""
+    data: dict[str, list[Any]] = {name: [] for name in MINING_BY_CATEGORY_SPEC.column_names}
     for client in clients:
         mine = [o for o in outcomes if o.client == client]
         present = {o.category for o in mine}
@@ -245,7 +265,7 @@ def mining_by_category_table(outcomes: Sequence[ProposalOutcome], clients: Seque
             data["accepted"].append(len(accepted))
             data["completion"].append(_rate(len(accepted), len(chosen)))
             data["attempts_mean"].append(_mean([o.attempts for o in accepted]))
-    return pa.Table.from_pydict(data, schema=_schema(MINING_BY_CATEGORY_COLUMNS))
+    return pa.Table.from_pydict(data, schema=MINING_BY_CATEGORY_SPEC.schema)
 
 
 def mining_stages_table(seconds: Mapping[str, Mapping[str, float]], accepted: Mapping[str, int],
@@ -253,14 +273,14 @@ def mining_stages_table(seconds: Mapping[str, Mapping[str, float]], accepted: Ma
     """Where the time goes, per client (``seconds``: client -> stage -> seconds summed over the sequences, the
     stages of :data:`MINING_STAGES`): one row per stage with its seconds, its share of the total and its seconds
     per accepted scenario, then a ``total`` row with ``accepted_per_hour_per_core`` = accepted scenarios /
-    (total hours x ``cores``) (NaN on the stage rows) (:data:`MINING_STAGES_COLUMNS`).
+    (total hours x ``cores``) (NaN on the stage rows) (:data:`MINING_STAGES_SPEC`).
 
     Raises:
         ValueError: ``cores`` < 1.
     """
     if cores < 1:
         raise ValueError(f"mining_stages_table: cores must be >= 1, got {cores}")
-    data: dict[str, list[Any]] = {name: [] for name, _ in MINING_STAGES_COLUMNS}
+    data: dict[str, list[Any]] = {name: [] for name in MINING_STAGES_SPEC.column_names}
     for client, per in seconds.items():
         total = sum(float(per.get(s, 0.0)) for s in MINING_STAGES)
         n = int(accepted.get(client, 0))
@@ -273,9 +293,9 @@ def mining_stages_table(seconds: Mapping[str, Mapping[str, float]], accepted: Ma
             data["seconds_per_accepted"].append(value / n if n else math.nan)
             data["accepted_per_hour_per_core"].append(
                 (n / (total / 3600.0 * cores) if total > 0 else math.nan) if stage == "total" else math.nan)
-    return pa.Table.from_pydict(data, schema=_schema(MINING_STAGES_COLUMNS))
+    return pa.Table.from_pydict(data, schema=MINING_STAGES_SPEC.schema)
 
 
-__all__ = ["MINING_BY_CATEGORY_COLUMNS", "MINING_COLUMNS", "MINING_STAGES", "MINING_STAGES_COLUMNS",
+__all__ = ["MINING_BY_CATEGORY_SPEC", "MINING_SPEC", "MINING_SPECS", "MINING_STAGES", "MINING_STAGES_SPEC",
            "UNKNOWN_CATEGORY", "ProposalOutcome", "collides_or_offroad", "mining_by_category_table", "mining_table",
            "mining_stages_table", "proposal_outcomes", "states_from_trajectories", "stored_failure"]

@@ -232,7 +232,7 @@ def test_corrupt_delta_is_named(tmp_path):
 def test_trajectories_of_an_old_schema_version_are_refused(tmp_path):
     import pyarrow as pa
 
-    from storage.schemas import TRAJECTORIES_SCHEMA
+    from storage.schemas.edits import TRAJECTORIES_SCHEMA
 
     store = ArtifactStore(str(tmp_path))
     old = TRAJECTORIES_SCHEMA.with_metadata({b"schema_name": b"trajectories", b"schema_version": b"1"})

@@ -11,7 +11,8 @@ import pytest
 
 from storage import ArtifactStore, SchemaError
 from storage.edits import EditRecord, append_edit_record, append_edit_records, edits_table_relpath, read_edit_records
-from storage.schemas import EDITS_MINING_COLUMNS, EDITS_SCHEMA, schema_version
+from storage.schemas.base import schema_version
+from storage.schemas.edits import EDITS_MINING_COLUMNS, EDITS_SCHEMA
 
 _EDIT_COLUMNS = [n for n in EDITS_SCHEMA.names if n not in EDITS_MINING_COLUMNS]
 

@@ -1,10 +1,14 @@
 import pyarrow as pa
 import pytest
 
+from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC
 from storage import ArtifactStore
 from storage.errors import SchemaError
 from storage.runs import RunTable, new_run_id, run_dir, write_run_tables
-from storage.schemas import grounding_table_schema
+
+
+def grounding_table_schema(first):
+    return (GROUNDING_SPEC if first == "method" else ABLATION_SPEC).schema
 
 
 def _table(first="method"):

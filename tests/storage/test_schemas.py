@@ -17,7 +17,7 @@ from storage import (
     schema_name,
     schema_version,
 )
-from storage.schemas import EDITS_MINING_COLUMNS
+from storage.schemas.edits import EDITS_MINING_COLUMNS
 
 SCHEMAS: dict[str, pa.Schema] = {
     **{name: spec.build() for name, spec in TABLES.items() if not spec.dims},

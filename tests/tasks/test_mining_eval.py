@@ -13,13 +13,14 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
+from simsplat_core.eval.mining import MINING_BY_CATEGORY_SPEC, MINING_SPEC, MINING_STAGES_SPEC
+from simsplat_core.eval.search.evaluate import SEARCH_SPEC
 from simsplat_core.eval.search.queries import ALL_QUERIES
 from simsplat_core.mining.openai_vlm import OpenAIVLMClient
 from simsplat_core.mining.vlm_prompts import COMMAND_TOOL, JUDGE_TOOL, PROPOSE_TOOL
 from simsplat_core.scenario.agents import EGO_ID
 from storage import ArtifactStore
 from storage.edits import read_edit_records
-from storage.schemas import mining_table_schema, search_table_schema
 from tasks.mine import mine_sequence_task
 from tasks.mining_eval import evaluate_mining_run
 from tasks.search_eval import search_run_table
@@ -47,7 +48,7 @@ def evaluated(store_root: str, tmp_path_factory: pytest.TempPathFactory) -> tupl
 def test_the_mining_tables_are_written_with_a_row_per_client(store_root: str, evaluated) -> None:  # noqa: F811
     result, out, before = evaluated
     store = ArtifactStore(str(out))
-    mining = store.read_table("tables/mining.parquet", mining_table_schema("mining")).to_pylist()
+    mining = store.read_table("tables/mining.parquet", MINING_SPEC.schema).to_pylist()
     assert [r["client"] for r in mining] == ["rule", "openai"]
     rule, openai = mining
     assert rule["ran"] and rule["accepted"] == 1 and rule["prompts"] >= 1
@@ -57,16 +58,16 @@ def test_the_mining_tables_are_written_with_a_row_per_client(store_root: str, ev
     rows = read_edit_records(ArtifactStore(store_root), result.runs["rule"])
     assert rule["prompts"] == len({r.mining["scenario"] for r in rows})  # a proposal is a scenario of the run
     by_category = store.read_table("tables/mining_by_category.parquet",
-                                   mining_table_schema("mining_by_category")).to_pylist()
+                                   MINING_BY_CATEGORY_SPEC.schema).to_pylist()
     total = [r for r in by_category if r["category"] == "total"]
     assert [(r["client"], r["prompts"], r["accepted"]) for r in total] == [("rule", rule["prompts"], 1)]
-    stages = store.read_table("tables/mining_stages.parquet", mining_table_schema("mining_stages")).to_pylist()
+    stages = store.read_table("tables/mining_stages.parquet", MINING_STAGES_SPEC.schema).to_pylist()
     (row,) = [r for r in stages if r["stage"] == "total"]
     assert row["accepted_per_hour_per_core"] == pytest.approx(1 / (row["seconds"] / 3600 * 2))
     assert {r["stage"] for r in stages if r["seconds"] > 0} >= {"load", "apply", "validate", "judge"}
     for name in ("mining", "mining_by_category", "mining_stages"):
         assert (out / "tables" / f"{name}.md").read_text().startswith("| ")
-    search = store.read_table("tables/search.parquet", search_table_schema()).to_pylist()  # the search benchmark
+    search = store.read_table("tables/search.parquet", SEARCH_SPEC.schema).to_pylist()  # the search benchmark
     assert len(search) == len(ALL_QUERIES) and all(0.0 <= (r["log_ba"] or 0.0) <= 1.0 for r in search)
     assert (out / "tables" / "search.md").read_text().startswith("# Search")
     after = {str(p.relative_to(store_root)) for p in Path(store_root).rglob("*") if "edits" not in p.parts}

@@ -1,6 +1,6 @@
 """One method's result on one prompt, and the tables that sum them up (SIMSplat Table 3, edit fidelity).
 
-Tables (pyarrow, schemas in ``storage.schemas``; Markdown via ``eval.tables.markdown``):
+Tables (pyarrow; each declared here as a ``TableSpec``: schema, column meanings, Markdown):
 
 * ``editing``: one row per (method, category) -- the six categories and ``total`` -- with ``prompts``,
   ``completed`` and ``rate``;
@@ -22,30 +22,65 @@ import pyarrow as pa
 
 from simsplat_core.eval.editing.fidelity import FidelityScore
 from simsplat_core.eval.editing.prompts import CATEGORIES, INFEASIBLE, EditPrompt
-from simsplat_core.eval.tables import markdown
+from simsplat_core.eval.table_spec import Column, TableSpec, markdown
 
 #: Methods of the tables, in row order.
 METHOD_NAMES: tuple[str, ...] = ("ours", "chatsim-like", "omnire-like")
-#: Columns of each table (``storage.schemas.editing_table_schema`` adds the file metadata).
-TABLE_COLUMNS: dict[str, tuple[tuple[str, pa.DataType], ...]] = {
-    "editing": (("method", pa.string()), ("category", pa.string()), ("prompts", pa.int64()),
-                ("completed", pa.int64()), ("rate", pa.float64())),
-    "editing_infeasible": (("method", pa.string()), ("prompts", pa.int64()), ("refused", pa.int64()),
-                           ("rate", pa.float64()), ("expected_reason", pa.int64())),
-    "edit_fidelity": (("method", pa.string()), ("category", pa.string()), ("edits", pa.int64()),
-                      ("psnr", pa.float64()), ("ssim", pa.float64()), ("psnr_unedited", pa.float64()),
-                      ("psnr_region", pa.float64()), ("psnr_unedited_region", pa.float64())),
-    "editing_outcomes": (("method", pa.string()), ("seq_id", pa.string()), ("prompt_id", pa.string()),
-                         ("category", pa.string()), ("kind", pa.string()), ("text", pa.string()),
-                         ("completed", pa.bool_()), ("refusal", pa.string()), ("reason", pa.string()),
-                         ("validation", pa.string()), ("seconds", pa.float64()), ("psnr", pa.float64()),
-                         ("psnr_region", pa.float64())),
-}
+
+_METHOD = Column("method", pa.string(), f"the editing method ({' / '.join(METHOD_NAMES)})")
+_CATEGORY = Column("category", pa.string(), "the prompt category (the six edit categories, or total)")
+
+#: ``tables/editing``: task completion per (method, category) (Table 3).
+EDITING_SPEC = TableSpec("editing", "Editing: task completion", "(method, category)", (
+    _METHOD, _CATEGORY,
+    Column("prompts", pa.int64(), "feasible prompts of the category", "count"),
+    Column("completed", pa.int64(), "prompts whose edit passed the ground-truth check", "count"),
+    Column("rate", pa.float64(), "completed / prompts (NaN without prompts)", "share"),
+), keys=("method", "category"))
+#: ``tables/editing_infeasible``: infeasible prompts refused per method.
+INFEASIBLE_SPEC = TableSpec("editing_infeasible", "Editing: infeasible prompts refused", "method", (
+    _METHOD,
+    Column("prompts", pa.int64(), "infeasible prompts", "count"),
+    Column("refused", pa.int64(), "infeasible prompts the method refused", "count"),
+    Column("rate", pa.float64(), "refused / prompts (NaN without prompts)", "share"),
+    Column("expected_reason", pa.int64(), "refusals whose reason names the prompt's problem", "count"),
+), keys=("method",))
+#: ``tables/edit_fidelity``: mean fidelity of the completed, natively re-rendered edits.
+FIDELITY_SPEC = TableSpec("edit_fidelity", "Edit fidelity vs the world's rendering of the edit", "(method, category)", (
+    _METHOD, _CATEGORY,
+    Column("edits", pa.int64(), "completed edits the world re-rendered natively", "count"),
+    Column("psnr", pa.float64(), "mean PSNR of the edited render vs the world's render of the edit", "dB"),
+    Column("ssim", pa.float64(), "mean SSIM of the same", ""),
+    Column("psnr_unedited", pa.float64(), "mean test PSNR of the unedited scenes of these edits", "dB"),
+    Column("psnr_region", pa.float64(), "mean PSNR inside the edited region", "dB"),
+    Column("psnr_unedited_region", pa.float64(), "mean PSNR of the unedited render inside the same region", "dB"),
+), keys=("method", "category"), digits=2)
 
 
-def _table(name: str, rows: list[dict]) -> pa.Table:
-    schema = pa.schema([pa.field(n, t, nullable=False) for n, t in TABLE_COLUMNS[name]])
-    return pa.Table.from_pylist(rows, schema=schema)
+def _failed(table: pa.Table) -> list[int]:
+    return [k for k, done in enumerate(table["completed"].to_pylist()) if not done]
+
+
+#: ``tables/editing_outcomes``: every (method, prompt) with the check's reason (Markdown: the failed ones).
+OUTCOMES_SPEC = TableSpec("editing_outcomes", "Editing: every prompt", "(method, prompt)", (
+    _METHOD,
+    Column("seq_id", pa.string(), "the edited sequence"),
+    Column("prompt_id", pa.string(), "the prompt's id in the prompt set"),
+    _CATEGORY,
+    Column("kind", pa.string(), "the prompt's kind within its category"),
+    Column("text", pa.string(), "the prompt"),
+    Column("completed", pa.bool_(), "the check passed (infeasible prompts: the edit was refused)"),
+    Column("refusal", pa.string(), "the editor's refusal reason (\"\": not refused)"),
+    Column("reason", pa.string(), "the check's reason: what was measured or what failed"),
+    Column("validation", pa.string(), "the editor's own validation: ok | failed | \"\" (refused)"),
+    Column("seconds", pa.float64(), "edit wall time: parse, ground, apply, validate", "s"),
+    Column("psnr", pa.float64(), "fidelity PSNR of a completed, natively re-rendered edit (else NaN)", "dB"),
+    Column("psnr_region", pa.float64(), "the same inside the edited region", "dB"),
+), keys=("method", "seq_id", "prompt_id"), printed=("method", "category", "text", "refusal", "reason"),
+    row_filter=_failed, detail=True)
+
+#: The editing evaluation's tables, in the order they are written.
+EDITING_SPECS: tuple[TableSpec, ...] = (EDITING_SPEC, INFEASIBLE_SPEC, FIDELITY_SPEC, OUTCOMES_SPEC)
 
 
 @dataclass(frozen=True)
@@ -91,7 +126,7 @@ def completion_table(outcomes: Sequence[PromptOutcome]) -> pa.Table:
             done = sum(o.completed for o in cat)
             rows.append({"method": method, "category": category, "prompts": len(cat), "completed": done,
                          "rate": done / len(cat) if cat else math.nan})
-    return _table("editing", rows)
+    return EDITING_SPEC.table(rows)
 
 
 def infeasible_table(outcomes: Sequence[PromptOutcome]) -> pa.Table:
@@ -103,7 +138,7 @@ def infeasible_table(outcomes: Sequence[PromptOutcome]) -> pa.Table:
         expected = sum(o.completed and o.refusal in o.prompt.intent.expected_refusals for o in mine)
         rows.append({"method": method, "prompts": len(mine), "refused": refused,
                      "rate": refused / len(mine) if mine else math.nan, "expected_reason": expected})
-    return _table("editing_infeasible", rows)
+    return INFEASIBLE_SPEC.table(rows)
 
 
 def _mean(values: list[float]) -> float:
@@ -129,7 +164,7 @@ def fidelity_table(outcomes: Sequence[PromptOutcome], unedited_psnr: Mapping[str
                          "psnr_unedited": _mean([unedited_psnr.get(o.prompt.seq_id, math.nan) for o in cat]),
                          "psnr_region": _mean([s.psnr_region for s in scores]),
                          "psnr_unedited_region": _mean([s.psnr_unedited_region for s in scores])})
-    return _table("edit_fidelity", rows)
+    return FIDELITY_SPEC.table(rows)
 
 
 def outcomes_table(outcomes: Sequence[PromptOutcome]) -> pa.Table:
@@ -139,7 +174,7 @@ def outcomes_table(outcomes: Sequence[PromptOutcome]) -> pa.Table:
              "refusal": o.refusal, "reason": o.reason, "validation": o.validation, "seconds": float(o.seconds),
              "psnr": o.fidelity.psnr if o.fidelity is not None else math.nan,
              "psnr_region": o.fidelity.psnr_region if o.fidelity is not None else math.nan} for o in outcomes]
-    return _table("editing_outcomes", rows)
+    return OUTCOMES_SPEC.table(rows)
 
 
 def failures_markdown(outcomes: Sequence[PromptOutcome], method: str = "ours") -> str:
@@ -148,5 +183,6 @@ def failures_markdown(outcomes: Sequence[PromptOutcome], method: str = "ours") -
     return markdown(table, columns=("category", "kind", "text", "refusal", "reason"))
 
 
-__all__ = ["METHOD_NAMES", "PromptOutcome", "completion_table", "failures_markdown", "fidelity_table",
+__all__ = ["EDITING_SPEC", "EDITING_SPECS", "FIDELITY_SPEC", "INFEASIBLE_SPEC", "METHOD_NAMES", "OUTCOMES_SPEC",
+           "PromptOutcome", "completion_table", "failures_markdown", "fidelity_table",
            "infeasible_table", "outcomes_table"]

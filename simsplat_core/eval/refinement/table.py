@@ -1,6 +1,6 @@
 """The ``motion`` table (DESIGN.md): one row per (dataset, method, predictor); and the per-case outcomes table.
 
-Columns (:data:`MOTION_COLUMNS`, the schema ``storage.schemas.motion_table_schema`` is built from them):
+Columns (:data:`MOTION_COLUMNS`, declared with their meanings as :data:`MOTION_SPEC`):
 ``dataset`` (``"synthetic"``, a real dataset such as ``"waymo-motion"`` / ``"av2"``, or ``"<dataset>+edits"``
 for scripted edits of real scenarios), ``method`` (``"log"``, ``"none"``, ``"single-agent"``, ``"full"``),
 ``predictor`` (the motion predictor's name, ``""`` for the ``log`` and ``none`` rows), ``scenarios``,
@@ -11,11 +11,11 @@ moved); ``ade_3s`` / ``ade_8s`` (null for the log row, for edits and where the d
 ``agent_collision`` / ``agent_offroad``, the share of agents that collide / leave the road (informative where
 there are few scenarios).
 
-The outcomes table (:data:`OUTCOME_COLUMNS`, ``motion_outcomes.parquet``) has one row per (edit case, mode),
-with the failing agents and what happened to each, so failures can be inspected.
+The outcomes table (:data:`OUTCOME_COLUMNS`, :data:`OUTCOMES_SPEC`, ``motion_outcomes.parquet``) has one row per
+(edit case, mode), with the failing agents and what happened to each, so failures can be inspected.
 
     rows = motion_rows(synthetic_rows(...), real_rows(...).rows, evaluate_real_edits(...).rows)
-    table = motion_table(rows); text = motion_markdown(table)
+    table = motion_table(rows); text = MOTION_SPEC.render_markdown(table)
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from typing import Any
 
 import pyarrow as pa
 
-from simsplat_core.eval.tables import markdown
+from simsplat_core.eval.table_spec import Column, TableSpec
 
 #: ``(name, type, nullable)`` of the ``motion`` table's columns, in order.
 MOTION_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
@@ -50,6 +50,30 @@ MOTION_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
 #: Columns that are shares in ``[0, 1]``.
 RATE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "offroad", "kinematic", "failure",
                                  "agent_collision", "agent_offroad")
+
+_MOTION_MEANINGS: dict[str, tuple[str, str]] = {
+    "dataset": ("synthetic, a real dataset (waymo-motion, av2) or <dataset>+edits", ""),
+    "method": ("log | none | single-agent | full", ""),
+    "predictor": ("the motion predictor (\"\" for the log and none rows)", ""),
+    "scenarios": ("scenarios evaluated", "count"),
+    "refused": ("cases the editor refused, left out of the rates", "count"),
+    "collision_vehicle": ("scenarios where an agent collides with a vehicle", "share"),
+    "collision_pedestrian": ("scenarios where an agent collides with a pedestrian", "share"),
+    "offroad": ("scenarios where an agent leaves the road", "share"),
+    "kinematic": ("scenarios where an agent breaks the kinematic limits", "share"),
+    "failure": ("scenarios where any agent fails", "share"),
+    "progress": ("mean progress along the agents' log paths (NaN where no agent moved)", "share"),
+    "stopped_share": ("share of moving agents that stop", "share"),
+    "ade_3s": ("average displacement error over 3 s (null: undefined)", "m"),
+    "ade_8s": ("average displacement error over 8 s (null: undefined)", "m"),
+    "agent_collision": ("agents that collide", "share"),
+    "agent_offroad": ("agents that leave the road", "share"),
+}
+#: ``tables/motion``: one row per (dataset, method, predictor).
+MOTION_SPEC = TableSpec(
+    "motion", "Motion: failure rates, progress, ADE", "(dataset, method, predictor)",
+    tuple(Column(n, t, *_MOTION_MEANINGS[n], nullable=nl) for n, t, nl in MOTION_COLUMNS),
+    keys=("dataset", "method", "predictor"), version=2)  # 2: predictor and refused columns
 
 
 def motion_rows(*groups: Sequence[Mapping[str, Any]]) -> list[dict]:
@@ -79,13 +103,7 @@ def motion_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
                                  "is not in [0, 1]")
             values.append(value)
         data[name] = values
-    schema = pa.schema([pa.field(n, t, nullable=nl) for n, t, nl in MOTION_COLUMNS])
-    return pa.Table.from_pydict(data, schema=schema)
-
-
-def motion_markdown(table: pa.Table, digits: int = 3) -> str:
-    """The table as GitHub Markdown (null ADE blank, NaN as ``–``)."""
-    return markdown(table, digits, tuple(n for n, _, _ in MOTION_COLUMNS))
+    return pa.Table.from_pydict(data, schema=MOTION_SPEC.schema)
 
 
 #: ``(name, type, nullable)`` of the outcomes table's columns (one row per edit case and refinement mode).
@@ -112,8 +130,34 @@ OUTCOME_COLUMNS: tuple[tuple[str, pa.DataType, bool], ...] = (
     ("stopped_share", pa.float64(), False),
     ("seconds", pa.float64(), False),
 )
-#: Columns of the outcomes' Markdown (failures only).
-OUTCOME_MARKDOWN: tuple[str, ...] = ("dataset", "seq_id", "kind", "mode", "text", "refused", "failure_details")
+
+_OUTCOME_MEANINGS: dict[str, tuple[str, str]] = {
+    "case_id": ("the edit case", ""), "dataset": ("the case's dataset", ""), "seq_id": ("the sequence", ""),
+    "source": ("editing | interaction | real-edit", ""),
+    "kind": ("the editing category, the interaction kind or the real edit's name", ""),
+    "text": ("the prompt", ""), "mode": ("the refinement mode: none | single-agent | full", ""),
+    "predictor": ("the motion predictor", ""), "refused": ("the editor's refusal (\"\": carried out)", ""),
+    "collision_vehicle": ("an agent collides with a vehicle", ""),
+    "collision_pedestrian": ("an agent collides with a pedestrian", ""),
+    "collision_static": ("an agent collides with a static object", ""),
+    "offroad": ("an agent leaves the road", ""), "kinematic": ("an agent breaks the kinematic limits", ""),
+    "failure": ("any agent fails", ""), "failed_agents": ("the failed agents' ids, comma separated", ""),
+    "failure_details": ("per failed agent: <id> [<source> <category>]: what happened, ' | ' separated", ""),
+    "refined": ("agents that reacted", "count"), "progress": ("mean progress along the log paths", "share"),
+    "stopped_share": ("share of moving agents that stop", "share"), "seconds": ("wall time of the case", "s"),
+}
+
+
+def _failed_or_refused(table: pa.Table) -> list[int]:
+    return [k for k, (f, r) in enumerate(zip(table["failure"].to_pylist(), table["refused"].to_pylist())) if f or r]
+
+
+#: ``tables/motion_outcomes``: one row per (edit case, mode); its Markdown lists the failed or refused ones.
+OUTCOMES_SPEC = TableSpec(
+    "motion_outcomes", "Motion: every edit case and mode", "(edit case, refinement mode)",
+    tuple(Column(n, t, *_OUTCOME_MEANINGS[n], nullable=nl) for n, t, nl in OUTCOME_COLUMNS),
+    keys=("case_id", "mode"), printed=("dataset", "seq_id", "kind", "mode", "text", "refused", "failure_details"),
+    row_filter=_failed_or_refused, detail=True)
 
 
 def outcomes_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
@@ -126,15 +170,8 @@ def outcomes_table(rows: Sequence[Mapping[str, Any]]) -> pa.Table:
                 raise KeyError(f"outcome row {k} ({row.get('case_id')}) has no column {name!r}")
             values.append(row[name])
         data[name] = values
-    schema = pa.schema([pa.field(n, t, nullable=nl) for n, t, nl in OUTCOME_COLUMNS])
-    return pa.Table.from_pydict(data, schema=schema)
+    return pa.Table.from_pydict(data, schema=OUTCOMES_SPEC.schema)
 
 
-def outcomes_markdown(table: pa.Table, digits: int = 3) -> str:
-    """The failed or refused outcomes of ``table`` as Markdown (:data:`OUTCOME_MARKDOWN` columns)."""
-    keep = [k for k, (f, r) in enumerate(zip(table["failure"].to_pylist(), table["refused"].to_pylist())) if f or r]
-    return markdown(table.take(pa.array(keep, pa.int64())), digits, OUTCOME_MARKDOWN)
-
-
-__all__ = ["MOTION_COLUMNS", "OUTCOME_COLUMNS", "OUTCOME_MARKDOWN", "RATE_COLUMNS", "motion_markdown", "motion_rows",
-           "motion_table", "outcomes_markdown", "outcomes_table"]
+__all__ = ["MOTION_COLUMNS", "MOTION_SPEC", "OUTCOMES_SPEC", "OUTCOME_COLUMNS", "RATE_COLUMNS", "motion_rows",
+           "motion_table", "outcomes_table"]

@@ -47,7 +47,7 @@ def eval_imports(path: Path, root: Path = CORE) -> list[str]:
 
 def test_eval_imports_finds_every_import_form(tmp_path: Path) -> None:
     module = tmp_path / "probe.py"
-    module.write_text("import simsplat_core.eval.tables\nfrom simsplat_core import eval\n"
+    module.write_text("import simsplat_core.eval.grounding.tables\nfrom simsplat_core import eval\n"
                       "from simsplat_core.eval.motion import split_objects\nfrom simsplat_core.evaluation import x\n")
     assert [hit.split(" ")[0] for hit in eval_imports(module, tmp_path)] == ["probe.py:1", "probe.py:2", "probe.py:3"]
 

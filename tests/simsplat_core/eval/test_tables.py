@@ -8,13 +8,8 @@ import pyarrow as pa
 import pytest
 
 from simsplat_core.eval.grounding.metrics import CategoryScore
-from simsplat_core.eval.tables import (
-    GROUNDING_COLUMNS,
-    ablation_table,
-    grounding_markdown,
-    grounding_table,
-    markdown,
-)
+from simsplat_core.eval.grounding.tables import GROUNDING_COLUMNS, GROUNDING_SPEC, ablation_table, grounding_table
+from simsplat_core.eval.table_spec import markdown
 
 
 def _summary() -> dict:
@@ -56,7 +51,7 @@ def test_ablation_table_rows() -> None:
 
 def test_markdown_layout() -> None:
     t = grounding_table(_summary(), {"Ours": "ours", "none": "empty"})
-    md = grounding_markdown(t, digits=2)
+    md = GROUNDING_SPEC.render_markdown(t, digits=2)
     lines = md.strip().splitlines()
     assert lines[0] == "| method | " + " | ".join(GROUNDING_COLUMNS) + " |"
     assert lines[1].startswith("|:---|---:")

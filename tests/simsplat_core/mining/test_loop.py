@@ -38,7 +38,7 @@ from simsplat_core.mining.judge_input import targets_of
 from simsplat_core.mining.rule_judge import JudgeConfig
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.vlm.openai_chat import VLMError
-from storage.schemas import EDITS_SCHEMA
+from storage.schemas.edits import EDITS_SCHEMA
 
 #: The judge without its render checks (module docstring).
 RELAXED = JudgeConfig(blank_std=-1.0, hole_share=1.01, min_visible_pixels=0)

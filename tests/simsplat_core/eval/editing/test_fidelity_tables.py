@@ -11,7 +11,7 @@ from simsplat_core.eval.editing.fidelity import FidelityScore, edit_fidelity, ed
 from simsplat_core.eval.editing.intents import EditIntent
 from simsplat_core.eval.editing.observation import ViewSet
 from simsplat_core.eval.editing.outcomes import (
-    TABLE_COLUMNS,
+    EDITING_SPECS,
     PromptOutcome,
     completion_table,
     failures_markdown,
@@ -20,7 +20,8 @@ from simsplat_core.eval.editing.outcomes import (
     outcomes_table,
 )
 from simsplat_core.eval.editing.prompts import CATEGORIES, EditPrompt
-from storage.schemas import EDITING_TABLES, editing_table_schema, validate_table
+from simsplat_core.eval.table_registry import table_spec
+from storage.schemas.validation import validate_table
 
 
 def _views(rgb: np.ndarray) -> ViewSet:
@@ -69,7 +70,7 @@ def _outcomes() -> list[PromptOutcome]:
 
 def test_completion_and_infeasible_tables() -> None:
     table = completion_table(_outcomes())
-    validate_table(table, editing_table_schema("editing"), "editing", require_metadata=False)
+    validate_table(table, table_spec("editing").schema, "editing", require_metadata=False)
     rows = {(r["method"], r["category"]): r for r in table.to_pylist()}
     assert len(rows) == 2 * 7
     assert rows[("ours", "remove")]["rate"] == pytest.approx(2 / 3)
@@ -82,22 +83,23 @@ def test_completion_and_infeasible_tables() -> None:
 
 def test_fidelity_and_outcome_tables() -> None:
     table = fidelity_table(_outcomes(), {"s": 28.5})
-    validate_table(table, editing_table_schema("edit_fidelity"), "edit_fidelity", require_metadata=False)
+    validate_table(table, table_spec("edit_fidelity").schema, "edit_fidelity", require_metadata=False)
     rows = {(r["method"], r["category"]): r for r in table.to_pylist()}
     assert rows[("ours", "add_vehicle")]["psnr"] == pytest.approx(25.5)
     assert rows[("ours", "total")]["edits"] == 12 and rows[("ours", "total")]["psnr_unedited"] == 28.5
     assert rows[("chatsim-like", "remove")]["psnr"] == pytest.approx(25.0)
     out = outcomes_table(_outcomes())
-    validate_table(out, editing_table_schema("editing_outcomes"), "editing_outcomes", require_metadata=False)
+    validate_table(out, table_spec("editing_outcomes").schema, "editing_outcomes", require_metadata=False)
     assert out.num_rows == len(_outcomes())
     md = failures_markdown(_outcomes())
     assert md.count("\n") == 2 + 6 and "text 2" in md
 
 
 def test_every_editing_table_has_a_schema() -> None:
-    assert set(EDITING_TABLES) == set(TABLE_COLUMNS)
-    for name in EDITING_TABLES:
-        schema = editing_table_schema(name)
+    names = [spec.name for spec in EDITING_SPECS]
+    assert names == ["editing", "editing_infeasible", "edit_fidelity", "editing_outcomes"]
+    for name in names:
+        schema = table_spec(name).schema
         assert schema.metadata[b"schema_name"] == name.encode()
-    with pytest.raises(KeyError, match="no editing table"):
-        editing_table_schema("nope")
+    with pytest.raises(KeyError, match="no evaluation table"):
+        table_spec("nope")

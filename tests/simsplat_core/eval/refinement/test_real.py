@@ -12,7 +12,7 @@ import pytest
 
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.eval.refinement import real as R
-from simsplat_core.eval.refinement.table import MOTION_COLUMNS, motion_markdown, motion_rows, motion_table
+from simsplat_core.eval.refinement.table import MOTION_COLUMNS, MOTION_SPEC, motion_rows, motion_table
 from simsplat_core.motion.baselines import NOT_OBSERVED, ConstantVelocityPredictor, LogReplayPredictor
 from simsplat_core.motion.motion_map import motion_map_from_features
 from simsplat_core.motion.predictor import MotionPredictor, RolloutRequest
@@ -101,7 +101,7 @@ def test_rows_on_a_map_without_lanes() -> None:
     assert set(evaluation.per_type["hand"]["constant-velocity"]) == {"vehicle"}  # "p" appears after the history
     table = motion_table(motion_rows(evaluation.rows))
     assert table.column_names == [n for n, _, _ in MOTION_COLUMNS] and table.num_rows == 2
-    assert "| hand | log |  | 1 | 0 |" in motion_markdown(table)
+    assert "| hand | log |  | 1 | 0 |" in MOTION_SPEC.render_markdown(table)
 
 
 def test_a_collision_counts_per_scenario_and_per_agent() -> None:

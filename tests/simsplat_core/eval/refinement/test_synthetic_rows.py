@@ -9,7 +9,7 @@ import math
 import pytest
 
 from simsplat_core.eval.refinement.synthetic import MotionCase, MotionOutcome, outcome_row, synthetic_rows
-from simsplat_core.eval.refinement.table import OUTCOME_COLUMNS, motion_table, outcomes_markdown, outcomes_table
+from simsplat_core.eval.refinement.table import OUTCOME_COLUMNS, OUTCOMES_SPEC, motion_table, outcomes_table
 from simsplat_core.scenario.rollout_metrics import ScenarioFailures
 
 CRASH = ScenarioFailures(collision_vehicle=True, failed_agents=("car_2",))
@@ -52,7 +52,7 @@ def test_outcomes_table_and_markdown_of_failures() -> None:
     assert first["failure"] and first["failed_agents"] == "car_2" and "collision with ego" in first["failure_details"]
     assert table.to_pylist()[2]["refused"] == "no_asset: none" and not table.to_pylist()[2]["failure"]
     assert math.isclose(first["progress"], 1.0)
-    text = outcomes_markdown(table)
+    text = OUTCOMES_SPEC.render_markdown(table)
     assert "text c1" in text and "text c3" in text and "text c2" not in text  # failed and refused only
     with pytest.raises(KeyError, match="no column 'mode'"):
         outcomes_table([{k: v for k, v in outcome_row(outcomes[0]).items() if k != "mode"}])
