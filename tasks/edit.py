@@ -21,14 +21,15 @@ from typing import Any
 import numpy as np
 import pydantic
 
-from simsplat_core.editing.apply import EditContext, apply_edit
-from simsplat_core.editing.asset_record import Asset
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.apply import apply_edit
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.record import Asset
 from simsplat_core.editing.commands import EditProgram, program_from_json
 from simsplat_core.editing.delta import apply_delta
-from simsplat_core.editing.edit_ops import node_factory
+from simsplat_core.editing.draft import EditContext
+from simsplat_core.editing.ops import node_factory
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
-from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.parse.prompt import parse_prompt
 from simsplat_core.editing.renders import FrameRender, frame_views, render_frame, render_frames
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.language.query import QueryEngine

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.editing.procedural_assets import STATIC_KINDS
+from simsplat_core.editing.assets.procedural import STATIC_KINDS
 from simsplat_core.eval.editing.intents import EGO, EditIntent, MotionIntent, PlacementIntent
 from simsplat_core.eval.editing.observation import EditObservation, StateChanges, state_changes, trajectory_changed
 from simsplat_core.eval.editing.truth import SceneTruth
