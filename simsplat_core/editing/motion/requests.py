@@ -16,6 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.editing.behaviours.registry import PEDESTRIAN_ONLY, VEHICLE_ONLY
 from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.motion.speed_profile import PEDESTRIAN_LIMITS, VEHICLE_LIMITS, LongitudinalLimits
 from simsplat_core.editing.result import EditRefused
@@ -37,9 +38,6 @@ RUN_MPS = 3.0
 STOP_GAP_M = {"crosswalk": 1.5, "intersection": 1.0, "stop_line": 1.0, "behind": 2.0}
 #: Standstill gap kept to a leader, metres.
 FOLLOW_GAP_M = 2.0
-#: Behaviour fields that only vehicles / only pedestrians have (``Behaviour`` docstring).
-VEHICLE_ONLY = ("lane_change", "turn", "reverse", "follow")
-PEDESTRIAN_ONLY = ("cross_street", "jaywalk", "gait")
 
 
 @dataclass(frozen=True)

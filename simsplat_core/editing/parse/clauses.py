@@ -27,12 +27,12 @@ from collections.abc import Sequence
 
 from pydantic import ValidationError
 
+from simsplat_core.editing.behaviours.registry import INTENT_FIELDS
 from simsplat_core.editing.parse import chunks
 from simsplat_core.editing.parse import lexicon as lex
 from simsplat_core.editing.parse.anchor import agent_kind
 from simsplat_core.editing.parse.behaviour import parse_predicate
 from simsplat_core.editing.parse.placement import PlacementParse, find_placement, parse_asset, spacing_words
-from simsplat_core.editing.parse.predicate import INTENT_FIELDS
 from simsplat_core.editing.parse.semantic import nearest_intent
 from simsplat_core.editing.parse.speed import SPEED_NOUN, SPEED_VERB
 from simsplat_core.editing.parse.state import INDEFINITE, Draft, PromptState, Subject

@@ -3,14 +3,14 @@
 Object nouns, colours and garments are the grounding lexicon's (``language.query_parse``): this module adds
 only what editing needs beyond describing objects -- the verbs of the four ops, the words that end a noun
 phrase, a few insertable things the grounding nouns lack ("barrel", "worker"), the non-objects a prompt may
-name ("the sky"), and the *intents* an unknown verb may be mapped to by E5 (``editing.parse.semantic``). Motion
-intents are tied to the scenario vocabulary's classes (``CLASS_INTENT``), so the class names are spelled
-only in ``scenario/vocabulary.py``.
+name ("the sky"), and the *intents* an unknown verb may be mapped to by E5 (``editing.parse.semantic``). The
+motion behaviours' own words (their intents, phrasings and motion classes) are declared in ``editing.behaviours``.
 """
 
 from __future__ import annotations
 
 from simsplat_core.editing.assets.procedural import STATIC_KINDS as PROCEDURAL_STATIC_KINDS
+from simsplat_core.editing.behaviours import registry as behaviours
 from simsplat_core.language.query_parse import LOWER_GARMENTS, NOUNS, UPPER_GARMENTS
 from simsplat_core.scenario import vocabulary as voc
 
@@ -174,37 +174,16 @@ HEAD_NOUN_MAX_WORDS = max(len(n.split()) for n in HEAD_NOUNS)
 # ------------------------------------------------------------------------------------------------ intents
 
 #: Intents an unknown verb or predicate may mean. "remove" / "insert" / "replace" are ops; the others set
-#: behaviour fields (``editing.parse.behaviour.INTENT_FIELDS``); "unsupported" marks phrasings to refuse.
+#: behaviour fields (``editing.behaviours.registry.INTENT_FIELDS``); "unsupported" marks phrasings to refuse.
 UNSUPPORTED = "unsupported"
-#: Scenario-vocabulary motion classes -> the intent of asking an agent to do it.
-CLASS_INTENT: dict[str, str] = {
-    voc.TURNING_LEFT: "turn_left", voc.TURNING_RIGHT: "turn_right", voc.GOING_STRAIGHT: "straight",
-    voc.CHANGING_LANE_LEFT: "lane_left", voc.CHANGING_LANE_RIGHT: "lane_right", voc.SLOWING_DOWN: "decelerate",
-    voc.SPEEDING_UP: "accelerate", voc.STOPPING: "stop", voc.STOPPED: "stop", voc.PARKED: "stop",
-    voc.REVERSING: "reverse", voc.CROSSING_LEFT_TO_RIGHT: "cross", voc.CROSSING_RIGHT_TO_LEFT: "cross",
-    voc.CROSSING: "cross", voc.WALKING_ALONG: "walk", voc.STANDING: "stop",
-}
-#: Imperative phrasings of each intent (E5 passages, beside the vocabulary's own class prototypes).
+#: Imperative phrasings of each intent (E5 passages, beside the vocabulary's own class prototypes): the ops',
+#: the behaviours' (``editing.behaviours``) and the phrasings to refuse.
 INTENT_PHRASES: dict[str, tuple[str, ...]] = {
     "remove": ("remove it from the scene", "delete it", "take it out of the scene", "get rid of it",
                "make it disappear", "erase it"),
     "insert": ("add one to the scene", "put a new one on the road", "place another one here"),
     "replace": ("replace it with a different one", "swap it for another one"),
-    "stop": ("stop", "come to a stop", "halt", "pull over and stop"),
-    "brake_hard": ("brake hard", "slam on the brakes", "emergency stop"),
-    "decelerate": ("slow down", "decelerate", "reduce speed"),
-    "accelerate": ("speed up", "accelerate", "go faster"),
-    "reverse": ("reverse", "back up", "drive backwards"),
-    "lane_left": ("change lanes to the left", "merge into the left lane"),
-    "lane_right": ("change lanes to the right", "merge into the right lane"),
-    "turn_left": ("turn left at the intersection", "make a left turn"),
-    "turn_right": ("turn right at the intersection", "make a right turn"),
-    "straight": ("go straight through the intersection",),
-    "follow": ("follow the car", "drive behind the car"),
-    "cross": ("cross the street", "walk across the road"),
-    "run": ("run", "walk fast"),
-    "walk": ("walk",),
-    "wait": ("wait before moving", "start later"),
+    **behaviours.INTENT_PHRASES,
     UNSUPPORTED: ("fly", "change its colour", "paint it", "make it rain", "explode", "jump", "honk the horn",
                   "turn on the lights", "dance", "sing", "make it bigger", "turn into an animal", "teleport",
                   "make it invisible", "do a u-turn", "drive on the sidewalk", "crash"),
@@ -221,11 +200,3 @@ SUPPORTED = (
     "change lanes left/right, turn left/right or go straight at the next intersection, delay or start time, "
     "follow another vehicle; make a pedestrian cross the street, jaywalk, walk or run."
 )
-#: Vehicle-only and pedestrian-only behaviour fields (``Behaviour``'s docstring).
-VEHICLE_ONLY: tuple[str, ...] = ("lane_change", "turn", "reverse", "follow")
-PEDESTRIAN_ONLY: tuple[str, ...] = ("cross_street", "jaywalk", "gait")
-#: Those fields in words, for messages.
-FIELD_WORDS: dict[str, str] = {"lane_change": "changing lanes", "turn": "turning at an intersection",
-                               "reverse": "driving in reverse", "follow": "following another vehicle",
-                               "cross_street": "crossing the street", "jaywalk": "jaywalking",
-                               "gait": "walking or running"}

@@ -15,15 +15,6 @@ from typing import Any
 from simsplat_core.editing.parse import chunks
 from simsplat_core.scenario import vocabulary as voc
 
-#: Behaviour fields each intent sets (``stop`` is a dict of ``StopSpec`` fields).
-INTENT_FIELDS: dict[str, dict[str, Any]] = {
-    "stop": {"stop": {}}, "brake_hard": {"longitudinal": "brake_hard"}, "decelerate": {"longitudinal": "decelerate"},
-    "accelerate": {"longitudinal": "accelerate"}, "reverse": {"reverse": True}, "lane_left": {"lane_change": "left"},
-    "lane_right": {"lane_change": "right"}, "turn_left": {"turn": "left"}, "turn_right": {"turn": "right"},
-    "straight": {"turn": "straight"}, "cross": {"cross_street": True},
-    "jaywalk": {"jaywalk": True, "cross_street": True},
-    "walk": {"gait": "walk"}, "run": {"gait": "run"},
-}
 #: Words a predicate may hold that say nothing on their own.
 IGNORABLE = frozenset(
     "the a an its their his her it them they to at in on of and then also just now right away instead again bit "

@@ -3,8 +3,8 @@
 An unknown verb ("yank the van out of the scene") or predicate ("have the sedan hit the brakes", "make the
 bus pull over") is embedded as an E5 *query* and compared with *passages*: each intent's imperative
 phrasings (``editing.parse.lexicon.INTENT_PHRASES``) and the scenario vocabulary's motion-class prototypes
-mapped through ``CLASS_INTENT`` ("a car coming to a stop" -> stop). Phrasings of things the editor cannot
-do ("fly", "paint it", "make it rain") are passages too, of the intent ``unsupported``.
+mapped through ``editing.behaviours.registry.CLASS_INTENT`` ("a car coming to a stop" -> stop). Phrasings of
+things the editor cannot do ("fly", "paint it", "make it rain") are passages too, of the intent ``unsupported``.
 
 The best intent is taken only when its cosine is at least :data:`MIN_SIMILARITY` and beats the best other
 intent by :data:`MIN_MARGIN`, and is not ``unsupported``; otherwise nothing is close enough and the parser
@@ -22,7 +22,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.editing.parse.lexicon import CLASS_INTENT, INTENT_PHRASES, UNSUPPORTED
+from simsplat_core.editing.behaviours.registry import CLASS_INTENT, INTENT_FAMILY
+from simsplat_core.editing.parse.lexicon import INTENT_PHRASES, UNSUPPORTED
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES
 
@@ -30,8 +31,6 @@ from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES
 MIN_SIMILARITY = 0.87
 #: Least lead of the best intent over the best intent of another family.
 MIN_MARGIN = 0.02
-#: Intents close enough that E5 need not tell them apart (the margin is taken to other families).
-FAMILY: dict[str, str] = {"stop": "slowing", "brake_hard": "slowing", "decelerate": "slowing"}
 
 
 @dataclass(frozen=True)
@@ -96,8 +95,8 @@ def nearest_intent(phrase: str, encoder: TextEncoder, *, min_similarity: float =
         best.setdefault(protos.intents[idx], (float(scores[idx]), int(idx)))
     ranked = sorted(best.items(), key=lambda kv: -kv[1][0])
     nearest, (score, idx) = ranked[0]
-    family = FAMILY.get(nearest, nearest)
-    others = [s for intent, (s, _) in ranked[1:] if FAMILY.get(intent, intent) != family]
+    family = INTENT_FAMILY.get(nearest, nearest)  # the margin is taken to other families
+    others = [s for intent, (s, _) in ranked[1:] if INTENT_FAMILY.get(intent, intent) != family]
     margin = score - others[0] if others else score
     ok = nearest != UNSUPPORTED and score >= min_similarity and margin >= min_margin
     return IntentMatch(nearest if ok else None, nearest, score, margin, protos.passages[idx])

@@ -21,13 +21,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
+from simsplat_core.editing.behaviours.registry import FIELD_WORDS, INTENT_FIELDS, PEDESTRIAN_ONLY, VEHICLE_ONLY
 from simsplat_core.editing.commands import EGO, AssetSpec, Placement, TargetRef
 from simsplat_core.editing.parse import chunks
 from simsplat_core.editing.parse import lexicon as lex
 from simsplat_core.editing.parse.anchor import agent_kind
 from simsplat_core.editing.parse.behaviour import parse_predicate
 from simsplat_core.editing.parse.placement import PlacementParse
-from simsplat_core.editing.parse.predicate import INTENT_FIELDS, PredicateParse
+from simsplat_core.editing.parse.predicate import PredicateParse
 from simsplat_core.editing.parse.semantic import nearest_intent
 from simsplat_core.editing.parse.text import number_word
 from simsplat_core.editing.result import EditRefused
@@ -233,12 +234,12 @@ class PromptState:
             raise self.refuse(f"{subject.label!r} is a static object: it cannot move. Motion edits are for "
                               "vehicles (speed, stop, reverse, lane change, turn, delay, follow) and pedestrians "
                               "(cross the street, jaywalk, walk or run, stop, delay, speed)", "wrong_category")
-        wrong = lex.VEHICLE_ONLY if subject.kind == "pedestrian" else lex.PEDESTRIAN_ONLY
+        wrong = VEHICLE_ONLY if subject.kind == "pedestrian" else PEDESTRIAN_ONLY
         bad = [name for name in wrong if fields.get(name) not in (None, False)]
         if bad:
             can = ("cross the street, jaywalk, walk or run, stop, wait and change speed" if subject.kind == "pedestrian"
                    else "change speed, stop, reverse, change lanes, turn, wait and follow")
-            what = " or ".join(lex.FIELD_WORDS[name] for name in bad)
+            what = " or ".join(FIELD_WORDS[name] for name in bad)
             raise self.refuse(f"{subject.label!r} is a {subject.kind}, and {what} is not something a "
                               f"{subject.kind} does; a {subject.kind} can {can}", "wrong_category")
 
