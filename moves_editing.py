@@ -91,7 +91,7 @@ SYMBOL_MOVES: dict[str, dict[str, str]] = {
 }
 
 #: Old names distinctive enough to rewrite when they stand bare in double backticks.
-DISTINCTIVE = {m for m in MOVES if "_" in m}
+DISTINCTIVE = {m for m in MOVES if "_" in m and MOVES[m].rpartition(".")[2] != m}
 
 SUFFIXES = (".py", ".md", ".toml")
 
