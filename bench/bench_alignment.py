@@ -39,10 +39,10 @@ from pathlib import Path
 
 import numpy as np
 
-from simsplat_core.language.feature_field import similarity_map
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.alignment.feature_field import similarity_map
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.alignment.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.node_masks import NodeIdMaps, mask_agreement
-from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import ReconstructionConfig, reconstruct
 from simsplat_core.world import WorldConfig, generate_log

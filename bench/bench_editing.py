@@ -48,7 +48,7 @@ from simsplat_core.editing.renders import render_frames  # noqa: E402
 from simsplat_core.editing.result import EditRefused  # noqa: E402
 from simsplat_core.eval.editing.prompts import CATEGORIES, PromptConfig, build_prompt_set  # noqa: E402
 from simsplat_core.eval.editing.truth import SceneTruth  # noqa: E402
-from simsplat_core.language.query import QueryEngine  # noqa: E402
+from simsplat_core.language.grounding.engine import QueryEngine  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402
 from storage import ArtifactStore, list_logs, read_scene_log  # noqa: E402
 from storage.assets import read_asset_bank  # noqa: E402

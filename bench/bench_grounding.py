@@ -71,7 +71,7 @@ from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, engine_va
 from simsplat_core.eval.grounding.metrics import GroundingResults, QueryOutcome, evaluate_grounding  # noqa: E402
 from simsplat_core.eval.motion import grounding_accuracy, split_objects  # noqa: E402
 from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table  # noqa: E402
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig  # noqa: E402
 from simsplat_core.language.scene_language import LanguageScene  # noqa: E402
 from simsplat_core.language.text import default_text_encoder  # noqa: E402
 from simsplat_core.scene.config import ReconstructionConfig  # noqa: E402
@@ -100,8 +100,8 @@ def _builder_version() -> str:
     import hashlib
 
     h = hashlib.sha1()
-    for rel in ("simsplat_core/language/scene_builder.py", "simsplat_core/language/feature_field.py",
-                "simsplat_core/language/node_masks.py"):
+    for rel in ("simsplat_core/language/alignment/scene_builder.py",
+                "simsplat_core/language/alignment/feature_field.py", "simsplat_core/language/node_masks.py"):
         h.update((ROOT / rel).read_bytes())
     return h.hexdigest()[:10]
 
@@ -158,7 +158,7 @@ def reconstructed_scene(log: SceneLog, iterations: int, encoder, aligner, cache:
     Built scenes are cached too, keyed by the builder's sources and ``tag`` (the aligner's training
     seeds); ``reuse_scenes`` accepts a cached scene of any builder version (quick re-evaluation).
     """
-    from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
+    from simsplat_core.language.alignment.scene_builder import AlignmentConfig, build_language_scene
 
     stem = f"scene-{log.seq_id}-it{iterations}-{_config_key(reconstruction_config(iterations))}"
     path = cache / f"{stem}-{_builder_version()}{tag}.pkl"
@@ -181,8 +181,8 @@ def engine_methods(encoder, calib_examples, codebooks=None) -> tuple[dict, dict]
     """The QueryEngine ablations, each calibrated on ``calib_examples`` (the engine's default thresholds when
     there are none); returns ``(grounders, thresholds)``."""
     from simsplat_core.eval.grounding.calibration import calibrate_thresholds
-    from simsplat_core.language.query import QueryEngine
-    from simsplat_core.language.query_config import QueryConfig
+    from simsplat_core.language.grounding.config import QueryConfig
+    from simsplat_core.language.grounding.engine import QueryEngine
 
     variants = engine_variants(QueryEngine(encoder, QueryConfig(), codebooks))
     grounders, thresholds = {}, {}
@@ -314,7 +314,7 @@ def breakdowns(results: GroundingResults, method: str) -> dict:
 def cold_latency(engine_grounder: EngineGrounder, scenes: dict[str, LanguageScene], bench: GroundingBenchmark,
                  count: int = 30) -> dict:
     """Seconds per ``ground`` call with nothing cached: a fresh E5 encoder (one-entry cache) and engine."""
-    from simsplat_core.language.query import QueryEngine
+    from simsplat_core.language.grounding.engine import QueryEngine
     from simsplat_core.language.text import E5TextEncoder
 
     engine = engine_grounder.engine
@@ -367,7 +367,7 @@ def main() -> None:
                         help="use cached language scenes built by another version of the scene builder")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
-    for noisy in ("simsplat_core.scene.trainer", "simsplat_core.language.feature_field"):
+    for noisy in ("simsplat_core.scene.trainer", "simsplat_core.language.alignment.feature_field"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
     bench_and_calib = set(args.bench_seeds) | set(args.calib_seeds)
     if set(args.bench_seeds) & set(args.calib_seeds) or bench_and_calib & set(range(args.train_seeds)):

@@ -34,9 +34,9 @@ import time
 from pathlib import Path
 
 from simsplat_core.eval.motion import grounding_accuracy, labeller_agreement, split_objects
-from simsplat_core.language.motion_dataset import RealismConfig
+from simsplat_core.language.alignment.motion_dataset import RealismConfig
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig
 from simsplat_core.language.motion_labels import label_log
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
 from simsplat_core.language.text import E5TextEncoder, default_text_encoder
 from simsplat_core.world import WorldConfig, generate_log
 

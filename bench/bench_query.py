@@ -39,8 +39,8 @@ sys.path.insert(0, str(ROOT))
 
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log  # noqa: E402
 from simsplat_core.language.codebooks import MotionCodebooks  # noqa: E402
-from simsplat_core.language.query import QueryEngine  # noqa: E402
-from simsplat_core.language.query_parse import parse_query  # noqa: E402
+from simsplat_core.language.grounding.engine import QueryEngine  # noqa: E402
+from simsplat_core.language.grounding.parse import parse_query  # noqa: E402
 from simsplat_core.language.text import E5TextEncoder  # noqa: E402
 from simsplat_core.world import WorldConfig, generate_log  # noqa: E402
 

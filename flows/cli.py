@@ -26,8 +26,6 @@ os.environ.setdefault("RAY_AUTH_MODE", "disabled")
 os.environ.setdefault("PREFECT_LOGGING_TO_API_WHEN_MISSING_FLOW", "ignore")  # CLI work outside flows logs locally
 
 app = typer.Typer(help="SIMSplat scenario-mining pipeline.", no_args_is_help=True, add_completion=False)
-ingest_app = typer.Typer(help="Decode real driving logs into the artifact store.", no_args_is_help=True)
-app.add_typer(ingest_app, name="ingest")
 eval_app = typer.Typer(help="Evaluate stored results and write the run's tables.", no_args_is_help=True)
 app.add_typer(eval_app, name="eval")
 assets_app = typer.Typer(help="The asset bank of scene editing: build it, list it, draw its contact sheet.",
@@ -110,7 +108,7 @@ def _print_stages(stages, only: tuple[str, ...] | None = None) -> None:
 
 def _alignment_config(captioner: str):
     """The validated ``AlignmentConfig`` of ``--captioner`` (a VLM endpoint is checked now, not after hours)."""
-    from simsplat_core.language.scene_builder import AlignmentConfig, AlignmentConfigError
+    from simsplat_core.language.alignment.scene_builder import AlignmentConfig, AlignmentConfigError
     from simsplat_core.vlm import OpenAIChatConfig, VLMError
 
     try:
@@ -985,48 +983,43 @@ def world(
     _print_logs(logs)
 
 
-def _ingest(source: str, path: Path, out: str, image_scale: float) -> None:
+#: ``--image-scale`` of ``simsplat ingest`` for sources with camera images, when not given.
+DEFAULT_IMAGE_SCALE = 0.5
+
+
+@app.command("ingest", no_args_is_help=True)
+def ingest(
+    source: Annotated[str, typer.Argument(help="A log source of the registry (an unknown name lists them with "
+                                          "what they read), or 'auto': the source that recognises PATH.")],
+    path: Annotated[Path, typer.Argument(help="The log: the file or directory the source reads.")],
+    out: Annotated[str, typer.Option(help="Artifact store root.")],
+    image_scale: Annotated[
+        float | None,
+        typer.Option(min=0.01, max=1.0, help=f"Resize camera images by this factor, for sources with images "
+                     f"(waymo-frame; default {DEFAULT_IMAGE_SCALE}: 960x640; a full-size 200-frame segment needs "
+                     "~6 GB of RAM)."),
+    ] = None,
+) -> None:
+    """Decode a real driving log of SOURCE at PATH into OUT/logs/<seq_id>/, e.g. simsplat ingest av2 LOG_DIR
+    --out DIR, or simsplat ingest auto PATH --out DIR."""
     from flows.pipeline import ingest_flow
+    from simsplat_core.data.registry import AUTO_SOURCE, UnknownLogSourceError, resolve_source
 
     if not path.exists():
         raise typer.BadParameter(f"{path} does not exist", param_hint="PATH")
+    try:
+        chosen = resolve_source(source, path)
+    except UnknownLogSourceError as exc:
+        raise typer.BadParameter(str(exc), param_hint="PATH" if source == AUTO_SOURCE else "SOURCE") from exc
+    scales = "image_scale" in chosen.options
+    if image_scale is not None and not scales:
+        raise typer.BadParameter(f"log source {chosen.name!r} has no camera images to scale",
+                                 param_hint="--image-scale")
+    scale = (DEFAULT_IMAGE_SCALE if image_scale is None else image_scale) if scales else 1.0
     logs = _run_flow(
-        ingest_flow, RunnerKind.threads, 1, store_root=out, source=source, paths=[str(path)], image_scale=image_scale
+        ingest_flow, RunnerKind.threads, 1, store_root=out, source=chosen.name, paths=[str(path)], image_scale=scale
     )
     _print_logs(logs)
-
-
-@ingest_app.command("waymo-frame")
-def ingest_waymo_frame(
-    path: Annotated[Path, typer.Argument(help="A Waymo Open Dataset Frame TFRecord file.")],
-    out: Annotated[str, typer.Option(help="Artifact store root.")],
-    image_scale: Annotated[
-        float,
-        typer.Option(min=0.01, max=1.0, help="Resize camera images by this factor "
-                     "(0.5: 960x640; a full-size 200-frame segment needs ~6 GB of RAM)."),
-    ] = 0.5,
-) -> None:
-    """Decode a Waymo Frame TFRecord (all its records, one sequence) into OUT/logs/<seq_id>/."""
-    _ingest("waymo-frame", path, out, image_scale)
-
-
-@ingest_app.command("waymo-scenario")
-def ingest_waymo_scenario(
-    path: Annotated[Path, typer.Argument(help="A Waymo Open Motion Scenario TFRecord file.")],
-    out: Annotated[str, typer.Option(help="Artifact store root.")],
-) -> None:
-    """Decode the first Scenario of a Waymo Open Motion TFRecord (tracks, ego, map; no images) into
-    OUT/logs/<seq_id>/."""
-    _ingest("waymo-scenario", path, out, 1.0)
-
-
-@ingest_app.command("av2")
-def ingest_av2(
-    path: Annotated[Path, typer.Argument(help="An Argoverse 2 sensor log directory.")],
-    out: Annotated[str, typer.Option(help="Artifact store root.")],
-) -> None:
-    """Decode an Argoverse 2 sensor log (annotations, poses, calibration, map) into OUT/logs/<seq_id>/."""
-    _ingest("av2", path, out, 1.0)
 
 
 @app.command()

@@ -15,8 +15,8 @@ from prefect.futures import as_completed
 from flows.cpu_shares import reserving_cpus, task_cpu_share
 from flows.progress import FlowProgress
 from simsplat_core.eval.grounding.metrics import CATEGORIES
-from simsplat_core.language.motion_training import MotionAlignerConfig
-from simsplat_core.language.scene_builder import AlignmentConfig
+from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
+from simsplat_core.language.alignment.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
 from storage import ArtifactStore, list_scenes

@@ -88,7 +88,7 @@ def read_aligner_state(store: ArtifactStore, model_hash: str):
         FileNotFoundError: no complete model with that hash (naming the path).
         ValueError: the state file is of another layout version (naming the file).
     """
-    from simsplat_core.language.motion_training import MotionAlignerState
+    from simsplat_core.language.alignment.motion_training import MotionAlignerState
 
     rel = model_dir(model_hash)
     if read_aligner_manifest(store, model_hash) is None:

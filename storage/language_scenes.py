@@ -93,7 +93,7 @@ def motion_to_json(motion) -> str:
 
 def motion_from_json(text: str, f_mot: np.ndarray, f_loc: np.ndarray):
     from simsplat_core.language.motion_labels import MotionLabel
-    from simsplat_core.language.motion_training import ObjectMotionFeatures
+    from simsplat_core.language.scene_language import ObjectMotionFeatures
 
     if not text:
         return None

@@ -16,9 +16,9 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.compute_threads import set_compute_threads
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.alignment.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.appearance.embedders import appearance_embedder
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
-from simsplat_core.language.scene_builder import AlignmentConfig, build_language_scene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import SceneGraph
 from storage import (

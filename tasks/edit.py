@@ -32,7 +32,7 @@ from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
 from simsplat_core.editing.parse.prompt import parse_prompt
 from simsplat_core.editing.renders import FrameRender, frame_views, render_frame, render_frames
 from simsplat_core.editing.result import EditedScene, EditRefused
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.motion.predictor import MotionPredictor

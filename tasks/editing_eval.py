@@ -32,7 +32,7 @@ from simsplat_core.eval.editing.outcomes import (
 )
 from simsplat_core.eval.editing.prompts import INFEASIBLE, PromptConfig, build_prompt_set, prompt_counts
 from simsplat_core.eval.tables import markdown
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from storage import ArtifactStore
 from storage.assets import read_asset_bank

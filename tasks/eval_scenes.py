@@ -14,7 +14,7 @@ from simsplat_core.editing.assets.bank import AssetBank
 from simsplat_core.eval.editing.observation import AssetLook
 from simsplat_core.eval.editing.plans import AssetPools
 from simsplat_core.eval.editing.truth import SceneTruth
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.motion.predictor import MotionPredictor
 from storage import ArtifactStore, read_scene_log
 from tasks.edit import LoadedEdit, load_edit_context

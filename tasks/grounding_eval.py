@@ -22,7 +22,7 @@ from simsplat_core.eval.grounding.benchmark import BenchmarkConfig, build_benchm
 from simsplat_core.eval.grounding.methods import ABLATION_ROW_METHODS, COMPARISON_ROWS, grounding_methods
 from simsplat_core.eval.grounding.metrics import GroundingResults, evaluate_grounding
 from simsplat_core.eval.tables import ablation_table, grounding_markdown, grounding_table, markdown
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from storage import ArtifactStore, read_scene_log
 from storage.language_scenes import read_language_scene

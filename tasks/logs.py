@@ -12,6 +12,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from prefect import task
 from prefect.cache_policies import NO_CACHE
@@ -104,25 +105,30 @@ def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> S
 
 @task(name="ingest-real-log", retries=0, cache_policy=NO_CACHE)
 def ingest_real_log(store_root: str, source: str, path: str, image_scale: float = 1.0) -> StoredLog:
-    """Decode a real driving log (``source`` = ``waymo-frame``, ``waymo-scenario`` or ``av2``) and store it.
+    """Decode a real driving log with the loader ``source`` names in ``simsplat_core.data.registry`` (``"auto"``:
+    the source that recognises ``path``) and store it.
 
-    Decoding always runs (the seq_id comes from the file); the write is skipped when the store already
-    holds an identical log.
+    ``image_scale`` goes to sources that take it (``waymo-frame``); for the others it must stay 1. Decoding
+    always runs (the seq_id comes from the file); the write is skipped when the store already holds an
+    identical log.
+
+    Raises:
+        UnknownLogSourceError: an unknown source, or ``auto`` and a path no source recognises (both list the
+            known sources).
+        ValueError: ``image_scale != 1`` for a source without images to scale.
+        CorruptLogError, FileNotFoundError: the loader's errors.
     """
-    from simsplat_core.data import load_av2_log, load_waymo_frames, load_waymo_scenario
+    from simsplat_core.data.registry import load_log, resolve_source
 
     started = time.perf_counter()
-    if source == "waymo-frame":
-        log = load_waymo_frames(Path(path), image_scale=image_scale)
-    elif source == "waymo-scenario":
-        log = load_waymo_scenario(Path(path))
-    elif source == "av2":
-        log = load_av2_log(Path(path))
-    else:
-        raise ValueError(f"unknown log source {source!r}: expected 'waymo-frame', 'waymo-scenario' or 'av2'")
+    chosen = resolve_source(source, path)
+    options: dict[str, Any] = {"image_scale": image_scale} if "image_scale" in chosen.options else {}
+    if not options and image_scale != 1.0:
+        raise ValueError(f"log source {chosen.name!r} has no images to scale (image_scale {image_scale})")
+    log = load_log(chosen.name, Path(path), **options)
     summary = summarize_log(log)
     provenance = {"source_path": str(path), "image_scale": image_scale, "summary": summary.to_dict()}
     written = write_scene_log(ArtifactStore(store_root), log, provenance=provenance)
     seconds = time.perf_counter() - started
-    logger.info("%s: ingested from %s (%d bytes, %.1f s)", log.seq_id, path, written.bytes, seconds)
+    logger.info("%s: ingested from %s as %s (%d bytes, %.1f s)", log.seq_id, path, chosen.name, written.bytes, seconds)
     return StoredLog(summary, written.relpath, written.bytes, round(seconds, 3), written.skipped)

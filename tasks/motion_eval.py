@@ -50,7 +50,7 @@ from simsplat_core.eval.refinement.table import (
     outcomes_markdown,
     outcomes_table,
 )
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.motion.registry import DEFAULT_PREDICTOR, make_predictor
 from storage import ArtifactStore

@@ -13,11 +13,11 @@ from typing import Any
 
 import numpy as np
 
-from simsplat_core.language.feature_field import similarity_map
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_result import Grounding, NodeMatch
+from simsplat_core.language.alignment.feature_field import similarity_map
+from simsplat_core.language.grounding.engine import QueryEngine
+from simsplat_core.language.grounding.result import Grounding, NodeMatch
+from simsplat_core.language.grounding.static_location import with_static_locations
 from simsplat_core.language.scene_language import LanguageScene
-from simsplat_core.language.static_location import with_static_locations
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene import SceneGraph

@@ -76,7 +76,7 @@ def resolve_seq_ids(store_root: str, seq_ids: list[str] | None = None) -> list[s
     available = list_logs(ArtifactStore(store_root))
     if not available:
         raise ValueError(f"no driving log in {store_root}/logs: generate synthetic ones (simsplat run --sequences N) "
-                         "or ingest real ones (simsplat ingest av2 / waymo-frame / waymo-scenario)")
+                         "or ingest real ones (simsplat ingest SOURCE PATH, or simsplat ingest auto PATH)")
     chosen = list(seq_ids) if seq_ids else available
     unknown = [s for s in chosen if s not in available]
     if unknown:

@@ -34,10 +34,10 @@ from pathlib import Path
 
 import numpy as np
 
-from simsplat_core.data.av2_map import load_av2_map
+from simsplat_core.data.arrow_columns import read_columns
+from simsplat_core.data.av2_map import find_map_archive, load_av2_map
 from simsplat_core.data.common import BoxObservation, boxes_visible, build_track, safe_seq_id, validated
 from simsplat_core.data.errors import CorruptLogError
-from simsplat_core.data.feather_io import read_columns
 from simsplat_core.geometry import invert_transform, quat_wxyz_to_matrix, yaw_of_rotation
 from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, Track, node_type_for_category, split_for_frame
 
@@ -72,6 +72,12 @@ AV2_CATEGORIES: dict[str, str] = {
 
 _POSE_COLUMNS = ("qw", "qx", "qy", "qz", "tx_m", "ty_m", "tz_m")
 _MAP_NAME = re.compile(r"log_map_archive_(?P<log>.+?)____(?P<city>[A-Za-z]+)_city_(?P<city_id>\d+)\.json$")
+
+
+def is_av2_sensor_log(path: Path) -> bool:
+    """Whether ``path`` is an AV2 sensor-log directory (``annotations.feather`` and ``city_SE3_egovehicle.feather``
+    in it; log-source detection)."""
+    return (path / "annotations.feather").is_file() and (path / "city_SE3_egovehicle.feather").is_file()
 
 
 def poses_from_columns(cols: dict[str, np.ndarray]) -> np.ndarray:
@@ -175,15 +181,6 @@ def read_ring_cameras(calib_dir: str | Path) -> dict[str, RingCamera]:
             },
         )
     return cameras
-
-
-def _find_map(log_dir: Path) -> Path:
-    candidates = sorted((log_dir / "map").glob("log_map_archive*.json"))
-    if not candidates:
-        raise CorruptLogError(log_dir / "map", "file", "no log_map_archive*.json")
-    if len(candidates) > 1:
-        raise CorruptLogError(log_dir / "map", "file", f"several map archives: {[c.name for c in candidates]}")
-    return candidates[0]
 
 
 def _tracks_and_objects(
@@ -314,7 +311,7 @@ def load_av2_log(log_dir: str | Path, seq_id: str | None = None) -> SceneLog:
 
     tracks, objects = _tracks_and_objects(ann_path, ann, row_frame, centers, sizes, headings, visible, timestamps_us)
 
-    map_path = _find_map(log_dir)
+    map_path = find_map_archive(log_dir / "map")
     map_features = load_av2_map(map_path, world_from_city)
     metadata = {
         "source_dir": str(log_dir),

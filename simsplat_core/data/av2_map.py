@@ -1,10 +1,11 @@
-"""Argoverse 2 vector map (``map/log_map_archive*.json``) -> ``MapFeature`` s.
+"""Argoverse 2 vector map (``log_map_archive*.json``, sensor logs and motion-forecasting scenarios) -> ``MapFeature`` s.
 
 What becomes what (all points moved from the city frame to the log's world frame):
 
 * ``lane_segments`` of type VEHICLE or BUS -> ``"lane"``: the centre line, from resampling the left
   and right boundaries to the same number of points (``max`` of their counts) by arc length and
-  averaging; direction of travel kept. BIKE lanes are skipped.
+  averaging; direction of travel kept. BIKE lanes are skipped. (Motion-forecasting archives also
+  carry a 2D ``centerline`` with z = 0; it is not used, so that lanes keep the map's elevation.)
 * ``pedestrian_crossings`` -> ``"crosswalk"`` polygon ``edge1 + edge2`` (edge2 reversed when needed
   so the outline does not self-intersect).
 * ``drivable_areas`` -> ``"drivable_area"`` polygon (``area_boundary``, implicitly closed).
@@ -13,6 +14,7 @@ What becomes what (all points moved from the city frame to the log's world frame
   dead-ends) (AV2 has no explicit curbs). A crop line across a shoulder or parking strip with no
   lane may remain as a short road edge.
 
+Lane connectivity (``successors`` of the drivable lanes) comes from ``archive_lane_successors``.
 Malformed content raises ``CorruptLogError`` naming the file and the JSON field.
 """
 
@@ -168,6 +170,62 @@ def _entry_field(entry: Any, key: str, path: Path, where: str) -> Any:
     return entry[key]
 
 
+def find_map_archive(folder: str | Path) -> Path:
+    """The one ``log_map_archive*.json`` of ``folder``.
+
+    Raises:
+        CorruptLogError: none, or several (named), in ``folder``.
+    """
+    folder = Path(folder)
+    candidates = sorted(folder.glob("log_map_archive*.json"))
+    if not candidates:
+        raise CorruptLogError(folder, "file", "no log_map_archive*.json")
+    if len(candidates) > 1:
+        raise CorruptLogError(folder, "file", f"several map archives: {[c.name for c in candidates]}")
+    return candidates[0]
+
+
+def read_map_archive(path: str | Path) -> Mapping[str, Any]:
+    """The parsed JSON object of an AV2 ``log_map_archive*.json``.
+
+    Raises:
+        CorruptLogError: unreadable file, invalid JSON, or a top level that is not an object.
+    """
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise CorruptLogError(path, f"line {exc.lineno} column {exc.colno}", f"invalid JSON: {exc.msg}") from exc
+    except (OSError, UnicodeDecodeError) as exc:
+        raise CorruptLogError(path, "file", f"cannot read: {exc}") from exc
+    if not isinstance(doc, Mapping):
+        raise CorruptLogError(path, "top level", "expected a JSON object")
+    return doc
+
+
+def archive_lane_successors(doc: Mapping[str, Any], path: str | Path) -> dict[str, list[str]]:
+    """``{lane feature id: [successor lane feature ids]}`` of the drivable lanes of a parsed map archive.
+
+    Ids follow ``load_av2_map`` (``lane_<id>``); successors that are not drivable lanes of the archive (bike
+    lanes, lanes beyond the map crop) are left out.
+
+    Raises:
+        CorruptLogError: ``lane_segments`` missing, or a lane without a ``lane_type`` or with ``successors``
+            that is not a list (named by the JSON field).
+    """
+    path = Path(path)
+    lanes = _section(doc, "lane_segments", path)
+    drivable = {str(key) for key, lane in lanes.items()
+                if _entry_field(lane, "lane_type", path, f"lane_segments[{key}]") in DRIVABLE_LANE_TYPES}
+    out: dict[str, list[str]] = {}
+    for key in sorted(drivable):
+        successors = lanes[key].get("successors") or []
+        if not isinstance(successors, list):
+            raise CorruptLogError(path, f"field {f'lane_segments[{key}].successors'!r}", "expected a list of lane ids")
+        out[f"lane_{key}"] = [f"lane_{s}" for s in successors if str(s) in drivable]
+    return out
+
+
 def load_av2_map(path: str | Path, world_from_city: np.ndarray) -> list[MapFeature]:
     """Parse an AV2 ``log_map_archive*.json`` into map features in the world frame.
 
@@ -179,14 +237,7 @@ def load_av2_map(path: str | Path, world_from_city: np.ndarray) -> list[MapFeatu
         CorruptLogError: unreadable / invalid JSON, or a missing or malformed section or field.
     """
     path = Path(path)
-    try:
-        doc = json.loads(path.read_text(encoding="utf-8"))
-    except json.JSONDecodeError as exc:
-        raise CorruptLogError(path, f"line {exc.lineno} column {exc.colno}", f"invalid JSON: {exc.msg}") from exc
-    except (OSError, UnicodeDecodeError) as exc:
-        raise CorruptLogError(path, "file", f"cannot read: {exc}") from exc
-    if not isinstance(doc, Mapping):
-        raise CorruptLogError(path, "top level", "expected a JSON object")
+    doc = read_map_archive(path)
 
     def to_world(points: np.ndarray) -> np.ndarray:
         return transform_points(world_from_city, points)

@@ -12,7 +12,7 @@ from typing import TypeVar
 import numpy as np
 
 from simsplat_core.data.errors import CorruptLogError
-from simsplat_core.data.protowire import ProtoDecodeError
+from simsplat_core.data.protowire import MessageSchema, ProtoDecodeError, decode_message
 from simsplat_core.data.tfrecord import iter_tfrecords
 from simsplat_core.geometry import box_corners_batch, invert_transform, project_box_bounds, transform_points
 from simsplat_core.types import CameraImage, LogValidationError, SceneLog, Track
@@ -60,6 +60,22 @@ def parse_tfrecords(path: Path, parse: Callable[[bytes], _Parsed]) -> list[tuple
     if not parsed:
         raise CorruptLogError(path, "file", "no records")
     return parsed
+
+
+def first_record_has(path: Path, signature: MessageSchema, field: str) -> bool:
+    """Whether the first record of the TFRecord file ``path`` decodes as ``signature`` with ``field`` set.
+
+    A cheap content test for telling proto types apart (log-source detection): ``signature`` names a few
+    top-level fields whose wire types differ between the candidate messages. Never raises: an unreadable,
+    damaged or empty file is ``False``.
+    """
+    try:
+        record = next(iter_tfrecords(path), None)
+        if record is None:
+            return False
+        return bool(decode_message(record.data, signature).get(field))
+    except (CorruptLogError, ProtoDecodeError, OSError):
+        return False
 
 
 def safe_seq_id(name: str) -> str:

@@ -40,12 +40,20 @@ from simsplat_core.data.common import (
     BoxObservation,
     boxes_visible,
     build_track,
+    first_record_has,
     parse_tfrecords,
     safe_seq_id,
     validated,
 )
 from simsplat_core.data.errors import CorruptLogError
-from simsplat_core.data.waymo_proto import CAMERA_NAMES, LABEL_TYPES, WaymoCalibration, WaymoFrame, parse_frame
+from simsplat_core.data.waymo_proto import (
+    CAMERA_NAMES,
+    FRAME_SIGNATURE,
+    LABEL_TYPES,
+    WaymoCalibration,
+    WaymoFrame,
+    parse_frame,
+)
 from simsplat_core.geometry import CV_TO_SENSOR, invert_transform, make_transform, yaw_matrix, yaw_of_rotation
 from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, Track, node_type_for_category, split_for_frame
 
@@ -55,6 +63,11 @@ logger = logging.getLogger(__name__)
 WAYMO_CATEGORIES: dict[int, str] = {0: "other", 1: "vehicle", 2: "pedestrian", 3: "sign", 4: "cyclist"}
 
 _CV_TO_SENSOR_4 = make_transform(CV_TO_SENSOR, np.zeros(3))
+
+
+def is_waymo_frame_file(path: Path) -> bool:
+    """Whether ``path`` is a TFRecord file whose first record is a Waymo ``Frame`` (log-source detection)."""
+    return path.is_file() and first_record_has(path, FRAME_SIGNATURE, "timestamp_micros")
 
 
 def scaled_intrinsics(intrinsic: np.ndarray, sx: float, sy: float) -> np.ndarray:

@@ -134,6 +134,12 @@ FRAME = MessageSchema(
         Field(6, "laser_labels", "message", repeated=True, message=LABEL),
     ),
 )
+#: The top-level fields that tell a ``Frame`` from a ``Scenario`` by wire type (``timestamp_micros`` is a varint
+#: where ``Scenario.tracks`` is a message); for source detection with ``common.first_record_has``.
+FRAME_SIGNATURE = MessageSchema(
+    "Frame",
+    (Field(1, "context", "message", message=MessageSchema("Context", ())), Field(2, "timestamp_micros", "int64")),
+)
 
 
 @dataclass(frozen=True)

@@ -44,6 +44,7 @@ from simsplat_core.data.common import (
     LANE_SUCCESSORS_KEY,
     BoxObservation,
     build_track,
+    first_record_has,
     parse_tfrecords,
     safe_seq_id,
     validated,
@@ -51,6 +52,7 @@ from simsplat_core.data.common import (
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.data.waymo_scenario_proto import (
     OBJECT_TYPES,
+    SCENARIO_SIGNATURE,
     SIGNAL_STATES,
     ScenarioMapFeature,
     ScenarioTrack,
@@ -79,6 +81,12 @@ SCENARIO_MAP_KINDS: dict[str, str] = {
 _JSON_DECIMALS = 3
 # Columns of ``ScenarioTrack.states``.
 _X, _Y, _Z, _LENGTH, _WIDTH, _HEIGHT, _HEADING, _VX, _VY = range(9)
+
+
+def is_waymo_scenario_file(path: Path) -> bool:
+    """Whether ``path`` is a TFRecord file whose first record is a Waymo Open Motion ``Scenario`` (log-source
+    detection)."""
+    return path.is_file() and first_record_has(path, SCENARIO_SIGNATURE, "scenario_id")
 
 
 def _where(record_index: int, field: str) -> str:

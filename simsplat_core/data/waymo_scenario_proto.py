@@ -133,6 +133,16 @@ SCENARIO = MessageSchema(
     ),
 )
 
+#: The top-level fields that tell a ``Scenario`` from a ``Frame`` by wire type (``tracks`` is a message where
+#: ``Frame.timestamp_micros`` is a varint); for source detection with ``common.first_record_has``.
+SCENARIO_SIGNATURE = MessageSchema(
+    "Scenario",
+    (
+        Field(2, "tracks", "message", repeated=True, message=MessageSchema("Track", ())),
+        Field(5, "scenario_id", "string"),
+    ),
+)
+
 _STATE_KEYS = ("center_x", "center_y", "center_z", "length", "width", "height", "heading", "velocity_x", "velocity_y")
 
 

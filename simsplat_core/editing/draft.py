@@ -18,9 +18,9 @@ from simsplat_core.editing.commands import AssetSpec
 from simsplat_core.editing.grounding import Grounder
 from simsplat_core.editing.options import EditorOptions
 from simsplat_core.editing.result import AddedNode, EditDelta, EditRefused
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
+from simsplat_core.language.grounding.static_location import with_static_locations
 from simsplat_core.language.scene_language import LanguageScene
-from simsplat_core.language.static_location import with_static_locations
 from simsplat_core.motion.motion_map import motion_map_of
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor
 from simsplat_core.motion.registry import default_predictor
@@ -46,7 +46,7 @@ class EditContext:
         log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
         graph: the stored scene graph.
         language: the graph's language scene (what grounding reads), static objects' sectors filled in from the
-            log (``language.static_location``).
+            log (``language.grounding.static_location``).
         engine: the grounding engine (its text encoder also retrieves assets and parses prompts).
         bank: the asset bank (``None``: inserts and replacements are refused, naming ``simsplat assets build``).
         lanes: the log's lane graph.

@@ -31,8 +31,8 @@ from simsplat_core.editing.commands import TargetRef
 from simsplat_core.editing.options import GroundingMode
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.appearance.captioner import AppearanceCaption
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_parse import ParsedQuery, parse_query
+from simsplat_core.language.grounding.engine import QueryEngine
+from simsplat_core.language.grounding.parse import ParsedQuery, parse_query
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.stage_clock import StageClock, maybe_stage

@@ -24,9 +24,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.language.alignment.motion_training import MotionAligner
 from simsplat_core.language.codebooks import cosine_scores
 from simsplat_core.language.motion_labels import LabelThresholds, MotionLabel, label_log
-from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
+from simsplat_core.language.scene_language import ObjectMotionFeatures
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.vocabulary import LOCATION_CONTEXT, LOCATION_SECTOR, MOTION_VOCABULARIES

@@ -1,6 +1,6 @@
 """Rule-based motion and location auto-labels from trajectories, ego poses and (optionally) the map.
 
-These labels supervise the trajectory encoder (``motion_training.py``) and define the classes of the
+These labels supervise the trajectory encoder (``alignment.motion_training``) and define the classes of the
 grounding evaluation. Class names and their phrasings are in ``vocabulary.py``.
 
 Vehicles (also cyclists and other movers), decided in this order:

@@ -2,8 +2,10 @@
 
 ``LanguageScene`` is the contract between the alignment stage (which builds it from a scene graph, its
 log and the trained models) and the ``QueryEngine`` / grounding benchmark (which only read it). It holds
-per object node the language features of SIMSplat Sec. 3.2 and, per frame and camera, the node-id maps
-rendered from the scene's Gaussians, from which every per-frame pixel mask is cut.
+per object node the language features of SIMSplat Sec. 3.2 (``NodeLanguage``; its motion and location part,
+``ObjectMotionFeatures``, is what ``alignment.motion_training.MotionAligner.features`` returns) and, per frame
+and camera, the node-id maps rendered from the scene's Gaussians, from which every per-frame pixel mask is cut.
+Both ``language.alignment`` and ``language.grounding`` import this module; it imports neither.
 
 Shapes: ``D`` is the text space's width (384 for E5), ``F`` frames, ``C`` cameras, ``H x W`` pixels.
 
@@ -25,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.language.appearance.captioner import AppearanceCaption
-from simsplat_core.language.motion_training import ObjectMotionFeatures
+from simsplat_core.language.motion_labels import MotionLabel
 from simsplat_core.language.node_masks import render_node_id_maps
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.types import SceneLog
@@ -33,6 +35,33 @@ from simsplat_core.types import SceneLog
 
 class StaleSceneError(ValueError):
     """Data derived from one scene graph was asked for another (edited) graph; the message says which."""
+
+
+@dataclass(frozen=True)
+class ObjectMotionFeatures:
+    """Motion/location language features of one object.
+
+    Attributes:
+        object_id, kind: the object and its motion codebook (``"vehicle"`` / ``"pedestrian"``).
+        f_mot: ``[D]`` float32 convex combination of the kind's motion prototypes.
+        f_loc: ``[D]`` float32 convex combination of the location prototypes.
+        motion_probs: convex weights by motion class (sum 1).
+        location_probs: convex weights by location class, sectors then contexts (sum 1; each group 1/2).
+        labels: the auto-labels of the object's whole trajectory.
+    """
+
+    object_id: str
+    kind: str
+    f_mot: np.ndarray
+    f_loc: np.ndarray
+    motion_probs: dict[str, float]
+    location_probs: dict[str, float]
+    labels: MotionLabel
+
+    @property
+    def motion(self) -> str:
+        """Most likely motion class."""
+        return max(self.motion_probs, key=self.motion_probs.__getitem__)
 
 
 @dataclass(frozen=True)
@@ -49,7 +78,7 @@ class NodeLanguage:
         caption: the captioner's description of the object (``None`` without pixels).
         motion: motion/location features from the trajectory aligner (``None`` for static objects).
         static_location: for a static object, the share of its steps in each ego-relative sector
-            (``language.static_location``; derived from the log when scene and log meet, not stored).
+            (``language.grounding.static_location``; derived from the log when scene and log meet, not stored).
     """
 
     node_id: int

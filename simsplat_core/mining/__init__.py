@@ -11,7 +11,8 @@ from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequenc
 from simsplat_core.mining.openai_vlm import OpenAIVLMClient
 from simsplat_core.mining.rule_client import ProposalRejected, RuleBasedVLMClient
 from simsplat_core.mining.rule_proposals import EDIT_CATEGORIES, Proposal, propose_edits
-from simsplat_core.mining.scene_facts import AgentFacts, AssetFacts, RoadFacts, SceneFacts, scene_facts, summary
+from simsplat_core.mining.scene_fact_records import AgentFacts, AssetFacts, RoadFacts, SceneFacts
+from simsplat_core.mining.scene_facts import scene_facts, summary
 from simsplat_core.mining.vlm_protocol import (
     PARAMETERS,
     AgentTrajectory,

@@ -26,7 +26,7 @@ from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.mining.rule_judge import JudgeConfig, judge_edit
 from simsplat_core.mining.rule_proposals import Proposal, propose_edits
-from simsplat_core.mining.scene_facts import SceneFacts
+from simsplat_core.mining.scene_fact_records import SceneFacts
 from simsplat_core.mining.vlm_protocol import Judgement, JudgeRequest, ProposalRequest, SceneSummary
 
 logger = logging.getLogger(__name__)

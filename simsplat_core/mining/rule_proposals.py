@@ -52,7 +52,7 @@ from simsplat_core.mining.rule_wording import (
     row_phrase,
     speed_phrase,
 )
-from simsplat_core.mining.scene_facts import AgentFacts, AssetFacts, SceneFacts
+from simsplat_core.mining.scene_fact_records import AgentFacts, AssetFacts, SceneFacts
 from simsplat_core.scenario import vocabulary as voc
 
 logger = logging.getLogger(__name__)

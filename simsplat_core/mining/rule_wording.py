@@ -25,7 +25,7 @@ import numpy as np
 from simsplat_core.editing.behaviours.registry import PROPOSAL_FORMS
 from simsplat_core.editing.commands import SPEED_UNITS
 from simsplat_core.language.appearance.captioner import article
-from simsplat_core.mining.scene_facts import AgentFacts, AssetFacts, SceneFacts
+from simsplat_core.mining.scene_fact_records import AgentFacts, AssetFacts, SceneFacts
 from simsplat_core.scenario import vocabulary as voc
 
 #: Phrases of a vocabulary class usable after a noun: they start with a preposition and name no motion.

@@ -27,7 +27,7 @@ import numpy as np
 from simsplat_core.editing.commands import EditProgram, program_to_json
 
 if TYPE_CHECKING:
-    from simsplat_core.mining.scene_facts import SceneFacts
+    from simsplat_core.mining.scene_fact_records import SceneFacts
 
 #: What a suggested change is about (the knobs the loop can turn between attempts).
 Parameter = Literal["asset", "speed", "start_time", "offset", "anchor", "other"]

@@ -4,10 +4,10 @@
     [c.text for c in q.clauses]          # ["a pedestrian crossing in front of ego", "a car turns right"]
     q.clauses[0].motions, q.clauses[0].sectors    # ("crossing",), ("in_front_of_ego",)
 
-Rules (on ``query_parse.normalise``d text):
+Rules (on ``grounding.parse.normalise``d text):
 
 1. **Conjunction.** "while", "whilst", "as", "when", "and", "with" (and "at the same time as") split the
-   text into clauses when the part after them names an agent of its own (a ``query_parse.NOUNS`` noun):
+   text into clauses when the part after them names an agent of its own (a ``grounding.parse.NOUNS`` noun):
    "a car slowing down and stopping" stays one clause, "a parked van and a person standing" is two. Every
    clause must hold in the same frame (different objects may satisfy them).
 2. **Relations** between two agents of one clause: "<A> following / behind / tailing <B>" (A drives behind B
@@ -16,9 +16,9 @@ Rules (on ``query_parse.normalise``d text):
    "me") are not agents: "in front of us" stays a sector of A.
 3. **Ego lane.** "the ego lane blocked by <B>", "<B> blocking our lane", "<B> in our lane": <B> must be in
    the ego's lane ahead of it (``AgentClause.in_ego_lane``); "blocked" / "blocking" also asks it to stand.
-4. Each clause is then a grounding query (``query_parse.parse_query``): category, subtype, colours, motion
+4. Each clause is then a grounding query (``grounding.parse.parse_query``): category, subtype, colours, motion
    phrase, sector and context phrases; the motion phrase names motion classes through the query lexicon
-   (``query_lexicon.MOTION_KEYWORDS``), the location phrases the sector / context classes.
+   (``grounding.lexicon.MOTION_KEYWORDS``), the location phrases the sector / context classes.
 5. **The ego as a subject.** A clause whose subject is the ego ("we turn left", "as our car slows down",
    "when the ego is stopped at the intersection") is ``AgentClause.is_ego``: only the ego's own per-frame
    motion and map context answer it. Relations may name the ego as their object: "a car following us"
@@ -39,8 +39,13 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field, replace
 
-from simsplat_core.language.query_lexicon import CONTEXT_KEYWORDS, MOTION_KEYWORDS, PEDESTRIAN_MERGED, SECTOR_KEYWORDS
-from simsplat_core.language.query_parse import NOUNS, ParsedQuery, normalise, parse_query
+from simsplat_core.language.grounding.lexicon import (
+    CONTEXT_KEYWORDS,
+    MOTION_KEYWORDS,
+    PEDESTRIAN_MERGED,
+    SECTOR_KEYWORDS,
+)
+from simsplat_core.language.grounding.parse import NOUNS, ParsedQuery, normalise, parse_query
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.trajectory import agent_kind
 

@@ -2,7 +2,7 @@
 
 A clause holds for object ``o`` at frame ``f`` when (``describe`` names the parts):
 
-* ``o``'s category is one the subject allows and its appearance fits (``query_scoring.attribute_fit`` of the
+* ``o``'s category is one the subject allows and its appearance fits (``grounding.scoring.attribute_fit`` of the
   captioner's caption, at least ``SearchConfig.min_appearance``; logs without captions cannot check
   colours or subtypes and let every object of the category through);
 * its window motion class at ``f`` is one the clause names (the crossing classes count as "crossing"; a
@@ -38,9 +38,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.geometry import wrap_angle
-from simsplat_core.language.query_config import QueryConfig
-from simsplat_core.language.query_lexicon import CROSSING_CLASSES
-from simsplat_core.language.query_scoring import attribute_fit
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.lexicon import CROSSING_CLASSES
+from simsplat_core.language.grounding.scoring import attribute_fit
 from simsplat_core.language.scene_language import NodeLanguage
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.agents import EGO_ID

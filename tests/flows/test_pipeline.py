@@ -6,8 +6,8 @@ import pytest
 
 from flows.pipeline import MiningPlan, main_flow, reconstruction_config
 from flows.runtime import RunnerKind, make_task_runner
-from simsplat_core.language.motion_training import MotionAlignerConfig
-from simsplat_core.language.scene_builder import AlignmentConfig
+from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
+from simsplat_core.language.alignment.scene_builder import AlignmentConfig
 from simsplat_core.world import WorldConfig
 from storage import ArtifactStore, list_logs, list_scenes, read_scene, read_scene_log
 from storage.assets import list_asset_banks

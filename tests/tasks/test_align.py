@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.language.motion_training import MotionAlignerConfig
+from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.world import WorldConfig, generate_log
 from storage import ArtifactStore, write_scene_log
@@ -63,7 +63,7 @@ def test_missing_log_and_empty_input_are_named(tmp_path):
 
 @pytest.fixture(scope="module")
 def aligned(store_with_logs):
-    from simsplat_core.language.scene_builder import AlignmentConfig
+    from simsplat_core.language.alignment.scene_builder import AlignmentConfig
     from simsplat_core.scene import ReconstructionConfig
     from tasks.align import align_scene
     from tasks.reconstruct import reconstruct_scene

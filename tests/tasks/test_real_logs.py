@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from flows.cli import app
 from flows.pipeline import align_targets, plan_alignment
 from simsplat_core.data.av2 import load_av2_log
-from simsplat_core.language.motion_training import MotionAlignerConfig
+from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from storage import ArtifactStore, write_scene_log
 from storage.language_scenes import read_language_scene
 from tasks.align import align_scene, train_motion_aligner

@@ -8,9 +8,9 @@
 
 1. ``asset_id`` given: that asset (a variant id ``<id>~<colour>`` / ``<id>~<l>x<w>x<h>`` is derived).
 2. Category, subtype and colour come from the spec, or -- when it leaves them out -- from the words
-   of its description (the query lexicon's nouns ``query_parse.NOUNS``, the procedural kinds' names and
-   aliases, and ``query_parse.COLOR_SYNONYMS``). A subtype fits an asset's when it names it, a kind it
-   belongs to (``query_lexicon.SUBTYPE_FIT`` with factor 1: "car" fits sedan, hatchback and SUV) or a
+   of its description (the query lexicon's nouns ``grounding.parse.NOUNS``, the procedural kinds' names and
+   aliases, and ``grounding.parse.COLOR_SYNONYMS``). A subtype fits an asset's when it names it, a kind it
+   belongs to (``grounding.lexicon.SUBTYPE_FIT`` with factor 1: "car" fits sedan, hatchback and SUV) or a
    group of procedural kinds (``editing.assets.procedural.STATIC_GROUPS``: "barrier" fits both barriers).
 3. Size (``size_m``): a cut-out fits when every side is within ``SIZE_TOLERANCE`` (relative, at least
    ``SIZE_TOLERANCE_M``) of the wanted one; a procedural asset fits when it can be rebuilt at that size
@@ -63,8 +63,8 @@ from simsplat_core.editing.assets.record import (
 from simsplat_core.editing.commands import AssetSpec
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.appearance.captioner import caption_text
-from simsplat_core.language.query_lexicon import SUBTYPE_FIT
-from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS, parse_query
+from simsplat_core.language.grounding.lexicon import SUBTYPE_FIT
+from simsplat_core.language.grounding.parse import COLOR_SYNONYMS, NOUNS, parse_query
 from simsplat_core.language.text import TextEncoder
 
 logger = logging.getLogger(__name__)

@@ -4,7 +4,7 @@
     qualifier_length("driving at 30 km/h".split(), anchor="the bus", mover="vehicle")                # 0
 
 An insert has one placement relation ("behind the white van"); what follows the anchor's head noun phrase
-is read by the grounding parser's own spans (``query_parse.find_spans``: the sector, map-context and motion
+is read by the grounding parser's own spans (``grounding.parse.find_spans``: the sector, map-context and motion
 phrases the ``QueryEngine`` grounds) and belongs to the anchor ("the white van *to the left of the ego
 car*", "the red car *at the intersection continuing straight*", "the bus *that is waiting at the light*"),
 except:
@@ -30,8 +30,8 @@ from collections.abc import Sequence
 
 from simsplat_core.editing.parse import chunks
 from simsplat_core.editing.parse import lexicon as lex
-from simsplat_core.language.query_lexicon import MOTION_KEYWORDS
-from simsplat_core.language.query_parse import find_spans, normalise, parse_query
+from simsplat_core.language.grounding.lexicon import MOTION_KEYWORDS
+from simsplat_core.language.grounding.parse import find_spans, normalise, parse_query
 from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES
 
 #: Relative pronouns that start a clause about the noun before them.

@@ -6,7 +6,7 @@
 Rules run in a fixed order on the canonical predicate (``editing.parse.text``); each blanks the words it used, so
 "stop behind the bus" is a stop, not also a placement. What is left over (less filler words) is returned as
 ``residual``: the parser maps it with E5 or refuses it, never drops it. When no rule matched, the grounding
-lexicon's motion keywords (``query_lexicon.MOTION_KEYWORDS``) name a scenario-vocabulary class, which
+lexicon's motion keywords (``grounding.lexicon.MOTION_KEYWORDS``) name a scenario-vocabulary class, which
 ``editing.behaviours.registry.CLASS_INTENT`` turns into an intent.
 
 Speeds, stops and timing are read by ``editing.parse.speed``; a given speed replaces accelerate / decelerate (not
@@ -21,7 +21,7 @@ from simsplat_core.editing.behaviours.registry import CLASS_INTENT, INTENT_FIELD
 from simsplat_core.editing.parse import chunks
 from simsplat_core.editing.parse.predicate import IGNORABLE, PredicateParse, PredicateWork
 from simsplat_core.editing.parse.speed import speed_rules, stop_rules, timing_rules
-from simsplat_core.language.query_lexicon import MOTION_KEYWORDS
+from simsplat_core.language.grounding.lexicon import MOTION_KEYWORDS
 from simsplat_core.scenario import vocabulary as voc
 
 __all__ = ["PredicateParse", "keyword_intent", "parse_predicate"]

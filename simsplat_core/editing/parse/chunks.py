@@ -20,7 +20,7 @@ import re
 from collections.abc import Iterable, Sequence
 
 from simsplat_core.editing.parse import lexicon as lex
-from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS
+from simsplat_core.language.grounding.parse import COLOR_SYNONYMS, NOUNS
 
 PUNCT = frozenset({",", ";", ".", "!", "?", ":"})
 #: Prepositions that attach a phrase to the noun before them ("the van *on* the left").

@@ -37,7 +37,7 @@ from simsplat_core.editing.parse.semantic import nearest_intent
 from simsplat_core.editing.parse.speed import SPEED_NOUN, SPEED_VERB
 from simsplat_core.editing.parse.state import INDEFINITE, Draft, PromptState, Subject
 from simsplat_core.editing.result import EditRefused
-from simsplat_core.language.query_parse import parse_query
+from simsplat_core.language.grounding.parse import parse_query
 
 logger = logging.getLogger(__name__)
 

@@ -1,6 +1,6 @@
 """The edit parser's words: what verbs ask for which op, what starts a predicate, what an intent changes.
 
-Object nouns, colours and garments are the grounding lexicon's (``language.query_parse``): this module adds
+Object nouns, colours and garments are the grounding lexicon's (``language.grounding.parse``): this module adds
 only what editing needs beyond describing objects -- the verbs of the four ops, the words that end a noun
 phrase, a few insertable things the grounding nouns lack ("barrel", "worker"), the non-objects a prompt may
 name ("the sky"), and the *intents* an unknown verb may be mapped to by E5 (``editing.parse.semantic``). The
@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from simsplat_core.editing.assets.procedural import STATIC_KINDS as PROCEDURAL_STATIC_KINDS
 from simsplat_core.editing.behaviours import registry as behaviours
-from simsplat_core.language.query_parse import LOWER_GARMENTS, NOUNS, UPPER_GARMENTS
+from simsplat_core.language.grounding.parse import LOWER_GARMENTS, NOUNS, UPPER_GARMENTS
 from simsplat_core.scenario import vocabulary as voc
 
 # ------------------------------------------------------------------------------------------------ ops

@@ -11,7 +11,7 @@ with an optional frame ("at frame 10") and heading ("facing left", "rotated 90 d
 makes an ``in_lane`` placement whose distance and anchor come from "N m ahead (of X)"; a map area keeps
 the anchor and distance it is given with.
 
-Assets: the grounding parser (``query_parse.parse_query``) reads category, subtype and colours of the
+Assets: the grounding parser (``grounding.parse.parse_query``) reads category, subtype and colours of the
 noun phrase; counts come from numbers, number words, "a row of" and bare plurals.
 """
 
@@ -26,7 +26,7 @@ from simsplat_core.editing.parse import chunks
 from simsplat_core.editing.parse import lexicon as lex
 from simsplat_core.editing.parse.anchor import qualifier_length
 from simsplat_core.editing.parse.text import number_word
-from simsplat_core.language.query_parse import NOUNS, parse_query
+from simsplat_core.language.grounding.parse import NOUNS, parse_query
 from simsplat_core.scenario import vocabulary as voc
 
 _N = r"(\d+(?:\.\d+)?)"

@@ -32,7 +32,7 @@ from simsplat_core.editing.parse.predicate import PredicateParse
 from simsplat_core.editing.parse.semantic import nearest_intent
 from simsplat_core.editing.parse.text import number_word
 from simsplat_core.editing.result import EditRefused
-from simsplat_core.language.query_parse import COLOR_SYNONYMS, NOUNS, parse_query
+from simsplat_core.language.grounding.parse import COLOR_SYNONYMS, NOUNS, parse_query
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 
 INDEFINITE = ("a", "an", "another", "some", "one more")

@@ -13,9 +13,9 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_config import QueryConfig
-from simsplat_core.language.query_parse import parse_query
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.engine import QueryEngine
+from simsplat_core.language.grounding.parse import parse_query
 from simsplat_core.language.scene_language import LanguageScene
 
 logger = logging.getLogger(__name__)

@@ -23,13 +23,13 @@ from typing import Literal
 
 import numpy as np
 
+from simsplat_core.language.alignment.motion_training import MotionAligner
 from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.language.appearance.crops import crops_from_log
 from simsplat_core.language.appearance.embedders import CaptionEmbedder
 from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.motion_labels import MotionLabel, label_log
-from simsplat_core.language.motion_training import MotionAligner, ObjectMotionFeatures
-from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
+from simsplat_core.language.scene_language import LanguageScene, NodeLanguage, ObjectMotionFeatures
 from simsplat_core.language.text import TextEncoder, l2_normalise
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.types import ObjectInfo, SceneLog
@@ -76,7 +76,7 @@ def label_motion_features(
     """Motion features as a perfectly trained aligner would give them: convex weights peaked on the auto-labels.
 
     ``f_mot = sum_k w_k p_k`` over the kind's motion prototypes, ``f_loc = 1/2 (sum_s w_s p_s +
-    sum_c w_c p_c)`` over sector and context prototypes (``motion_training.py``), each ``[D]`` float32.
+    sum_c w_c p_c)`` over sector and context prototypes (``language.alignment.motion_training``), each ``[D]`` float32.
     """
     out = {}
     for oid, label in labels.items():

@@ -16,8 +16,8 @@ import dataclasses
 from collections.abc import Mapping
 
 from simsplat_core.eval.grounding.baselines import AppearanceOnlyGrounder, EngineGrounder, FrameCaptionGrounder
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_config import QueryConfig
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.types import SceneLog
 

@@ -160,22 +160,21 @@ def scenario_of_log(log: SceneLog, start_step: int = START_STEP, dataset: str | 
 
 
 def load_real_log(path: str | Path) -> SceneLog:
-    """A Waymo Open Motion scenario TFRecord (a file) or an Argoverse 2 log (a directory).
+    """A real log by the source that recognises it (``simsplat_core.data.registry``: a Waymo Open Motion scenario
+    TFRecord, an Argoverse 2 sensor log or motion-forecasting scenario, ...). A file no source recognises is read
+    as a Waymo Open Motion scenario and a directory as an Argoverse 2 sensor log, so that their loaders name the
+    damage.
 
     Raises:
         FileNotFoundError: ``path`` does not exist.
         CorruptLogError: the loader's error, naming the file and the place in it.
     """
+    from simsplat_core.data.registry import detect_source, load_log  # noqa: PLC0415  # loaders load on use
+
     path = Path(path)
     if not path.exists():
         raise FileNotFoundError(f"{path} does not exist")
-    if path.is_dir():
-        from simsplat_core.data.av2 import load_av2_log  # noqa: PLC0415  # only the loader a path needs
-
-        return load_av2_log(path)
-    from simsplat_core.data.waymo_scenario import load_waymo_scenario  # noqa: PLC0415
-
-    return load_waymo_scenario(path)
+    return load_log(detect_source(path) or ("av2" if path.is_dir() else "waymo-scenario"), path)
 
 
 # ------------------------------------------------------------------------------------------ scores

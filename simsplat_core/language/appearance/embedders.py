@@ -148,7 +148,7 @@ def appearance_embedder(captioner: str, text_encoder: TextEncoder) -> CaptionEmb
     if captioner == "builtin":
         return CaptionEmbedder(text_encoder)
     if captioner == "vlm":
-        # import cycle at module level: vlm_captioner -> query_parse -> language.appearance -> embedders
+        # imported on use: only this captioner needs the VLM client (and grounding's parser)
         from simsplat_core.language.appearance.vlm_captioner import VlmCaptioner  # noqa: PLC0415
         from simsplat_core.vlm import OpenAIChatClient, OpenAIChatConfig  # noqa: PLC0415
 

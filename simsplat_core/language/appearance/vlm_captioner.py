@@ -25,7 +25,7 @@ import numpy as np
 
 from simsplat_core.language.appearance.captioner import AppearanceCaption, article
 from simsplat_core.language.appearance.crops import ObjectCrop
-from simsplat_core.language.query_parse import parse_query
+from simsplat_core.language.grounding.parse import parse_query
 from simsplat_core.vlm.openai_chat import OpenAIChatClient, user_message
 
 logger = logging.getLogger(__name__)

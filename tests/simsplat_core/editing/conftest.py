@@ -8,7 +8,7 @@ import dataclasses
 import pytest
 
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 from simsplat_core.scene import InitConfig, SceneGraph

@@ -102,7 +102,7 @@ def test_a_named_colour_the_match_does_not_have_is_refused_not_substituted(groun
 def test_colours_agree_with_captions_by_name_and_by_clothing():
     from simsplat_core.editing.grounding import colors_agree
     from simsplat_core.language.appearance.captioner import AppearanceCaption
-    from simsplat_core.language.query_parse import parse_query
+    from simsplat_core.language.grounding.parse import parse_query
 
     car = AppearanceCaption("a blue SUV", "vehicle", "SUV", ("blue",))
     person = AppearanceCaption("a pedestrian in a red top and black trousers", "pedestrian", "adult",

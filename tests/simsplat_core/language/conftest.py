@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from simsplat_core.language.motion_training import MotionAligner, MotionAlignerConfig
+from simsplat_core.language.alignment.motion_training import MotionAligner, MotionAlignerConfig
 from simsplat_core.language.text import TextEncoder, default_text_encoder
 from simsplat_core.types import SceneLog
 from simsplat_core.world import WorldConfig, generate_log

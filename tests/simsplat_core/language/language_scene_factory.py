@@ -18,10 +18,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.eval.grounding.gt_scene import AppearanceSource, label_motion_features, language_scene_from_log
+from simsplat_core.language.alignment.motion_training import MotionAligner
 from simsplat_core.language.appearance.captioner import AppearanceCaption, caption_text
 from simsplat_core.language.codebooks import MotionCodebooks
 from simsplat_core.language.motion_labels import MotionLabel
-from simsplat_core.language.motion_training import MotionAligner
 from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.language.text import TextEncoder, l2_normalise
 from simsplat_core.scenario.trajectory import agent_kind

@@ -7,9 +7,10 @@ import pytest
 
 from simsplat_core.editing.assets.bank import AssetBank
 from simsplat_core.editing.draft import EditContext
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
-from simsplat_core.mining.scene_facts import SceneFacts, scene_facts
+from simsplat_core.mining.scene_fact_records import SceneFacts
+from simsplat_core.mining.scene_facts import scene_facts
 from simsplat_core.scene import SceneGraph
 from simsplat_core.types import SceneLog
 from tests.simsplat_core.editing.conftest import edit_graph, edit_language, edit_log, encoder, engine  # noqa: F401

@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from simsplat_core.mining.rule_proposals import EDIT_CATEGORIES, category_order, propose_edits
-from simsplat_core.mining.scene_facts import SceneFacts
+from simsplat_core.mining.scene_fact_records import SceneFacts
 
 
 def test_the_run_order_is_shared_and_rotated() -> None:

@@ -23,7 +23,8 @@ from simsplat_core.mining import (
 )
 from simsplat_core.mining.rule_proposals import KINDS, Proposal, candidates, proposal_rng, propose_edits
 from simsplat_core.mining.rule_wording import FORMS, referring_phrase
-from simsplat_core.mining.scene_facts import AgentFacts, AssetFacts, RoadFacts, SceneFacts, summary
+from simsplat_core.mining.scene_fact_records import AgentFacts, AssetFacts, RoadFacts, SceneFacts
+from simsplat_core.mining.scene_facts import summary
 from simsplat_core.scenario import vocabulary as voc
 
 VIEW = np.zeros((8, 12, 3), np.uint8)

@@ -9,7 +9,8 @@ import math
 import pytest
 
 from simsplat_core.mining import SceneSummary
-from simsplat_core.mining.scene_facts import AREAS, SceneFacts, summary
+from simsplat_core.mining.scene_fact_records import AREAS, SceneFacts
+from simsplat_core.mining.scene_facts import summary
 from simsplat_core.scenario import vocabulary as voc
 
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import simsplat_core
 from simsplat_core.eval import motion as motion_eval
 from simsplat_core.eval.grounding import paraphrases
-from simsplat_core.language import query_lexicon
+from simsplat_core.language.grounding import lexicon
 from simsplat_core.scenario import vocabulary as voc
 
 CORE = Path(simsplat_core.__file__).resolve().parent
@@ -29,10 +29,10 @@ def test_every_class_has_its_paraphrases_and_keywords() -> None:
             assert paraphrases.MOTION_TERMS[term][0] == kind and name in paraphrases.MOTION_TERMS[term][1]
     assert set(paraphrases._SECTOR) == set(voc.LOCATION_SECTOR.names)
     assert set(paraphrases._CONTEXT) <= set(voc.LOCATION_CONTEXT.names)
-    keyword_classes = {c for _, classes in query_lexicon.MOTION_KEYWORDS for c in classes}
-    assert keyword_classes == set(voc.MOTION_CLASSES) - set(query_lexicon.CROSSING_CLASSES) | {voc.CROSSING}
-    assert {name for name, _ in query_lexicon.SECTOR_KEYWORDS} == set(voc.LOCATION_SECTOR.names)
-    assert {name for name, _ in query_lexicon.CONTEXT_KEYWORDS} == set(voc.LOCATION_CONTEXT.names)
+    keyword_classes = {c for _, classes in lexicon.MOTION_KEYWORDS for c in classes}
+    assert keyword_classes == set(voc.MOTION_CLASSES) - set(lexicon.CROSSING_CLASSES) | {voc.CROSSING}
+    assert {name for name, _ in lexicon.SECTOR_KEYWORDS} == set(voc.LOCATION_SECTOR.names)
+    assert {name for name, _ in lexicon.CONTEXT_KEYWORDS} == set(voc.LOCATION_CONTEXT.names)
     assert set(motion_eval.WORLD_MOTION.values()) <= set(voc.MOTION_CLASSES)
     assert set().union(*motion_eval.WORLD_BEHAVIOUR.values()) <= set(voc.MOTION_CLASSES)
 

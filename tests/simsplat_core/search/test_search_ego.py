@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from simsplat_core.geometry import pose_from_yaw
-from simsplat_core.language.query_scoring import color_fit
+from simsplat_core.language.grounding.scoring import color_fit
 from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.search import parse_description, search_log
 from simsplat_core.search.describe import FOLLOWING

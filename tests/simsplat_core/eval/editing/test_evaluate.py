@@ -25,7 +25,7 @@ from simsplat_core.eval.editing.outcomes import completion_table, fidelity_table
 from simsplat_core.eval.editing.prompts import INFEASIBLE, PromptConfig, build_prompt_set
 from simsplat_core.eval.editing.truth import SceneTruth
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log
-from simsplat_core.language.query import QueryEngine
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import InitConfig
 from simsplat_core.scene.init import initial_graph

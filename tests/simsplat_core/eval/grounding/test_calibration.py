@@ -8,12 +8,12 @@ import pytest
 
 from simsplat_core.eval.grounding.calibration import calibrate_thresholds
 from simsplat_core.language.codebooks import MotionCodebooks
-from simsplat_core.language.query import QueryEngine
-from simsplat_core.language.query_config import QueryConfig
+from simsplat_core.language.grounding.config import QueryConfig
+from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
+from tests.simsplat_core.language.grounding.look_alikes import SPECS, ids
 from tests.simsplat_core.language.language_scene_factory import hand_built_scene
-from tests.simsplat_core.language.look_alikes import SPECS, ids
 
 
 @pytest.fixture(scope="module")

@@ -115,8 +115,8 @@ def test_caption_embedder_per_object_sends_one_request_per_object(server: ChatSe
 
 
 def test_appearance_embedder_by_name(server: ChatServer, monkeypatch) -> None:
+    from simsplat_core.language.alignment.scene_builder import AlignmentConfig, AlignmentConfigError
     from simsplat_core.language.appearance.embedders import appearance_embedder
-    from simsplat_core.language.scene_builder import AlignmentConfig, AlignmentConfigError
     from simsplat_core.vlm import VLMError
 
     encoder = HashTextEncoder()
