@@ -14,7 +14,7 @@ it is only read (the evaluation's tables go to ``--eval-out``, default a tempora
    prompt (its phrases not yet in the text encoder's cache) in full. Torch uses ``--threads`` threads (the
    target is <= 20 s on 2 cores).
    Then the prompts of ``LOOK_PROMPTS`` (inserts asked in a colour, which the look check renders and, at worst,
-   re-applies with another asset: ``editing.look_check``) are timed the same way.
+   re-applies with another asset: ``editing.assets.look_check``) are timed the same way.
 2. **The evaluation** (``tasks.editing_eval.evaluate_editing_run``): completion per (method, category),
    infeasible prompts refused, fidelity per category next to the unedited test PSNR, failures grouped by
    reason.

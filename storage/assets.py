@@ -141,7 +141,7 @@ def _gaussian_columns(asset: Any) -> dict[str, np.ndarray]:
 
 def write_asset_bank(store: ArtifactStore, bank: Any, *, provenance: Mapping[str, Any] | None = None,
                      extra_files: Mapping[str, bytes] | None = None, overwrite: bool = False) -> str:
-    """Write ``bank`` (a ``simsplat_core.editing.assets.AssetBank``) atomically under ``assets/<bank_hash>/``;
+    """Write ``bank`` (a ``simsplat_core.editing.assets.bank.AssetBank``) atomically under ``assets/<bank_hash>/``;
     returns the bank hash. A complete bank with that hash is kept as it is unless ``overwrite``.
 
     Args:
@@ -231,7 +231,7 @@ def read_asset_bank(store: ArtifactStore, bank_hash: str | None = None) -> Any:
     """
     import torch  # noqa: PLC0415  # slow (as the core's modules): only when a bank is read
 
-    from simsplat_core.editing.assets import Asset, AssetBank  # noqa: PLC0415  # imports torch, see above
+    from simsplat_core.editing.assets.bank import Asset, AssetBank  # noqa: PLC0415  # imports torch, see above
     from simsplat_core.scene.gaussians import GaussianSet  # noqa: PLC0415  # imports torch, see above
     from simsplat_core.scene.nodes import OFFSETS  # noqa: PLC0415  # imports torch, see above
 

@@ -2,8 +2,8 @@
 
 Thin: find the sources (each sequence's newest reconstructed scene and the language scene built from it,
 if any), key the bank by them and the config, skip when a complete bank with that key is stored, else
-load each scene, cut its assets out (``editing.asset_cutout``), add the procedural statics
-(``editing.procedural_assets``), draw the contact sheet and write it all with ``storage.assets``.
+load each scene, cut its assets out (``editing.assets.cutout``), add the procedural statics
+(``editing.assets.procedural``), draw the contact sheet and write it all with ``storage.assets``.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from typing import Any
 from prefect import task
 from prefect.cache_policies import NO_CACHE
 
-from simsplat_core.editing.asset_cutout import CutoutConfig, cutout_assets
-from simsplat_core.editing.assets import AssetBank
-from simsplat_core.editing.procedural_assets import STATIC_KINDS, procedural_assets
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.cutout import CutoutConfig, cutout_assets
+from simsplat_core.editing.assets.procedural import STATIC_KINDS, procedural_assets
 from simsplat_core.scene import SceneGraph
 from simsplat_core.viz.asset_sheet import asset_contact_sheet
 from simsplat_core.viz.images import encode_png

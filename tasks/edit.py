@@ -19,7 +19,7 @@ import pydantic
 from simsplat_core.editing.apply import apply_edit
 from simsplat_core.editing.commands import EditProgram, program_from_json
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
-from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.parse.prompt import parse_prompt
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.motion.predictor import MotionPredictor
 from storage import ArtifactStore

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.assets.bank import AssetBank
 from simsplat_core.eval.editing.observation import AssetLook
 from simsplat_core.eval.editing.plans import AssetPools
 from simsplat_core.eval.editing.truth import SceneTruth

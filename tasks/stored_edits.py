@@ -13,12 +13,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from simsplat_core.editing.apply import EditContext
-from simsplat_core.editing.asset_record import Asset
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.record import Asset
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.delta import apply_delta
-from simsplat_core.editing.edit_ops import node_factory
+from simsplat_core.editing.draft import EditContext
+from simsplat_core.editing.ops import node_factory
 from simsplat_core.editing.options import EditorOptions
 from simsplat_core.editing.renders import render_frames
 from simsplat_core.editing.result import EditedScene

@@ -5,19 +5,19 @@
     edited = Editor(ctx).edit("remove the white van and make the red car stop")
     edited.graph, edited.states, edited.delta, edited.validation
 
-Commands run in order on a working copy (:class:`~simsplat_core.editing.edit_ops.Draft`): each grounds its
+Commands run in order on a working copy (:class:`~simsplat_core.editing.draft.Draft`): each grounds its
 target / anchor against the scene's language (``editing.grounding``), then
 
 * ``remove`` drops the nodes and their agents (every match of a group target);
 * ``replace`` keeps each target's trajectory and swaps its appearance for a bank asset: a new node on the
   same track, the asset's own box size, the box kept on the ground (same object id, source ``edited``);
-* ``insert`` retrieves an asset, resolves the placement on the lane graph / sidewalk (``editing.placement``)
-  and plans its motion (``editing.motion_controller``; vehicles drive along their lane, static objects and
+* ``insert`` retrieves an asset, resolves the placement on the lane graph / sidewalk (``editing.placement.resolve``)
+  and plans its motion (``editing.motion.controller``; vehicles drive along their lane, static objects and
   rows of cones stand still, pedestrians walk along the sidewalk or cross when told);
-* ``modify`` re-plans a target's trajectory from its log trajectory (``editing.motion_controller``).
+* ``modify`` re-plans a target's trajectory from its log trajectory (``editing.motion.controller``).
 
 An added object whose command asked a colour is then looked at in the edited renders and
-exposure-matched when it reads as another shade (``editing.look_check``); when no gain makes it read as asked,
+exposure-matched when it reads as another shade (``editing.assets.look_check``); when no gain makes it read as asked,
 the program is applied again without that asset (at most ``LOOK_RETRIES`` times; the attempt with the most
 objects reading as asked is kept). The edited graph is
 :func:`~simsplat_core.editing.delta.apply_delta` of the stored graph and the resulting delta (the same
@@ -31,7 +31,7 @@ every other agent is rolled out by the motion predictor (default ``motion.reacti
 the edited agents' fixed trajectories, reacting agents get ``source == "refined"`` and new pose tracks in
 the delta, and they are validated with the edited ones. ``"none"`` keeps the log for everyone else. When the
 reacting traffic cannot take an inserted object where asked without a crash, the program is applied again with
-the inserted objects a little further along their lanes, within the placement's slack (``editing.room``).
+the inserted objects a little further along their lanes, within the placement's slack (``editing.traffic.room``).
 """
 
 from __future__ import annotations
@@ -39,88 +39,27 @@ from __future__ import annotations
 import dataclasses
 import logging
 from collections.abc import Callable
-from dataclasses import dataclass
 
-from simsplat_core.editing.asset_record import VARIANT_SEP, Asset
-from simsplat_core.editing.assets import AssetBank, asked_top_color
+from simsplat_core.editing.assets.bank import asked_top_color
+from simsplat_core.editing.assets.look_check import match_exposure
+from simsplat_core.editing.assets.record import VARIANT_SEP, Asset
 from simsplat_core.editing.commands import EditProgram
 from simsplat_core.editing.delta import apply_delta
-from simsplat_core.editing.edit_ops import Draft, apply_command, node_factory
+from simsplat_core.editing.draft import Draft, EditContext
 from simsplat_core.editing.grounding import Grounder
-from simsplat_core.editing.look_check import match_exposure
+from simsplat_core.editing.ops import apply_command, node_factory
 from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_LIKE, EditorOptions
-from simsplat_core.editing.parser import parse_prompt
-from simsplat_core.editing.reaction import react
+from simsplat_core.editing.parse.prompt import parse_prompt
 from simsplat_core.editing.result import CommandOutcome, EditDelta, EditedScene, EditRefused
-from simsplat_core.editing.room import ROOM_SHIFTS, changed_rows, searches_room, traffic_copes
-from simsplat_core.language.grounding.engine import QueryEngine
-from simsplat_core.language.grounding.static_location import with_static_locations
-from simsplat_core.language.scene_language import LanguageScene
-from simsplat_core.motion.motion_map import motion_map_of
-from simsplat_core.motion.predictor import MotionMap, MotionPredictor
-from simsplat_core.motion.registry import default_predictor
-from simsplat_core.scenario.agents import AgentStates
-from simsplat_core.scenario.lane_graph import LaneGraph
-from simsplat_core.scenario.map_context import MapContext
+from simsplat_core.editing.traffic.reaction import react
+from simsplat_core.editing.traffic.room import ROOM_SHIFTS, changed_rows, searches_room, traffic_copes
 from simsplat_core.scenario.metrics import validate_agents
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.stage_clock import StageClock, maybe_stage
-from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
 
-__all__ = ["CHATSIM_LIKE", "OMNIRE_LIKE", "EditContext", "Editor", "EditorOptions", "apply_edit"]
-
-
-@dataclass(frozen=True, eq=False)
-class EditContext:
-    """Everything an edit reads, none of it changed by editing.
-
-    Attributes:
-        log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
-        graph: the stored scene graph.
-        language: the graph's language scene (what grounding reads), static objects' sectors filled in from the
-            log (``language.grounding.static_location``).
-        engine: the grounding engine (its text encoder also retrieves assets and parses prompts).
-        bank: the asset bank (``None``: inserts and replacements are refused, naming ``simsplat assets build``).
-        lanes: the log's lane graph.
-        map_ctx: the log's map for point queries.
-        states: every agent of the log (ego included) on the log's frames, with their node ids.
-        motion_map: the map the motion predictor drives on (refinement).
-        predictor: the motion predictor of refinement (``None``: the default reactive traffic model).
-    """
-
-    log: SceneLog
-    graph: SceneGraph
-    language: LanguageScene
-    engine: QueryEngine
-    bank: AssetBank | None
-    lanes: LaneGraph
-    map_ctx: MapContext
-    states: AgentStates
-    motion_map: MotionMap
-    predictor: MotionPredictor | None = None
-
-    @classmethod
-    def create(cls, log: SceneLog, graph: SceneGraph, language: LanguageScene, engine: QueryEngine,
-               bank: AssetBank | None, predictor: MotionPredictor | None = None) -> EditContext:
-        """The context of ``graph`` (reconstructed from ``log``): lane graph, map context and agent states
-        derived from the log.
-
-        Raises:
-            StaleSceneError: ``language`` describes another revision of the graph.
-        """
-        language.check_graph(graph)
-        node_of_object = {n.object_id: n.node_id for n in graph.object_nodes}
-        states = AgentStates.from_log(log, node_of_object)
-        motion_map = motion_map_of(log)
-        return cls(log=log, graph=graph, language=with_static_locations(language, states), engine=engine, bank=bank,
-                   lanes=motion_map.lanes, map_ctx=motion_map.context, states=states, motion_map=motion_map,
-                   predictor=predictor)
-
-    def motion_predictor(self) -> MotionPredictor:
-        """The predictor refinement uses (the context's, else the default reactive traffic model)."""
-        return self.predictor if self.predictor is not None else default_predictor()
+__all__ = ["CHATSIM_LIKE", "OMNIRE_LIKE", "Editor", "EditorOptions", "apply_edit"]
 
 
 def apply_edit(ctx: EditContext, program: EditProgram, options: EditorOptions = DEFAULT_OPTIONS) -> EditedScene:
@@ -207,7 +146,7 @@ def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions
 
 def _looked(ctx: EditContext, draft: Draft, outcomes: list[CommandOutcome], delta: EditDelta
             ) -> tuple[SceneGraph, EditDelta, list[CommandOutcome], frozenset[str], int]:
-    """The edited graph after the look check (``editing.look_check``): exposure-matched delta and graph, outcomes
+    """The edited graph after the look check (``editing.assets.look_check``): exposure-matched delta and graph, outcomes
     noting the gains, the stored asset ids of added objects that do not read as asked (after their gain), and
     how many do."""
     asset_of = _asset_source(ctx, draft)

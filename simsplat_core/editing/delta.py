@@ -20,7 +20,7 @@ from simsplat_core.scene.nodes import ObjectNode
 logger = logging.getLogger(__name__)
 
 #: Builds the node of an added object (``AddedNode`` -> ``ObjectNode`` with ``node_id == added.node_id``); the
-#: editor and the rebuild both use ``editing.asset_nodes.asset_node`` on the bank's asset.
+#: editor and the rebuild both use ``editing.assets.nodes.asset_node`` on the bank's asset.
 NodeFactory = Callable[[AddedNode], ObjectNode]
 
 

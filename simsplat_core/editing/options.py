@@ -15,7 +15,7 @@ with options, not separate code.
   its path. Off (``simsplat edit --ego-replays``), the renders come from the log's own camera poses, the views
   the scene was reconstructed from;
 * ``check_looks``: render inserted objects asked in an achromatic colour and match their exposure
-  (``editing.look_check``); off where only trajectories matter (the motion benchmark).
+  (``editing.assets.look_check``); off where only trajectories matter (the motion benchmark).
 
 :data:`CHATSIM_LIKE` and :data:`OMNIRE_LIKE` are the two restricted editors of the evaluation.
 """

@@ -58,7 +58,7 @@ class AddedNode:
     """A node the edit added: its id in the edited graph, the asset it came from and its own pose track.
 
     ``arc_length`` (``[T]`` metres along the new path at ``track.times``, or ``None``) retimes a
-    pedestrian asset's gait to the new path (``editing.asset_nodes.asset_node``).
+    pedestrian asset's gait to the new path (``editing.assets.nodes.asset_node``).
     """
 
     node_id: int

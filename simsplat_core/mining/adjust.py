@@ -14,8 +14,8 @@ suggestion of each parameter only), its ``value`` read for a number and a direct
   suggestions keep moving the start), ``"1 s earlier"`` takes from the delay (or the start time), a bare ``"3 s"``
   sets ``start_time_s``; moving agents only;
 * ``offset`` -- ``"5 m further"`` / ``"away"`` / ``"another spot"`` move the placement that much further from its
-  anchor (``distance_m``; from the editor's default distance when none was asked, ``editing.placement`` and
-  ``editing.edit_ops.DEFAULT_AHEAD_M``; an ``absolute`` position along its bearing), ``"closer"`` nearer (not
+  anchor (``distance_m``; from the editor's default distance when none was asked, ``editing.placement.resolve`` and
+  ``editing.ops.DEFAULT_AHEAD_M``; an ``absolute`` position along its bearing), ``"closer"`` nearer (not
   within :data:`MIN_LANE_GAP_M` along a lane, :data:`MIN_SIDE_GAP_M` beside the anchor); ``"... lane centre"``
   shrinks a ``behaviour.lateral_offset_m`` towards 0; commands with a placement (an insert always has one);
 * ``anchor`` -- a placement relative to an object is made relative to the ego (the anchor dropped);
@@ -49,8 +49,8 @@ from simsplat_core.editing.commands import (
     SpeedSpec,
     TargetRef,
 )
-from simsplat_core.editing.edit_ops import DEFAULT_AHEAD_M
-from simsplat_core.editing.placement import LANE_AHEAD_M, LONG_GAP_M, SIDE_GAP_M
+from simsplat_core.editing.ops import DEFAULT_AHEAD_M
+from simsplat_core.editing.placement.resolve import LANE_AHEAD_M, LONG_GAP_M, SIDE_GAP_M
 from simsplat_core.mining.edit_kinds import moves
 from simsplat_core.mining.vlm_protocol import ParameterChange
 from simsplat_core.scenario.vocabulary import PEDESTRIAN
@@ -166,7 +166,7 @@ def asked_placement(command: EditCommand, kind: str | None) -> Placement | None:
 
 
 def _default_distance(placement: Placement) -> float:
-    """The distance the editor uses when a placement asks none (``editing.placement``)."""
+    """The distance the editor uses when a placement asks none (``editing.placement.resolve``)."""
     if placement.relation == "in_lane":
         return LANE_AHEAD_M
     if placement.relation in ("in_front_of", "behind"):

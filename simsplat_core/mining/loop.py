@@ -42,9 +42,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pydantic
 
-from simsplat_core.editing.apply import EditContext, apply_edit
-from simsplat_core.editing.asset_record import VARIANT_SEP
+from simsplat_core.editing.apply import apply_edit
+from simsplat_core.editing.assets.record import VARIANT_SEP
 from simsplat_core.editing.commands import AssetSpec, EditProgram
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.options import DEFAULT_OPTIONS, EditorOptions
 from simsplat_core.editing.result import EditedScene, EditRefused
 from simsplat_core.mining.adjust import Adjustment, AlternativeAsset, adjust_program, retarget

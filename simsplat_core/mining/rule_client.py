@@ -10,7 +10,7 @@ and explicit checks instead of a model.
 * ``propose`` reads ``request.summary.facts`` (or ``facts_of(summary)``), never the images, and returns
   ``mining.rule_proposals.propose_edits``: feasible prompts over the six edit categories, safety-critical ones
   first, in varied wording, the same for the same seed and facts;
-* ``to_command`` is the project's parser (``editing.parser.parse_prompt``); a refusal is re-raised as
+* ``to_command`` is the project's parser (``editing.parse.prompt.parse_prompt``); a refusal is re-raised as
   :class:`ProposalRejected` (an ``EditRefused`` naming the prompt);
 * ``judge`` is ``mining.rule_judge.judge_edit``: explicit checks and concrete parameter changes.
 """
@@ -21,7 +21,7 @@ import logging
 from collections.abc import Callable
 
 from simsplat_core.editing.commands import EditProgram
-from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.parse.prompt import parse_prompt
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.mining.rule_judge import JudgeConfig, judge_edit

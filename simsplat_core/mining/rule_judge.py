@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from simsplat_core.editing.behaviours.registry import ASKED_CLASS
 from simsplat_core.editing.commands import Behaviour, EditCommand
 from simsplat_core.mining.vlm_protocol import (
     PLAUSIBILITY_MAX,
@@ -197,11 +198,11 @@ def _label_findings(behaviour: Behaviour, label: str) -> list[tuple[str, Paramet
         out.append((f"labelled {label}, not {voc.REVERSING}",
                     _speed_suggestion(2.0, "reversing does not show: back up at this speed")))
     if behaviour.lane_change is not None:
-        want = voc.CHANGING_LANE_LEFT if behaviour.lane_change == "left" else voc.CHANGING_LANE_RIGHT
+        want = ASKED_CLASS[("lane_change", behaviour.lane_change)]
         if label != want:
             out.append((f"labelled {label}, asked {want}", _earlier("the lane change does not complete in the log")))
     if behaviour.turn in ("left", "right"):
-        want = voc.TURNING_LEFT if behaviour.turn == "left" else voc.TURNING_RIGHT
+        want = ASKED_CLASS[("turn", behaviour.turn)]
         if label != want:
             out.append((f"labelled {label}, asked {want}", _earlier("the turn does not complete in the log")))
     elif behaviour.turn == "straight" and label in (voc.TURNING_LEFT, voc.TURNING_RIGHT):

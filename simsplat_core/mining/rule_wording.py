@@ -22,6 +22,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from simsplat_core.editing.behaviours.registry import PROPOSAL_FORMS
 from simsplat_core.editing.commands import SPEED_UNITS
 from simsplat_core.language.appearance.captioner import article
 from simsplat_core.mining.scene_fact_records import AgentFacts, AssetFacts, SceneFacts
@@ -289,79 +290,14 @@ FORMS: dict[str, tuple[str, ...]] = {
         "Put {P} on the sidewalk about {d} in front of us.",
     ),
     # ------------------------------------------------------------------ modify a vehicle
-    "hard_stop": (
-        "Make {T} slam on the brakes.",
-        "{T} should brake hard.",
-        "Have {T} stop suddenly.",
-        "Make {T} come to a sudden stop.",
-        "{T} suddenly stops.",
-    ),
-    "lane_change": (
-        "Make {T} change lanes to the {side}.",
-        "Have {T} cut in to the {side}.",
-        "{T} should merge {side} aggressively.",
-        "Make {T} switch to the {side} lane.",
-    ),
-    "reverse": (
-        "Make {T} reverse.",
-        "{T} should back up.",
-        "Put {T} in reverse.",
-        "Have {T} drive backwards.",
-    ),
     "pull_out": (
         "Make {T} pull out.",
         "Have {T} pull away from the curb.",
-    ),
-    "speed_up": (
-        "Make {T} go {v}.",
-        "Make {T} drive twice as fast.",
-        "{T} should go 50% faster.",
-    ),
-    "slow_down": (
-        "Make {T} slow down.",
-        "Have {T} drive at half the speed.",
-        "Make {T} go 10 km/h slower.",
-    ),
-    "turn": (
-        "Make {T} turn {side} at the intersection.",
-        "{T} should take a {side}.",
-        "Have {T} go {side} at the next junction.",
-    ),
-    "delay": (
-        "Make {T} start {t} later.",
-        "Have {T} start {t} later.",
     ),
     "replace": (
         "Replace {T} with {A}.",
         "Swap {T} for {A}.",
         "Turn {T} into {A}.",
-    ),
-    # ------------------------------------------------------------------ modify a pedestrian
-    "ped_jaywalk": (
-        "Make {T} jaywalk across the road.",
-        "Have {T} cross the street away from the crosswalk.",
-        "{T} should jaywalk.",
-    ),
-    "ped_run_across": (
-        "Make {T} run across the road.",
-        "Have {T} sprint across the street.",
-    ),
-    "ped_cross": (
-        "Make {T} cross the street.",
-        "Have {T} walk across the road.",
-    ),
-    "ped_run": (
-        "Make {T} run.",
-        "{T} should jog.",
-        "Have {T} sprint.",
-    ),
-    "ped_stop": (
-        "Make {T} stop.",
-        "Have {T} stop walking.",
-    ),
-    "ped_wait": (
-        "Make {T} wait {t} before moving.",
-        "{T} should start {t} later.",
     ),
     # ------------------------------------------------------------------ remove
     "remove": (
@@ -376,6 +312,8 @@ FORMS: dict[str, tuple[str, ...]] = {
         "Get rid of {G}.",
         "Delete {G}.",
     ),
+    # ------------------------------------------------------------------ the behaviours' own (``editing.behaviours``)
+    **PROPOSAL_FORMS,
 }
 
 

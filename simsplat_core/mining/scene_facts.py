@@ -1,7 +1,7 @@
 """Grounded facts about one scene for proposing edits: who is where relative to the ego, what the road ahead
 offers, which assets can be inserted.
 
-    facts = scene_facts(ctx)                  # ctx: editing.apply.EditContext
+    facts = scene_facts(ctx)                  # ctx: editing.draft.EditContext
     facts.agent("veh_02").caption             # "a white van"
     summary(facts).text()                     # the same facts as text lines (what an HTTP VLM reads)
 
@@ -44,8 +44,8 @@ from simsplat_core.scenario.lane_graph import LaneGraph, LanePath
 from simsplat_core.scenario.trajectory import agent_kind
 
 if TYPE_CHECKING:
-    from simsplat_core.editing.apply import EditContext
-    from simsplat_core.editing.assets import AssetBank
+    from simsplat_core.editing.assets.bank import AssetBank
+    from simsplat_core.editing.draft import EditContext
     from simsplat_core.language.scene_language import NodeLanguage
 
 logger = logging.getLogger(__name__)

@@ -11,8 +11,8 @@ from collections.abc import Callable, Sequence
 import cv2
 import numpy as np
 
-from simsplat_core.editing.asset_record import Asset
-from simsplat_core.editing.asset_render import render_asset
+from simsplat_core.editing.assets.record import Asset
+from simsplat_core.editing.assets.render import render_asset
 from simsplat_core.viz.images import to_uint8
 
 logger = logging.getLogger(__name__)

@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from flows.cli import app
-from tests.simsplat_core.editing.asset_fixtures import tiny_store
+from tests.simsplat_core.editing.assets.fixtures import tiny_store
 
 runner = CliRunner()
 

@@ -12,11 +12,11 @@ import pyarrow.parquet as pq
 import pytest
 import torch
 
-from simsplat_core.editing.assets import AssetBank
-from simsplat_core.editing.procedural_assets import procedural_asset
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.procedural import procedural_asset
 from storage import ArtifactStore, CorruptArtifactError, list_asset_banks, read_asset_bank, write_asset_bank
 from storage.assets import bank_dir, read_asset_index, read_bank_manifest
-from tests.simsplat_core.editing.asset_fixtures import mesh_vehicle, walking_pedestrian
+from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle, walking_pedestrian
 
 
 @pytest.fixture(scope="module")

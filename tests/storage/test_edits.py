@@ -64,7 +64,7 @@ def _delta() -> EditDelta:
 
 
 def _node_for(added: AddedNode) -> RigidNode:
-    """Stand-in for ``asset_nodes.asset_node``: a small box of Gaussians."""
+    """Stand-in for ``editing.assets.nodes.asset_node``: a small box of Gaussians."""
     n = len(added.track)
     return RigidNode(added.node_id, gaussians([[0.0, 0.0, 0.0], [1.0, 0.0, 0.2]], (0.9, 0.1, 0.1), seed=7),
                      object_id=added.object_id, category=added.category, scale=2.0,

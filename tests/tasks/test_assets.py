@@ -6,11 +6,11 @@ from pathlib import Path
 
 import pytest
 
-from simsplat_core.editing.asset_cutout import CutoutConfig
-from simsplat_core.editing.procedural_assets import STATIC_KINDS
+from simsplat_core.editing.assets.cutout import CutoutConfig
+from simsplat_core.editing.assets.procedural import STATIC_KINDS
 from storage import ArtifactStore, list_asset_banks, read_asset_bank
 from tasks.assets import asset_sources, bank_key, build_asset_bank
-from tests.simsplat_core.editing.asset_fixtures import TINY_SCENE_HASH, tiny_store
+from tests.simsplat_core.editing.assets.fixtures import TINY_SCENE_HASH, tiny_store
 
 #: The tiny log has 4 frames and grey random-initialised boxes: a filter that lets them through.
 LENIENT = CutoutConfig(min_visible_frames=1, min_gaussians=50, min_coverage=0.0)

@@ -15,8 +15,8 @@ import torch
 from typer.testing import CliRunner
 
 from flows.cli import app
-from simsplat_core.editing.assets import AssetBank
-from simsplat_core.editing.procedural_assets import procedural_asset
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.procedural import procedural_asset
 from simsplat_core.eval.grounding.gt_scene import language_scene_from_log
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.scene import InitConfig
@@ -32,7 +32,7 @@ from storage.edits import (
     read_trajectories,
 )
 from storage.language_scenes import write_language_scene
-from tests.simsplat_core.editing.asset_fixtures import mesh_vehicle
+from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
 
 runner = CliRunner()
 SCENE_HASH = "5ce4e0000000000000000000000000000000000000000000000000000000beef"

@@ -36,7 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.editing.procedural_assets import STATIC_KINDS
+from simsplat_core.editing.assets.procedural import STATIC_KINDS
+from simsplat_core.editing.behaviours.registry import ASKED_CLASS
 from simsplat_core.eval.editing.intents import EGO, EditIntent, MotionIntent, PlacementIntent
 from simsplat_core.eval.editing.observation import EditObservation, StateChanges, state_changes, trajectory_changed
 from simsplat_core.eval.editing.truth import SceneTruth
@@ -547,10 +548,10 @@ def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after
         if m.reverse:
             v.require(label.motion == voc.REVERSING, f"labelled {label.motion}, not reversing")
         if m.lane_change:
-            want = voc.CHANGING_LANE_LEFT if m.lane_change == "left" else voc.CHANGING_LANE_RIGHT
+            want = ASKED_CLASS[("lane_change", m.lane_change)]
             v.require(label.motion == want, f"labelled {label.motion}, asked {want} (lateral {label.lateral_m:.1f} m)")
         if m.turn in ("left", "right"):
-            want = voc.TURNING_LEFT if m.turn == "left" else voc.TURNING_RIGHT
+            want = ASKED_CLASS[("turn", m.turn)]
             v.require(label.motion == want, f"labelled {label.motion} (heading change "
                       f"{label.heading_change_deg:.0f} deg), asked {want}")
         elif m.turn == "straight":

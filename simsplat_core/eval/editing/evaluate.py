@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from simsplat_core.editing.apply import EditContext, Editor, apply_edit
+from simsplat_core.editing.apply import Editor, apply_edit
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.options import CHATSIM_LIKE, DEFAULT_OPTIONS, OMNIRE_LIKE, EditorOptions
 from simsplat_core.editing.renders import frame_views, render_frame
 from simsplat_core.editing.result import EditedScene, EditRefused

@@ -52,7 +52,7 @@ class AssetLook:
 
     @classmethod
     def of_asset(cls, asset: Any) -> AssetLook:
-        """From an ``editing.assets.Asset`` (its ``attributes["lower_color"]`` names trousers)."""
+        """From an ``editing.assets.bank.Asset`` (its ``attributes["lower_color"]`` names trousers)."""
         attributes = dict(getattr(asset, "attributes", {}) or {})
         return cls(asset.category, asset.subtype, asset.color, tuple(float(v) for v in asset.size),  # type: ignore[arg-type]
                    attributes.get("lower_color"), asset.source_seq, asset.source_object, asset.asset_id)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from simsplat_core.editing.commands import SPEED_UNITS
-from simsplat_core.editing.motion_requests import FOLLOW_GAP_M, VehicleMotionRequest
+from simsplat_core.editing.motion.requests import FOLLOW_GAP_M, VehicleMotionRequest
 from simsplat_core.eval.editing.intents import (
     EGO,
     AssetIntent,

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from simsplat_core.editing.behaviours.registry import PROMPT_FORMS
 from simsplat_core.editing.commands import SPEED_UNITS
 from simsplat_core.language.appearance.captioner import article
 
@@ -154,117 +155,10 @@ FORMS: dict[str, tuple[str, ...]] = {
         "Insert {A} who runs along the sidewalk {d} ahead.",
     ),
     # ------------------------------------------------------------------ modify a vehicle
-    "vehicle_speed_abs": (
-        "Make {T} drive at {v}.",
-        "Set the speed of {T} to {v}.",
-        "{T} should go {v}.",
-        "Have {T} travel at {v}.",
-    ),
-    "vehicle_speed_rel": (
-        "Make {T} {rel}.",
-        "{T} should drive {rel}.",
-        "Have {T} go {rel}.",
-    ),
-    "vehicle_stop_crosswalk": (
-        "Make {T} stop before the crosswalk.",
-        "{T} should halt before the zebra crossing.",
-        "Have {T} come to a stop in front of the pedestrian crossing.",
-        "Stop {T} before it reaches the crosswalk.",
-    ),
-    "vehicle_stop": (
-        "Make {T} come to a stop.",
-        "{T} should pull up and stop.",
-        "Bring {T} to a halt.",
-    ),
-    "vehicle_stop_by": (
-        "Make {T} come to a complete stop within {t}.",
-        "{T} should be standing still after {t}.",
-        "Have {T} stop within {t}.",
-    ),
-    "vehicle_brake_hard": (
-        "Make {T} brake hard.",
-        "{T} should slam on the brakes.",
-        "Have {T} do an emergency stop.",
-    ),
-    "vehicle_accelerate": (
-        "Make {T} accelerate.",
-        "{T} should speed up.",
-        "Have {T} pick up speed.",
-    ),
-    "vehicle_decelerate": (
-        "Make {T} slow down.",
-        "{T} should decelerate.",
-        "Have {T} reduce its speed.",
-    ),
-    "vehicle_reverse": (
-        "Make {T} back up.",
-        "{T} should reverse.",
-        "Have {T} drive backwards a few meters.",
-        "Let {T} reverse out of its spot.",
-    ),
-    "vehicle_lane_change": (
-        "Make {T} change lanes to the {side}.",
-        "{T} should move into the {side} lane.",
-        "Have {T} switch to the lane on its {side}.",
-        "Let {T} merge {side}.",
-    ),
-    "vehicle_turn": (
-        "Make {T} turn {side} at the intersection.",
-        "{T} should take a {side} at the next junction.",
-        "Have {T} turn {side} at the crossroads.",
-        "Let {T} make a {side} turn at the next intersection.",
-    ),
-    "vehicle_straight": (
-        "Make {T} go straight through the intersection.",
-        "{T} should continue straight instead of turning.",
-        "Have {T} drive straight on at the junction.",
-    ),
-    "vehicle_delay": (
-        "Delay {T} by {t}.",
-        "{T} should start {t} later.",
-        "Let {T} wait {t} before moving.",
-        "Make {T} set off {t} later than it does now.",
-    ),
     "vehicle_replace": (
         "Replace {T} with {A}.",
         "Swap {T} for {A}.",
         "Turn {T} into {A}.",
-    ),
-    # ------------------------------------------------------------------ modify a pedestrian
-    "pedestrian_speed_abs": (
-        "Make {T} walk at {v}.",
-        "{T} should walk at {v}.",
-        "Set the walking speed of {T} to {v}.",
-    ),
-    "pedestrian_speed_rel": (
-        "Make {T} walk {rel}.",
-        "{T} should move {rel}.",
-        "Have {T} walk {rel}.",
-    ),
-    "pedestrian_run": (
-        "Make {T} run.",
-        "{T} should start running.",
-        "Have {T} jog instead of walking.",
-    ),
-    "pedestrian_stop": (
-        "Make {T} stop.",
-        "{T} should stop walking.",
-        "Have {T} stand still.",
-    ),
-    "pedestrian_cross": (
-        "Make {T} cross the street.",
-        "{T} should walk across the road.",
-        "Have {T} cross over to the other side of the street.",
-    ),
-    "pedestrian_jaywalk": (
-        "Make {T} jaywalk across the road.",
-        "{T} should cross the street away from the crosswalk.",
-        "Have {T} jaywalk across the street.",
-    ),
-    "pedestrian_delay": (
-        "Delay {T} by {t}.",
-        "{T} should start walking {t} later.",
-        "Let {T} wait {t} before walking.",
     ),
     # ------------------------------------------------------------------ remove
     "remove_single": (
@@ -296,14 +190,6 @@ FORMS: dict[str, tuple[str, ...]] = {
         "Park {A} on the pavement {d} in front of us.",
         "Add {A} on the sidewalk next to the road.",
     ),
-    "turn_no_intersection": (
-        "Make {T} turn {side} at the next intersection.",
-        "{T} should take a {side} at the next junction.",
-    ),
-    "pedestrian_lane_change": (
-        "Make {T} change lanes to the {side}.",
-        "{T} should switch to the {side} lane.",
-    ),
     "static_motion": (
         "Make {T} drive at {v}.",
         "{T} should move at {v}.",
@@ -319,6 +205,8 @@ FORMS: dict[str, tuple[str, ...]] = {
         "What time is it?",
         "Make the buildings taller.",
     ),
+    # ------------------------------------------------------------------ the behaviours' own (``editing.behaviours``)
+    **PROMPT_FORMS,
 }
 
 _DISTANCE_UNITS = ("{x} m", "{x} meters", "{x} metres", "{x}m")

@@ -12,7 +12,7 @@ world (a copy; the original is never changed)
   editor should have drawn;
 * redraws replaced agents with the replacing asset's look on the same trajectory.
 
-Static objects are drawn with the procedural kinds' meshes (``editing.procedural_assets.static_kind_mesh``, the
+Static objects are drawn with the procedural kinds' meshes (``editing.assets.procedural.static_kind_mesh``, the
 world's own meshes for the world's kinds), from which the bank's procedural Gaussians were made. A look the
 world cannot build (an unknown kind) is drawn by the closest kind of similar size and reported as not native:
 visibility checks still use it, fidelity leaves it out.
@@ -31,8 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.color_names import DISPLAY_RGB
-from simsplat_core.editing.procedural_assets import STATIC_KINDS as PROCEDURAL_KINDS
-from simsplat_core.editing.procedural_assets import static_kind_mesh
+from simsplat_core.editing.assets.procedural import STATIC_KINDS as PROCEDURAL_KINDS
+from simsplat_core.editing.assets.procedural import static_kind_mesh
 from simsplat_core.eval.editing.observation import AssetLook, state_changes
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.world import World

@@ -5,7 +5,7 @@ are applied directly to a :class:`~simsplat_core.eval.refinement.real.RealScenar
 
 * ``lead_brakes`` ("the lead vehicle brakes hard"): the nearest moving vehicle ahead of the ego in its lane at
   ``start_step`` brakes from ``start_step + BRAKE_DELAY_STEPS`` at :data:`BRAKE_DECEL_MPS2` to a stop along
-  its own logged path (the jerk-limited profile of ``editing.speed_profile.brake_segments``), then stands;
+  its own logged path (the jerk-limited profile of ``editing.motion.speed_profile.brake_segments``), then stands;
 * ``stopped_truck`` ("insert a stopped truck in the ego lane 30 m ahead"): a :data:`TRUCK_SIZE` vehicle
   standing :data:`TRUCK_AHEAD_M` ahead of the ego along its lane (``LaneGraph.follow`` from the ego's pose at
   ``start_step``, heading along the lane), valid at every step;
@@ -39,7 +39,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.editing.speed_profile import VEHICLE_LIMITS, brake_segments, integrate
+from simsplat_core.editing.motion.speed_profile import VEHICLE_LIMITS, brake_segments, integrate
 from simsplat_core.eval.refinement.real import RealScenario
 from simsplat_core.eval.refinement.synthetic import MotionCase, MotionOutcome, measure, synthetic_rows
 from simsplat_core.motion.predictor import MotionPredictor
@@ -181,7 +181,7 @@ def _overlaps_at(states: AgentStates, xy: np.ndarray, heading: float, size: Sequ
 def braking_distances(v0: float, times: np.ndarray, decel: float = BRAKE_DECEL_MPS2,
                       jerk: float = VEHICLE_LIMITS.hard_jerk_mps3) -> tuple[np.ndarray, np.ndarray]:
     """``(distance, speed)`` at ``times`` (s since braking starts, ``>= 0``) of a jerk-limited stop from ``v0``
-    at a peak deceleration ``decel`` (``speed_profile.brake_segments``); at rest after the stop."""
+    at a peak deceleration ``decel`` (``editing.motion.speed_profile.brake_segments``); at rest after the stop."""
     segments = brake_segments(max(v0, 0.0), 0.0, decel, jerk)
     dist, speed = np.zeros(len(times)), np.zeros(len(times))
     for k, tau in enumerate(np.asarray(times, dtype=np.float64)):

@@ -27,7 +27,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simsplat_core.editing.apply import EditContext, Editor
+from simsplat_core.editing.apply import Editor
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.eval.editing.prompts import EditPrompt

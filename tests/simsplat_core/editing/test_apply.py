@@ -10,22 +10,23 @@ import pytest
 import torch
 
 from simsplat_core.editing import apply as apply_module
-from simsplat_core.editing import motion_glue
-from simsplat_core.editing.apply import OMNIRE_LIKE, EditContext, apply_edit
-from simsplat_core.editing.asset_record import Asset
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.apply import OMNIRE_LIKE, apply_edit
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.procedural import procedural_asset
+from simsplat_core.editing.assets.record import Asset
 from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, SpeedSpec, TargetRef
 from simsplat_core.editing.delta import apply_delta
-from simsplat_core.editing.edit_ops import Draft, node_factory
+from simsplat_core.editing.draft import Draft, EditContext
 from simsplat_core.editing.grounding import Grounder
-from simsplat_core.editing.joining import JOIN_DECEL_MPS2
-from simsplat_core.editing.motion_glue import first_overlap, making_room, plan_inserted, plan_modified
-from simsplat_core.editing.motion_requests import FOLLOW_GAP_M, StartState
+from simsplat_core.editing.motion import plans as motion_plans
+from simsplat_core.editing.motion.joining import JOIN_DECEL_MPS2
+from simsplat_core.editing.motion.plans import first_overlap, making_room, plan_inserted, plan_modified
+from simsplat_core.editing.motion.requests import FOLLOW_GAP_M, StartState
+from simsplat_core.editing.ops import node_factory
 from simsplat_core.editing.options import DEFAULT_OPTIONS
-from simsplat_core.editing.placement import PlacedPose, distance_slack
-from simsplat_core.editing.procedural_assets import procedural_asset
+from simsplat_core.editing.placement.resolve import PlacedPose, distance_slack
 from simsplat_core.editing.result import EditRefused
-from simsplat_core.editing.room import room_reach
+from simsplat_core.editing.traffic.room import room_reach
 from simsplat_core.scenario.geometry import signed_polygon_distance
 from simsplat_core.scenario.metrics import collision_steps
 from simsplat_core.scene import GaussianSet
@@ -345,7 +346,7 @@ def test_editor_parses_and_applies_a_prompt(ctx):
 def test_a_speed_up_the_traffic_ahead_takes_away_is_refused_not_silently_dropped(ctx):
     """Every vehicle asked for 12 m/s either gets near it, or is refused naming the traffic only when a free road
     would have let it get there (a plain physical limit, 4 s of log at comfortable acceleration, is no refusal)."""
-    from simsplat_core.editing.motion_glue import SPEED_REACHED_SHARE
+    from simsplat_core.editing.motion.plans import SPEED_REACHED_SHARE
 
     outcomes = {"reached": 0, "refused": 0, "limited": 0}
     for oid, category in zip(ctx.states.object_ids, ctx.states.categories, strict=True):
@@ -367,7 +368,7 @@ def test_a_speed_up_the_traffic_ahead_takes_away_is_refused_not_silently_dropped
 
 def _parked_off_lane(ctx: EditContext) -> str:
     """A vehicle of the log standing still over its whole track away from every lane (parked at the kerb)."""
-    from simsplat_core.editing.placement import LANE_SNAP_M
+    from simsplat_core.editing.placement.resolve import LANE_SNAP_M
 
     states = ctx.states
     for r, (oid, cat) in enumerate(zip(states.object_ids, states.categories, strict=True)):
@@ -422,7 +423,7 @@ def test_accelerate_ends_faster_or_is_refused_naming_the_traffic(ctx):
     """"Speed up" without a speed asks ``ACCELERATE_DELTA_MPS`` more than the start speed: every vehicle either
     ends clearly faster than it started, or is refused naming the traffic ahead (never carried out ending slower,
     as when it braked for traffic its log passed, or took a logged curve slower than the log)."""
-    from simsplat_core.editing.motion_requests import ACCELERATE_DELTA_MPS
+    from simsplat_core.editing.motion.requests import ACCELERATE_DELTA_MPS
 
     outcomes = {"faster": 0, "refused": 0}
     for oid, category in zip(ctx.states.object_ids, ctx.states.categories, strict=True):
@@ -448,7 +449,7 @@ def test_a_car_inserted_at_a_speed_holds_it_or_is_refused_naming_the_car_ahead(c
     """An inserted car asked to drive at a speed holds it from the start (within the tolerance), placed within the
     distance slack of the asked distance where it can, or is refused naming what slows it: never carried out
     while the traffic ahead holds it back."""
-    from simsplat_core.editing.motion_glue import SPEED_HELD_SHARE, SPEED_HELD_TOL_MPS
+    from simsplat_core.editing.motion.plans import SPEED_HELD_SHARE, SPEED_HELD_TOL_MPS
 
     tol = max(SPEED_HELD_TOL_MPS, SPEED_HELD_SHARE * speed)
     outcomes = {"held": 0, "moved": 0, "refused": 0}
@@ -514,7 +515,7 @@ def test_an_asked_faster_speed_is_met_at_the_end_or_refused_naming_the_traffic(c
     """"50 % faster": a carried-out edit ends (mean over the last 0.5 s, not just its last step) within the
     tolerance of the asked speed, unless even a free road could not get there in the time left; otherwise it
     is refused naming the traffic ahead (before, ending at 0.8 of it while still accelerating passed)."""
-    from simsplat_core.editing.motion_glue import SPEED_HELD_SHARE, SPEED_HELD_TOL_MPS, end_speed
+    from simsplat_core.editing.motion.plans import SPEED_HELD_SHARE, SPEED_HELD_TOL_MPS, end_speed
 
     st = ctx.states
     outcomes = {"met": 0, "refused": 0, "limited": 0}
@@ -612,7 +613,7 @@ def test_an_inserted_walker_sidesteps_someone_walking_towards_it(ctx, bank, monk
     passing = plan_inserted(draft, None, walker, placed, 0, 0)
     assert "and back to pass" in passing.description
     assert first_overlap(draft.states, passing, np.asarray(walker.size), ("ego",)) is None
-    monkeypatch.setattr(motion_glue, "SIDESTEPS_M", ())
+    monkeypatch.setattr(motion_plans, "SIDESTEPS_M", ())
     head_on = plan_inserted(draft, None, walker, placed, 0, 0)
     assert first_overlap(draft.states, head_on, np.asarray(walker.size), ("ego",)) is not None
 
@@ -638,7 +639,7 @@ def test_a_walker_told_to_run_sidesteps_someone_walking_towards_it(ctx, monkeypa
     assert "to pass" in passing.description and first_overlap(draft.states, passing, states.size[walker], ids) is None
     aside = np.linalg.norm(passing.xy[:, None] - alone.xy[None], axis=2).min(axis=1)  # [T] off its own path
     assert aside.max() > 0.6 and aside[-1] < 0.2
-    monkeypatch.setattr(motion_glue, "SIDESTEPS_M", ())
+    monkeypatch.setattr(motion_plans, "SIDESTEPS_M", ())
     head_on = plan_modified(draft, walker, fast, None, 0, "the walker")
     assert first_overlap(draft.states, head_on, states.size[walker], ids) is not None
 

@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from simsplat_core.editing.apply import EditContext
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.mining.scene_fact_records import SceneFacts

@@ -11,7 +11,8 @@ import numpy as np
 import pyarrow as pa
 import pytest
 
-from simsplat_core.editing.apply import EditContext, Editor
+from simsplat_core.editing.apply import Editor
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.result import EDIT_STAGES
 from simsplat_core.eval.mining import (
     MINING_STAGES,

@@ -9,7 +9,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simsplat_core.editing.apply import EditContext, Editor
+from simsplat_core.editing.apply import Editor
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.language.motion_labels import label_trajectory
 from simsplat_core.mining import RuleBasedVLMClient, judge_request_from_edit
 from simsplat_core.mining.judge_input import targets_of

@@ -14,8 +14,8 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from simsplat_core.editing.apply import EditContext
 from simsplat_core.editing.commands import AssetSpec, EditCommand, EditProgram
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.mining import (
@@ -202,7 +202,7 @@ def test_seed_prompts_come_first_and_a_failed_proposal_call_is_recorded(ctx: Edi
 def test_words_that_do_not_ground_are_retried_naming_the_object_the_proposer_meant(
         ctx: EditContext, rule_client: RuleBasedVLMClient) -> None:
     from simsplat_core.editing.apply import apply_edit
-    from simsplat_core.editing.parser import parse_prompt
+    from simsplat_core.editing.parse.prompt import parse_prompt
 
     (van,) = apply_edit(ctx, parse_prompt(REMOVE_VAN)).outcomes[0].changed_object_ids
     wrong = "Remove the purple van."  # no purple van here: the words do not ground

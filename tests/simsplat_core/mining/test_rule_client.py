@@ -10,7 +10,8 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from simsplat_core.editing.apply import EditContext, Editor
+from simsplat_core.editing.apply import Editor
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.result import EditRefused
 from simsplat_core.mining import (
     EDIT_CATEGORIES,

@@ -9,8 +9,9 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simsplat_core.editing.apply import EditContext, Editor, apply_edit
+from simsplat_core.editing.apply import Editor, apply_edit
 from simsplat_core.editing.commands import EditProgram
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.editing.options import DEFAULT_OPTIONS
 from simsplat_core.editing.result import EditedScene
 from simsplat_core.mining import (

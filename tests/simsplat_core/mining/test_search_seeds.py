@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from simsplat_core.editing.parser import parse_prompt
+from simsplat_core.editing.parse.prompt import parse_prompt
 from simsplat_core.mining.search_seeds import hit_variants
 from simsplat_core.search.engine import SearchHit
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from simsplat_core.viz.asset_sheet import asset_contact_sheet, asset_tile
-from tests.simsplat_core.editing.asset_fixtures import walking_pedestrian
+from tests.simsplat_core.editing.assets.fixtures import walking_pedestrian
 
 TILE = 48
 TILE_H = TILE + 3 * 13 + 4  # the render, then three caption lines

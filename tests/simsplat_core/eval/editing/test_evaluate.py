@@ -9,10 +9,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from simsplat_core.editing.apply import EditContext
-from simsplat_core.editing.assets import AssetBank
+from simsplat_core.editing.assets.bank import AssetBank
+from simsplat_core.editing.assets.procedural import procedural_asset
 from simsplat_core.editing.commands import EditCommand, EditProgram, TargetRef
-from simsplat_core.editing.procedural_assets import procedural_asset
+from simsplat_core.editing.draft import EditContext
 from simsplat_core.eval.editing.evaluate import (
     METHODS,
     EvalScene,

@@ -1,0 +1,76 @@
+"""``BehaviourDecl``: one motion behaviour of the edit language, declared once.
+
+A behaviour is what ``commands.Behaviour`` lets a command ask of an agent (stop, reverse, change lanes, ...).
+Its declaration holds everything about it that is data: the ``Behaviour`` fields it sets, which agents may do
+it, its *intents* (what an unknown verb may be mapped to, with the fields each sets and its imperative
+phrasings for E5), the scenario-vocabulary motion classes that mean it, and the sentence forms that ask for it
+in the mining rule client's proposals and in the editing benchmark's prompts. The registry
+(``editing.behaviours.registry``) collects the declarations and derives the tables the parser, the motion
+requests, the benchmark's prompt generator and the rule client read; the behaviour's planner (the motion
+controller's route / speed plan, ``editing.motion``) and its checks (``eval.editing.checks``,
+``mining.rule_judge``) are code, keyed by the field and kind names declared here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+#: The agents a behaviour may be restricted to.
+AgentKind = Literal["vehicle", "pedestrian"]
+
+
+@dataclass(frozen=True)
+class Intent:
+    """One thing a prompt may ask (an intent of the parser's E5 fallback, ``editing.parse.semantic``).
+
+    Attributes:
+        name: the intent's name (``"lane_left"``).
+        fields: the ``Behaviour`` field values it sets (``{"lane_change": "left"}``; ``stop`` is a dict of
+            ``StopSpec`` fields), or ``None`` when it needs more than fixed values (``follow`` needs a leader).
+        phrases: imperative phrasings of it (E5 passages), in the order they are embedded.
+        family: intents of one family are close enough that E5 need not tell them apart (``"slowing"``: stop,
+            brake hard, slow down); ``None``: its own.
+    """
+
+    name: str
+    fields: dict[str, Any] | None = None
+    phrases: tuple[str, ...] = ()
+    family: str | None = None
+
+
+@dataclass(frozen=True)
+class BehaviourDecl:
+    """A motion behaviour of the edit language (module docstring).
+
+    Attributes:
+        name: the behaviour's name (``"lane_change"``).
+        fields: the ``commands.Behaviour`` fields it sets.
+        agent: the only kind of agent that may do it (``None``: vehicles and pedestrians).
+        words: the behaviour in words, for refusals naming the wrong kind of agent (agent-restricted ones).
+        intents: the intents that ask for it, in the order their phrasings are embedded.
+        motion_classes: scenario-vocabulary motion class -> the intent of asking an agent to do it.
+        proposal_forms: mining rule client proposal kind -> its sentence forms (``mining.rule_wording``).
+        prompt_forms: editing benchmark intent kind -> its sentence forms (``eval.editing.wording``).
+    """
+
+    name: str
+    fields: tuple[str, ...]
+    agent: AgentKind | None = None
+    words: str = ""
+    intents: tuple[Intent, ...] = ()
+    motion_classes: Mapping[str, str] = field(default_factory=dict)
+    proposal_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    prompt_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        names = {i.name for i in self.intents}
+        unknown = sorted(set(self.motion_classes.values()) - names)
+        if unknown:
+            raise ValueError(f"behaviour {self.name!r}: motion_classes name unknown intents {unknown}")
+        if self.agent is not None and not self.words:
+            raise ValueError(f"behaviour {self.name!r}: an agent-restricted behaviour needs its words")
+        for intent in self.intents:
+            if intent.fields is not None and not set(intent.fields) & set(self.fields):
+                raise ValueError(f"behaviour {self.name!r}: intent {intent.name!r} sets none of its fields")

@@ -1,0 +1,1 @@
+"""The offline English -> ``EditProgram`` parser: ``prompt.parse_prompt`` and the rules it reads prompts with."""
