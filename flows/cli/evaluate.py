@@ -1,5 +1,8 @@
-"""``simsplat eval grounding | editing | mining | motion | search``: evaluate stored results and write the run's
-tables (``OUT/tables/*.parquet`` + ``*.md`` + ``manifest.json``)."""
+"""``simsplat eval all | grounding | editing | mining | motion | search``: evaluate stored results and write the run's
+tables (``OUT/tables/*.parquet`` + ``*.md`` + ``manifest.json``).
+
+Every command prints the tables it wrote as their declarations (``TableSpec``) print them, read back from OUT.
+"""
 
 from __future__ import annotations
 
@@ -9,9 +12,62 @@ from typing import Annotated
 import typer
 
 from flows.cli.common import stored_sequences
-from flows.cli.printers import print_editing, print_grounding, print_mining_eval, print_motion, print_text, report
+from flows.cli.printers import (
+    editing_notes,
+    evaluation_notes,
+    mining_notes,
+    motion_notes,
+    print_lines,
+    print_tables,
+    report,
+    table_locations,
+)
 
 commands = typer.Typer(help="Evaluate stored results and write the run's tables.", no_args_is_help=True)
+
+
+def _show(out_root: str, notes: list[str], out_relpath: str = "") -> None:
+    """The declared tables written under ``out_root``/``out_relpath``, then ``notes``."""
+    from tasks.run_tables import load_run_tables
+
+    print_tables(load_run_tables(out_root, out_relpath))
+    print_lines(notes)
+
+
+def _names(values: list[str] | None) -> list[str]:
+    """Repeatable or comma-separated option values as one list of names."""
+    return [n.strip() for v in values or () for n in v.split(",") if n.strip()]
+
+
+@commands.command("all")
+def eval_all(
+    store: Annotated[str, typer.Option(help="Artifact store root: every table its contents allow is computed.")],
+    out: Annotated[str | None, typer.Option(help="Run directory for tables/, manifest.json and summary.md "
+                                              "(default: STORE/runs/<run_id>/).")] = None,
+    only: Annotated[list[str] | None, typer.Option(help="Evaluations to run (repeatable or comma separated; "
+                                                   "default: all the store allows).")] = None,
+    per_category: Annotated[int, typer.Option(min=1, help="Editing prompts per category.")] = 30,
+    infeasible: Annotated[int, typer.Option(min=0, help="Infeasible editing prompts.")] = 20,
+    per_sequence: Annotated[int, typer.Option(min=1, help="Mining: accepted scenarios wanted per sequence.")] = 3,
+    clients: Annotated[str, typer.Option(help="Mining VLM clients, comma separated: rule, openai (run only when "
+                                         "SIMSPLAT_VLM_URL and SIMSPLAT_VLM_MODEL are set).")] = "rule,openai",
+    seed: Annotated[int, typer.Option(help="Seed of the prompt sets and the mining loop.")] = 0,
+    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+) -> None:
+    """Every evaluation the store's contents allow (reconstruction, throughput, grounding, editing, motion,
+    mining, search) into one run directory: each table as Parquet + Markdown, a manifest (code version, config,
+    the store's content keys, wall time per table) and summary.md; what cannot run is skipped with the reason."""
+    from flows.progress import StepBars
+    from tasks.eval_all import EvalAllConfig, evaluate_all
+
+    config = EvalAllConfig(groups=tuple(_names(only)) or None, per_category=per_category, infeasible=infeasible,
+                           per_sequence=per_sequence, clients=tuple(_names([clients])), seed=seed)
+    try:
+        with StepBars(headline=""):
+            result = evaluate_all(store, out_root=out, config=config)
+    except (FileNotFoundError, ValueError, KeyError) as exc:
+        raise typer.BadParameter(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc)) from exc
+    report(result, as_json, lambda r: _show(r.out_root, evaluation_notes(r), r.out_relpath))
 
 
 @commands.command("grounding")
@@ -29,7 +85,7 @@ def eval_grounding(
         result = evaluate_grounding_run.fn(store, seq_ids, out)
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc)) from exc
-    print_grounding(result)
+    _show(out, table_locations(result))
 
 
 @commands.command("editing")
@@ -55,14 +111,14 @@ def eval_editing(
     from tasks.editing_eval import evaluate_editing_run
 
     seq_ids = stored_sequences(store, seq, "language")
-    names = [n.strip() for m in methods or () for n in m.split(",") if n.strip()] or None
+    names = _names(methods) or None
     try:
         with StepBars(headline=""):
             result = evaluate_editing_run.fn(store, seq_ids, out, per_category=per_category, infeasible=infeasible,
                                              methods=names, render_all=render_all, seed=seed)
     except (FileNotFoundError, ValueError, KeyError) as exc:
         raise typer.BadParameter(str(exc)) from exc
-    report(result, as_json, print_editing)
+    report(result, as_json, lambda r: _show(out, editing_notes(r)))
 
 
 @commands.command("mining")
@@ -87,14 +143,14 @@ def eval_mining(
     from tasks.search_eval import search_run_table
 
     seq_ids = stored_sequences(store, seq, "language")
-    names = [n.strip() for n in clients.split(",") if n.strip()]
+    names = _names([clients])
     try:
         with StepBars(headline=""):
             result = evaluate_mining_run.fn(store, seq_ids, out, clients=names, per_sequence=per_sequence,
                                             max_attempts=max_attempts, seed=seed, search_table=search_run_table)
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc)) from exc
-    report(result, as_json, print_mining_eval)
+    report(result, as_json, lambda r: _show(out, mining_notes(r)))
 
 
 #: Real driving-log samples beside the repository (``../shared/data``), the default of ``eval motion --real``.
@@ -141,8 +197,7 @@ def eval_motion(
     from simsplat_core.motion.registry import available_predictors
     from tasks.motion_eval import evaluate_motion_run
 
-    names = [n.strip() for p in predictor or () for n in p.split(",") if n.strip()] or [
-        n for n in available_predictors() if n != "log"]
+    names = _names(predictor) or [n for n in available_predictors() if n != "log"]
     seq_ids = stored_sequences(store, seq, "language") if store is not None else []
     if seq and store is None:
         raise typer.BadParameter("--seq needs --store", param_hint="--seq")
@@ -160,7 +215,7 @@ def eval_motion(
         raise typer.BadParameter(str(exc.args[0]) if exc.args else str(exc), param_hint="--predictor") from exc
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc), param_hint="--real") from exc
-    report(result, as_json, print_motion)
+    report(result, as_json, lambda r: _show(out, motion_notes(r)))
 
 
 @commands.command("search")
@@ -176,4 +231,4 @@ def eval_search_command(
         summary = evaluate_search(store, out)
     except (FileNotFoundError, ValueError, KeyError) as exc:
         raise typer.BadParameter(str(exc)) from exc
-    print_text(summary)
+    _show(out, [str(summary)])

@@ -252,90 +252,61 @@ def print_asset_sheet(sheet: Any) -> None:
 
 
 # ------------------------------------------------------------------------------------------- evaluations
-def print_grounding(result: Any) -> None:
-    """The grounding benchmark (``tasks.grounding_eval.GroundingEvaluation``): acc / vIoU per method and category."""
-    from simsplat_core.eval.grounding.metrics import CATEGORIES
-
+def print_tables(tables: Sequence[tuple[Any, Any]]) -> None:
+    """Declared evaluation tables, each as its ``TableSpec`` prints it (``(spec, pyarrow.Table)`` pairs, e.g. from
+    ``tasks.run_tables.load_run_tables``): the same columns, rows and formats as the table's Markdown."""
     out = console()
-    table = Table(title=f"Grounding on {len(result.seq_ids)} sequences, {result.queries} queries (acc / vIoU)")
-    table.add_column("method")
-    for category in CATEGORIES:
-        table.add_column(category)
-    for method, per in result.scores.items():
-        table.add_row(method, *(f"{per[c]['acc']:.3f} / {per[c]['viou']:.3f}" for c in CATEGORIES))
-    out.print(table)
-    for name, uri in result.tables.items():
-        out.print(f"{name}: {uri}")
+    for spec, table in tables:
+        header, rows = spec.rows_for_console(table)
+        shown = Table(title=spec.title)
+        for name in header:
+            shown.add_column(name)
+        for row in rows:
+            shown.add_row(*row)
+        out.print(shown)
 
 
-def print_editing(result: Any) -> None:
-    """The editing benchmark: task completion and edit fidelity per method and category."""
-    from simsplat_core.eval.editing.prompts import CATEGORIES
-
+def print_lines(lines: Sequence[str]) -> None:
+    """Notes under the tables (timings, failed re-checks, where the tables went), as they are (no markup)."""
     out = console()
-    table = Table(title=f"Editing on {len(result.seq_ids)} sequences, {result.prompts['total']} prompts "
-                        f"(+{result.prompts['infeasible']} infeasible): task completion")
-    table.add_column("method")
-    for category in (*CATEGORIES, "total"):
-        table.add_column(category)
-    table.add_column("infeasible refused")
-    for method, per in result.completion.items():
-        table.add_row(method, *(f"{per.get(c, float('nan')):.2f}" for c in (*CATEGORIES, "total")),
-                      f"{result.refused.get(method, float('nan')):.2f}")
-    out.print(table)
-    fid = Table(title="Edit fidelity vs the world's rendering of the edit (PSNR dB; unedited test PSNR)")
-    for col in ("method", *CATEGORIES, "total", "unedited"):
-        fid.add_column(col)
-    for method, per in result.fidelity.items():
-        fid.add_row(method, *(f"{per[c]['psnr']:.2f}" for c in (*CATEGORIES, "total")),
-                    f"{per['total']['psnr_unedited']:.2f}")
-    out.print(fid)
-    for method, stats in result.edit_seconds.items():
-        if stats:
-            out.print(f"{method}: one edit {stats['median']:.2f} s median, {stats['max']:.2f} s max")
-    for name, uri in result.tables.items():
-        out.print(f"{name}: {uri}")
+    for line in lines:
+        out.print(line, markup=False, soft_wrap=True)
 
 
-def print_mining_eval(result: Any) -> None:
-    """The mining benchmark: completion, attempts and plausibility per client, where the time goes."""
-    out = console()
-    table = Table(title=f"Mining on {len(result.seq_ids)} sequence(s)")
-    columns = ("client", "prompts", "accepted", "completion", "attempts_mean", "plausibility_mean",
-               "accepted_with_failure", "note")
-    for col in columns:
-        table.add_column(col)
-    for row in result.mining:
-        table.add_row(*(f"{row[c]:.2f}" if isinstance(row[c], float) else str(row[c]) for c in columns))
-    out.print(table)
-    for row in result.stages:
-        if row["stage"] == "total":
-            out.print(f"{row['client']}: {row['seconds']:.0f} s, {row['accepted_per_hour_per_core']:.1f} "
-                      f"accepted scenarios per hour per core ({result.cores} core(s))")
-    for line in result.failed_scenarios:
-        out.print(f"accepted but failing on re-check: {line}", markup=False, soft_wrap=True)
-    for name, uri in result.tables.items():
-        out.print(f"{name}: {uri}")
+def table_locations(result: Any) -> list[str]:
+    """``name: uri`` of every table an evaluation wrote (its ``tables`` mapping)."""
+    return [f"{name}: {uri}" for name, uri in result.tables.items()]
 
 
-def print_motion(result: Any) -> None:
-    """The motion table: failure rates, progress and ADE per dataset and method; the real edits applied."""
-    from simsplat_core.eval.refinement.table import MOTION_COLUMNS
+def editing_notes(result: Any) -> list[str]:
+    """The editing benchmark's edit timings per method, then where its tables went."""
+    timings = [f"{method}: one edit {stats['median']:.2f} s median, {stats['max']:.2f} s max"
+               for method, stats in result.edit_seconds.items() if stats]
+    return timings + table_locations(result)
 
-    out = console()
-    table = Table(title=f"Motion on {len(result.sequences)} scene(s) and {len(result.real)} real log(s): failure "
-                        "rates, progress, ADE (m)")
-    names = [n for n, _, _ in MOTION_COLUMNS]
-    for name in names:
-        table.add_column(name)
-    for row in result.rows:
-        table.add_row(*("" if row[n] is None else f"{row[n]:.3f}" if isinstance(row[n], float) else str(row[n])
-                        for n in names))
-    out.print(table)
-    for seq_id, edits in result.real_edits.items():
-        out.print(f"real edits of {seq_id}: " + "; ".join(f"{e} applied" if not why else f"{e}: {why}"
-                                                         for e, why in edits.items()))
-    out.print(f"motion: {result.table}")
+
+def mining_notes(result: Any) -> list[str]:
+    """The mining benchmark's throughput per client, accepted scenarios failing the re-check, where its tables
+    went."""
+    lines = [f"{row['client']}: {row['seconds']:.0f} s, {row['accepted_per_hour_per_core']:.1f} accepted scenarios "
+             f"per hour per core ({result.cores} core(s))" for row in result.stages if row["stage"] == "total"]
+    lines += [f"accepted but failing on re-check: {line}" for line in result.failed_scenarios]
+    return lines + table_locations(result)
+
+
+def motion_notes(result: Any) -> list[str]:
+    """The scripted real edits applied (or why not), then where the motion table went."""
+    lines = [f"real edits of {seq_id}: " + "; ".join(f"{e} applied" if not why else f"{e}: {why}"
+                                                    for e, why in edits.items())
+             for seq_id, edits in result.real_edits.items()]
+    return [*lines, f"motion: {result.table}"]
+
+
+def evaluation_notes(result: Any) -> list[str]:
+    """``simsplat eval all``: each table's wall time, what was skipped and why, where the summary went."""
+    lines = [f"{name}: {seconds:.1f} s" for name, seconds in result.seconds.items()]
+    lines += [f"skipped {name}: {why}" for name, why in result.skipped.items()]
+    return [*lines, f"tables, manifest and summary: {result.run_dir}"]
 
 
 def print_text(text: Any) -> None:

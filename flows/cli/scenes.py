@@ -20,12 +20,12 @@ from flows.cli.common import (
 )
 from flows.cli.printers import (
     print_artifacts,
-    print_grounding,
     print_language,
     print_logs,
     print_mining,
     print_scenes,
     print_stages,
+    print_tables,
 )
 from flows.runtime import RunnerKind
 
@@ -81,7 +81,10 @@ def run(
     if result.language:
         print_language(result.aligner, result.language)
     if result.grounding is not None:
-        print_grounding(result.grounding)
+        from storage.runs import run_dir
+        from tasks.run_tables import load_run_tables
+
+        print_tables(load_run_tables(store, run_dir(result.run_id)))
     if result.mining:
         print_mining(mining_as_dict(result.run_id, result.mining))
     print_artifacts(store)
