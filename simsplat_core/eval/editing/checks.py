@@ -495,7 +495,7 @@ def _check_crossing_spot(truth: SceneTruth, p: PlacementIntent, row: int, after:
 
 
 # ---------------------------------------------------------------------------------------------- how
-def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after: AgentStates, object_id: str,
+def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after: AgentStates, object_id: str,  # noqa: C901, PLR0915 -- judge rule table: one check per motion intent field
                   v: Verdict) -> None:
     row = after.index(object_id)
     valid = after.valid[row]
