@@ -356,7 +356,8 @@ def av2_motion(aligner, train_logs, encoder, path: Path) -> dict:
     }
 
 
-def main() -> None:
+def _parse_args() -> argparse.Namespace:
+    """The command line (module docstring)."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--bench-seeds", type=int, nargs="+", default=[1000, 1001, 1002, 1003, 1004])
     parser.add_argument("--calib-seeds", type=int, nargs="*", default=[],
@@ -370,7 +371,78 @@ def main() -> None:
     parser.add_argument("--no-gt-scenes", action="store_true", help="skip the ours@gt-scene diagnostic")
     parser.add_argument("--reuse-scenes", action="store_true",
                         help="use cached language scenes built by another version of the scene builder")
-    args = parser.parse_args()
+    return parser.parse_args()
+
+
+def _failure_analysis(results: GroundingResults, engines: dict, scenes: dict[str, LanguageScene],
+                      facts: dict) -> tuple[dict[str, dict], list[dict]]:
+    """Failure classes of each ablation's wrong answers, and every wrong answer of the full method with the
+    engine's trace."""
+    failures = []
+    classes: dict[str, collections.Counter] = {}
+    for name in ABLATIONS:
+        counter = collections.Counter()
+        for o in results.for_method(name):
+            if o.correct:
+                continue
+            cls = failure_class(o, facts[o.query.seq_id], scenes[o.query.seq_id])
+            counter[cls] += 1
+            if name == "All":
+                failures.append({"query": o.query.text, "seq": o.query.seq_id, "kind": o.query.kind,
+                                 "family": o.query.family, "style": o.query.style, "targets": list(o.query.target_ids),
+                                 "predicted": list(o.predicted), "class": cls, "viou": round(o.viou, 3),
+                                 **engine_trace(engines["All"], scenes[o.query.seq_id], o, facts[o.query.seq_id])})
+        classes[name] = dict(counter.most_common())
+    return classes, failures
+
+
+def _reconstruct_all(logs: list[SceneLog], args: argparse.Namespace, encoder, aligner
+                     ) -> tuple[dict[str, LanguageScene], dict[str, dict]]:
+    """``seq_id -> language scene`` and ``seq_id -> build info`` of every log (:func:`reconstructed_scene`)."""
+    scenes: dict[str, LanguageScene] = {}
+    scene_info: dict[str, dict] = {}
+    for log in logs:
+        scene, info = reconstructed_scene(log, args.iterations, encoder, aligner, args.cache, f"-tr{args.train_seeds}",
+                                          args.reuse_scenes)
+        scenes[log.seq_id] = scene
+        scene_info[log.seq_id] = info
+        logger.info("%s: %s", log.seq_id, {k: v for k, v in info.items() if k != "alignment"})
+    return scenes, scene_info
+
+
+def _write_report(args: argparse.Namespace, result: dict, bench, bench_logs: list[SceneLog], table2, table3,
+                  diagnostics) -> None:
+    """``grounding.json`` (``result``) and ``grounding.md`` (Tables 2, 3 and the diagnostics) under ``args.out``."""
+    args.out.mkdir(parents=True, exist_ok=True)
+    (args.out / "grounding.json").write_text(json.dumps(result, indent=2) + "\n")
+    thresholds = (f"thresholds calibrated on seeds {args.calib_seeds}" if args.calib_seeds
+                  else "default engine thresholds")
+    md = [
+        "# Grounding benchmark",
+        "",
+        f"{len(bench.queries)} queries on {len(bench_logs)} reconstructed synthetic scenes "
+        f"(seeds {args.bench_seeds}, {args.iterations} reconstruction iterations, "
+        f"{thresholds}); counts {bench.counts()}.",
+        "",
+        "## Table 2: methods",
+        "",
+        GROUNDING_SPEC.render_markdown(table2),
+        "## Table 3: feature ablation",
+        "",
+        ABLATION_SPEC.render_markdown(table3),
+        "## Diagnostics",
+        "",
+        GROUNDING_SPEC.render_markdown(diagnostics),
+    ]
+    (args.out / "grounding.md").write_text("\n".join(md))
+    logger.info("Table 2\n%s", GROUNDING_SPEC.render_markdown(table2))
+    logger.info("Table 3\n%s", ABLATION_SPEC.render_markdown(table3))
+    logger.info("Diagnostics\n%s", GROUNDING_SPEC.render_markdown(diagnostics))
+    logger.info("wrote %s and %s", args.out / "grounding.json", args.out / "grounding.md")
+
+
+def main() -> None:
+    args = _parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(message)s")
     for noisy in ("simsplat_core.scene.trainer", "simsplat_core.language.alignment.feature_field"):
         logging.getLogger(noisy).setLevel(logging.WARNING)
@@ -388,14 +460,7 @@ def main() -> None:
 
     world = WorldConfig()
     logs = {s: generate_log(s, world) for s in [*args.calib_seeds, *args.bench_seeds]}
-    scenes: dict[str, LanguageScene] = {}
-    scene_info: dict[str, dict] = {}
-    for log in logs.values():
-        scene, info = reconstructed_scene(log, args.iterations, encoder, aligner, args.cache, f"-tr{args.train_seeds}",
-                                          args.reuse_scenes)
-        scenes[log.seq_id] = scene
-        scene_info[log.seq_id] = info
-        logger.info("%s: %s", log.seq_id, {k: v for k, v in info.items() if k != "alignment"})
+    scenes, scene_info = _reconstruct_all(list(logs.values()), args, encoder, aligner)
     result["scenes"] = {"world": {"frames": world.num_frames, "size": [world.width, world.height],
                                   "cameras": [c.name for c in world.cameras]},
                         "iterations": args.iterations, "per_scene": scene_info}
@@ -448,21 +513,7 @@ def main() -> None:
     result["latency_s"]["ours_cold"] = cold_latency(engines["All"], scenes, bench)
 
     facts = {log.seq_id: object_facts(log) for log in bench_logs}
-    failures = []
-    classes: dict[str, collections.Counter] = {}
-    for name in ABLATIONS:
-        counter = collections.Counter()
-        for o in results.for_method(name):
-            if o.correct:
-                continue
-            cls = failure_class(o, facts[o.query.seq_id], scenes[o.query.seq_id])
-            counter[cls] += 1
-            if name == "All":
-                failures.append({"query": o.query.text, "seq": o.query.seq_id, "kind": o.query.kind,
-                                 "family": o.query.family, "style": o.query.style, "targets": list(o.query.target_ids),
-                                 "predicted": list(o.predicted), "class": cls, "viou": round(o.viou, 3),
-                                 **engine_trace(engines["All"], scenes[o.query.seq_id], o, facts[o.query.seq_id])})
-        classes[name] = dict(counter.most_common())
+    classes, failures = _failure_analysis(results, engines, scenes, facts)
     result["failure_classes"] = classes
     result["single_by_target"] = {m: size_breakdown(results, m, facts, scenes)
                                   for m in ("All", "LangSplat-like", "oracle-nodes")}
@@ -471,32 +522,7 @@ def main() -> None:
 
     result["av2_motion_grounding"] = av2_motion(aligner, train_logs, encoder, args.av2)
 
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "grounding.json").write_text(json.dumps(result, indent=2) + "\n")
-    thresholds = (f"thresholds calibrated on seeds {args.calib_seeds}" if args.calib_seeds
-                  else "default engine thresholds")
-    md = [
-        "# Grounding benchmark",
-        "",
-        f"{len(bench.queries)} queries on {len(bench_logs)} reconstructed synthetic scenes "
-        f"(seeds {args.bench_seeds}, {args.iterations} reconstruction iterations, "
-        f"{thresholds}); counts {bench.counts()}.",
-        "",
-        "## Table 2: methods",
-        "",
-        GROUNDING_SPEC.render_markdown(table2),
-        "## Table 3: feature ablation",
-        "",
-        ABLATION_SPEC.render_markdown(table3),
-        "## Diagnostics",
-        "",
-        GROUNDING_SPEC.render_markdown(diagnostics),
-    ]
-    (args.out / "grounding.md").write_text("\n".join(md))
-    logger.info("Table 2\n%s", GROUNDING_SPEC.render_markdown(table2))
-    logger.info("Table 3\n%s", ABLATION_SPEC.render_markdown(table3))
-    logger.info("Diagnostics\n%s", GROUNDING_SPEC.render_markdown(diagnostics))
-    logger.info("wrote %s and %s", args.out / "grounding.json", args.out / "grounding.md")
+    _write_report(args, result, bench, bench_logs, table2, table3, diagnostics)
 
 
 if __name__ == "__main__":

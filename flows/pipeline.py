@@ -333,7 +333,9 @@ def main_flow(
     seq_ids = [p.seq_id for p in plans]
     scenes = reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs],
                                 reconstruction or ReconstructionConfig())
-    stored_aligner, language, grounding = None, [], None
+    stored_aligner: StoredAligner | None = None
+    language: list[StoredLanguageScene] = []
+    grounding: GroundingEvaluation | None = None
     run_id = run_id or new_run_id("main")
     if align:
         stored_aligner, language = align_scenes(store_root, align_targets(plans, scenes), seq_ids,

@@ -188,10 +188,13 @@ class StepBars:
 
     def _on_step(self, label: str, step: int, total: int, metrics: Mapping[str, float]) -> None:
         description = label + (f" {self.headline} {metrics[self.headline]:.2f}" if self.headline in metrics else "")
+        bar = self._bar
+        if bar is None:  # steps are listened to only while a bar is shown
+            return
         with self._lock:
             if label not in self._tasks:
-                self._tasks[label] = self._bar.add_task(label, total=total)
-            self._bar.update(self._tasks[label], completed=step, total=total, description=description)
+                self._tasks[label] = bar.add_task(label, total=total)
+            bar.update(self._tasks[label], completed=step, total=total, description=description)
 
     def __exit__(self, *exc: object) -> None:
         global _shared_bar

@@ -82,14 +82,23 @@ _SAFE_NAME = re.compile(r"^[A-Za-z0-9_\-][A-Za-z0-9_.\-]*$")
 
 
 class RenderLike(Protocol):
-    """What ``write_scene`` needs of a test-frame render (``simsplat_core.scene.TestFrameRender``)."""
+    """What ``write_scene`` reads of a test-frame render (``simsplat_core.scene.TestFrameRender``, frozen).
 
-    frame_idx: int
-    camera: str
-    rgb: np.ndarray  # [H, W, 3]
-    alpha: np.ndarray  # [H, W] or [H, W, 1]
-    depth: np.ndarray  # [H, W] or [H, W, 1]
-    node_id: np.ndarray  # [H, W] int
+    Read-only properties, so frozen dataclasses satisfy it.
+    """
+
+    @property
+    def frame_idx(self) -> int: ...
+    @property
+    def camera(self) -> str: ...
+    @property
+    def rgb(self) -> np.ndarray: ...  # [H, W, 3]
+    @property
+    def alpha(self) -> np.ndarray: ...  # [H, W] or [H, W, 1]
+    @property
+    def depth(self) -> np.ndarray: ...  # [H, W] or [H, W, 1]
+    @property
+    def node_id(self) -> np.ndarray: ...  # [H, W] int
 
 
 def _check_name(kind: str, value: str) -> str:

@@ -146,7 +146,7 @@ def _artifact_key(seq_id: str) -> str:
 
 
 @task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
-def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,
+def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,  # noqa: PLR0913 -- Prefect task: its parameters are the run's inputs (options keyword-only)
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str | Proposal] = (),
                        client: VLMClient | None = None, category_offset: int | None = None,
                        threads: int = 0) -> MiningSummary:

@@ -113,7 +113,7 @@ def _recheck(store: ArtifactStore, loaded: LoadedEdit, run_id: str, seq_id: str,
 
 
 @task(name="evaluate-mining", retries=0, cache_policy=NO_CACHE)
-def evaluate_mining_run(store_root: str, seq_ids: Sequence[str], out_root: str, out_relpath: str = "", *,
+def evaluate_mining_run(store_root: str, seq_ids: Sequence[str], out_root: str, out_relpath: str = "", *,  # noqa: PLR0913 -- Prefect task: its parameters are the run's inputs (options keyword-only)
                         clients: Sequence[str] = ("rule",), per_sequence: int = 3, max_attempts: int = 3,
                         seed: int = 0, cores: int | None = None, search_table: SearchTable | None = None,
                         client_overrides: Mapping[str, VLMClient] | None = None) -> MiningEvaluation:

@@ -81,8 +81,8 @@ def answer_query(store_root: str, seq_id: str, text: str, *, out: str | None = N
     log = read_scene_log(store, seq_id, load_images=False)
     views = [img for img in log.images if img.frame_idx == frame]
     views = sorted(views, key=lambda img: scene.cameras.index(img.camera))
-    images = [read_image_rgb(store, seq_id, img.camera, frame) for img in views]
-    images = [np.zeros((img.height, img.width, 3), np.float32) if px is None else px for img, px in zip(views, images)]
+    stored = [read_image_rgb(store, seq_id, img.camera, frame) for img in views]
+    images = [np.zeros((img.height, img.width, 3), np.float32) if px is None else px for img, px in zip(views, stored)]
     relevance = None
     if loaded.records is not None and loaded.autoencoder is not None:
         graph = SceneGraph.from_records(loaded.records)

@@ -72,9 +72,9 @@ def hit_picture(store: ArtifactStore, item: SearchableLog, hit: SearchHit) -> tu
                        key=lambda img: scene.cameras.index(img.camera) if img.camera in scene.cameras else 99)
         if where.size and views:
             masks = scene.masks(node_ids)[int(where[0])]  # [C, H, W]
-            images = [read_image_rgb(store, item.log.seq_id, v.camera, frame) for v in views]
+            stored = [read_image_rgb(store, item.log.seq_id, v.camera, frame) for v in views]
             images = [np.zeros((v.height, v.width, 3), np.float32) if px is None else px
-                      for v, px in zip(views, images)]
+                      for v, px in zip(views, stored)]
             if len(images) == masks.shape[0]:
                 return grounding_picture(images, masks), "cameras"
     return bev_panel(item.log, frame, highlight=hit.object_ids, window=hit.window,

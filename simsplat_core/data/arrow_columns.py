@@ -5,10 +5,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from simsplat_core.data.errors import CorruptLogError
+
+if TYPE_CHECKING:
+    import pyarrow as pa
 
 #: File formats ``read_columns`` reads.
 TABLE_FORMATS: tuple[str, ...] = ("feather", "parquet")
@@ -37,7 +41,6 @@ def read_columns(
     """
     # pyarrow is imported here so that simsplat_core.data (and the Waymo loader) import without it.
     import pyarrow as pa  # noqa: PLC0415
-    import pyarrow.compute as pc  # noqa: PLC0415
     import pyarrow.feather as feather  # noqa: PLC0415
     import pyarrow.parquet as pq  # noqa: PLC0415
 
@@ -57,34 +60,47 @@ def read_columns(
     missing = [c for c in wanted if c not in table.column_names]
     if missing:
         raise CorruptLogError(path, f"column {missing[0]!r}", f"required column missing (have {table.column_names})")
+    kinds = {**dict.fromkeys(float_columns, "float"), **dict.fromkeys(int_columns, "int"),
+             **dict.fromkeys(bool_columns, "bool"), **dict.fromkeys(str_columns, "str")}
     out: dict[str, np.ndarray] = {}
     for name in wanted:
         column = table.column(name)
         if column.null_count:
             raise CorruptLogError(path, f"column {name!r}", f"{column.null_count} null values")
         try:
-            if name in str_columns:
-                if pa.types.is_dictionary(column.type):
-                    column = pc.cast(column, pa.string())
-                if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
-                    raise TypeError(f"expected strings, got {column.type}")
-                out[name] = np.array(column.to_pylist(), dtype=object)
-            elif name in bool_columns:
-                if not pa.types.is_boolean(column.type):
-                    raise TypeError(f"expected booleans, got {column.type}")
-                out[name] = np.asarray(column.to_numpy(zero_copy_only=False), dtype=bool)
-            elif name in int_columns:
-                if not pa.types.is_integer(column.type):
-                    raise TypeError(f"expected integers, got {column.type}")
-                out[name] = column.to_numpy().astype(np.int64)
-            else:
-                if not (pa.types.is_floating(column.type) or pa.types.is_integer(column.type)):
-                    raise TypeError(f"expected numbers, got {column.type}")
-                values = pc.cast(column, pa.float64()).to_numpy()
-                bad = np.flatnonzero(~np.isfinite(values))
-                if bad.size:
-                    raise TypeError(f"non-finite value {values[bad[0]]} in row {bad[0]}")
-                out[name] = values
+            out[name] = _column_values(column, kinds[name])
         except (TypeError, pa.ArrowException) as exc:
             raise CorruptLogError(path, f"column {name!r}", str(exc)) from exc
     return out
+
+
+def _column_values(column: pa.ChunkedArray, kind: str) -> np.ndarray:
+    """One Arrow column as an ``[N]`` array of ``kind`` (``"str"``, ``"bool"``, ``"int"`` or ``"float"``).
+
+    Raises:
+        TypeError: the column's type does not hold ``kind``, or a float column has a non-finite value.
+    """
+    import pyarrow as pa  # noqa: PLC0415 -- optional dependency, as in read_columns
+    import pyarrow.compute as pc  # noqa: PLC0415
+
+    if kind == "str":
+        if pa.types.is_dictionary(column.type):
+            column = pc.cast(column, pa.string())
+        if not (pa.types.is_string(column.type) or pa.types.is_large_string(column.type)):
+            raise TypeError(f"expected strings, got {column.type}")
+        return np.array(column.to_pylist(), dtype=object)
+    if kind == "bool":
+        if not pa.types.is_boolean(column.type):
+            raise TypeError(f"expected booleans, got {column.type}")
+        return np.asarray(column.to_numpy(zero_copy_only=False), dtype=bool)
+    if kind == "int":
+        if not pa.types.is_integer(column.type):
+            raise TypeError(f"expected integers, got {column.type}")
+        return column.to_numpy().astype(np.int64)
+    if not (pa.types.is_floating(column.type) or pa.types.is_integer(column.type)):
+        raise TypeError(f"expected numbers, got {column.type}")
+    values = pc.cast(column, pa.float64()).to_numpy()
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise TypeError(f"non-finite value {values[bad[0]]} in row {bad[0]}")
+    return values

@@ -143,7 +143,7 @@ def _decode_packed(fld: Field, buf: bytes, pos: int, end: int, path: str) -> lis
     return np.frombuffer(buf, dtype=dtype, count=(end - pos) // dtype.itemsize, offset=pos)
 
 
-def decode_message(
+def decode_message(  # noqa: C901, PLR0915 -- the protobuf wire-format grammar: one branch per wire type and field kind, in one read loop
     buf: bytes, schema: MessageSchema, start: int = 0, end: int | None = None, path: str | None = None
 ) -> dict[str, Any]:
     """Decode ``buf[start:end]`` as one message of ``schema`` (see module docstring for the result).

@@ -212,7 +212,7 @@ def _label_findings(behaviour: Behaviour, label: str) -> list[tuple[str, Paramet
     return out
 
 
-def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, before: AgentTrajectory | None,
+def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, before: AgentTrajectory | None,  # noqa: C901 -- judge rule table: one rule per behaviour field
                      dt: float, cfg: JudgeConfig, label: str | None = None) -> list[Finding]:
     """What ``behaviour`` asks that ``after`` does not show (against ``before``, or its own start). Given the
     auto-labeller's motion class ``label`` of ``after``, the manoeuvres are checked on it (:func:`_label_findings`)

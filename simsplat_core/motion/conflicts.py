@@ -88,7 +88,7 @@ def travel_time(dist: np.ndarray, v: np.ndarray, v_max: np.ndarray, accel: np.nd
     return np.where(dist <= d_up, t_short, t_up + (dist - d_up) / np.maximum(v_top, _EPS))
 
 
-def yield_gaps(grid: RouteGrid, k0: np.ndarray, width: int, pairs: Pairs, crossing: np.ndarray, agents: DrivenAgents,
+def yield_gaps(grid: RouteGrid, k0: np.ndarray, width: int, pairs: Pairs, crossing: np.ndarray, agents: DrivenAgents,  # noqa: PLR0913 -- struct-of-arrays step of the vectorised predictor
                profiles: OffsetProfiles, pred: Predictions, size: np.ndarray,
                stop_margin_m: float, margin_m: float, clearance_time_s: float) -> tuple[np.ndarray, np.ndarray]:
     """``([N] gap from each driven agent's front to the point where it must stop and give way (``inf``: none),

@@ -62,7 +62,7 @@ def box_extents(length: np.ndarray, width: np.ndarray, rel_yaw: np.ndarray) -> t
     return 0.5 * (length * c + width * s), 0.5 * (length * s + width * c)
 
 
-def route_pairs(grid: RouteGrid, k0: np.ndarray, width: int, agent_xy: np.ndarray, self_index: np.ndarray,
+def route_pairs(grid: RouteGrid, k0: np.ndarray, width: int, agent_xy: np.ndarray, self_index: np.ndarray,  # noqa: PLR0913 -- struct-of-arrays step of the vectorised predictor
                 xy: np.ndarray, heading: np.ndarray, size: np.ndarray, velocity: np.ndarray, valid: np.ndarray,
                 reach_m: float) -> Pairs:
     """Candidate pairs and their geometry.

@@ -250,7 +250,7 @@ class ReactivePredictor:
         normal = np.stack([-np.sin(yaw), np.cos(yaw)], axis=1)
         return base + off[:, None] * normal, wrap_angle(yaw + np.arctan(drv.profiles.slope(rows, drv.s)))
 
-    def _predictions(self, states: AgentStates, grid: RouteGrid, drv: _Driven, t: int, tau: np.ndarray,
+    def _predictions(self, states: AgentStates, grid: RouteGrid, drv: _Driven, t: int, tau: np.ndarray,  # noqa: PLR0913 -- struct-of-arrays step of the vectorised predictor
                      v_plan: np.ndarray, given: np.ndarray, is_vehicle: np.ndarray, is_ped: np.ndarray,
                      cur_xy: np.ndarray, cur_valid: np.ndarray, crosswalks: tuple[np.ndarray, ...]) -> Predictions:
         """Every agent's positions over the conflict horizon: given trajectories for fixed / replayed agents,

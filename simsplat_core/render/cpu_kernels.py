@@ -260,7 +260,7 @@ def rasterize_fwd(
 
 
 @njit(cache=True, parallel=True, fastmath=False)
-def rasterize_bwd(
+def rasterize_bwd(  # noqa: C901, PLR0915 -- numba kernel: the backward of rasterize_fwd, one loop nest
     rec, colors, backgrounds, offsets, flatten_ids, tile_order, width, height, tile_size, tile_width,
     t_final, last_ids, v_render, v_alpha, rows, hit,
 ):  # pragma: no cover - numba

@@ -114,7 +114,7 @@ def project_fwd(means, quats, scales, viewmats, Ks, limits, width, height, near,
 
 
 @njit(cache=True, parallel=True, fastmath=False)
-def project_bwd(means, quats, scales, viewmats, Ks, limits, eps2d, radii, v_means2d, v_conics, v_depths,
+def project_bwd(means, quats, scales, viewmats, Ks, limits, eps2d, radii, v_means2d, v_conics, v_depths,  # noqa: C901, PLR0915 -- numba kernel: the backward of project_fwd, one loop nest
                 v_means, v_quats, v_scales):  # pragma: no cover - numba
     """Backward of :func:`project_fwd` w.r.t. means, quats and scales (recomputes the forward).
 

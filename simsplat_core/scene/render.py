@@ -60,7 +60,7 @@ def world_to_camera(cam_to_world: Tensor) -> Tensor:
     return out
 
 
-def render_composed(
+def render_composed(  # noqa: PLR0913 -- rasterization's (gsplat's) options, keyword-only
     gs: ComposedGaussians,
     cam_to_world: Tensor,  # [C, 4, 4]
     Ks: Tensor,  # [C, 3, 3]

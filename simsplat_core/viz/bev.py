@@ -127,6 +127,79 @@ def bev_extent(before: AgentStates, after: AgentStates, margin_m: float = 12.0, 
     return _extent(before, after, focus, margin_m, min_extent_m)
 
 
+def _footprint(view: _View, states: AgentStates, row: int, k: int) -> np.ndarray:
+    """``[4, 2]`` int32 canvas corners of agent ``row``'s box at step ``k``."""
+    center = np.append(states.xy[row, k], states.z[row, k])
+    corners = box_corners_batch(center[None], states.size[row][None], states.heading[row, k:k + 1])[0, :4]
+    return view(corners)
+
+
+def _path(view: _View, states: AgentStates, row: int) -> np.ndarray:
+    """``[K, 2]`` int32 canvas points of agent ``row``'s valid steps."""
+    return view(states.xy[row][states.valid[row]])
+
+
+def _draw_unchanged(canvas: np.ndarray, view: _View, after: AgentStates, changed: list[int], step: int) -> None:
+    """Unchanged agents: boxes in their category colour (and the ego's path)."""
+    for r, oid in enumerate(after.object_ids):
+        if r in changed or not after.valid[r, step]:
+            continue
+        if oid == EGO_ID:
+            pts = _path(view, after, r)
+            cv2.polylines(canvas, [pts], False, EGO_COLOR, 1, cv2.LINE_AA)
+            cv2.fillPoly(canvas, [_footprint(view, after, r, step)], EGO_COLOR)
+            continue
+        color = CATEGORY_COLORS.get(after.categories[r], CATEGORY_COLORS["other"])
+        box = _footprint(view, after, r, step)
+        cv2.polylines(canvas, [box], True, color, 1, cv2.LINE_AA)
+        cv2.line(canvas, tuple(int(v) for v in box[0]), tuple(int(v) for v in box[3]), (255, 255, 255), 1)
+
+
+def _draw_old_paths(canvas: np.ndarray, view: _View, before: AgentStates, old_rows: list[int]) -> None:
+    """The changed agents' paths before the edit, dashed."""
+    for r in old_rows:
+        pts = _path(view, before, r)
+        if len(pts) > 1:
+            _dashed(canvas, pts, OLD_PATH_COLOR)
+
+
+def _draw_removed(canvas: np.ndarray, view: _View, before: AgentStates, removed: list[int], step: int) -> None:
+    """Removed agents: dashed path and a crossed-out box (at ``step``, or their first valid step)."""
+    for r in removed:
+        pts = _path(view, before, r)
+        if len(pts) > 1:
+            _dashed(canvas, pts, REMOVED_COLOR)
+        k = step if before.valid[r, step] else int(np.argmax(before.valid[r]))
+        box = _footprint(view, before, r, k)
+        cv2.polylines(canvas, [box], True, REMOVED_COLOR, 1, cv2.LINE_AA)
+        cv2.line(canvas, tuple(int(v) for v in box[0]), tuple(int(v) for v in box[2]), REMOVED_COLOR, 1)
+        cv2.line(canvas, tuple(int(v) for v in box[1]), tuple(int(v) for v in box[3]), REMOVED_COLOR, 1)
+
+
+def _draw_changed(canvas: np.ndarray, view: _View, after: AgentStates, changed: list[int], step: int) -> None:
+    """New paths: solid, a dot per second, the box at ``step`` (filled) and where it ends up (outline), labelled."""
+    seconds = np.round(after.times - after.times[0], 6)
+    for r in changed:
+        color = _SOURCE_COLOR[after.sources[r]]
+        pts = _path(view, after, r)
+        if len(pts) > 1:
+            cv2.polylines(canvas, [pts], False, color, 2, cv2.LINE_AA)
+        ticks = after.valid[r] & (np.abs(seconds - np.round(seconds)) < 1e-3)
+        for p in view(after.xy[r][ticks]):
+            cv2.circle(canvas, (int(p[0]), int(p[1])), 2, color, -1, cv2.LINE_AA)
+        k = step if after.valid[r, step] else int(np.argmax(after.valid[r]))
+        last = int(after.num_steps - 1 - np.argmax(after.valid[r][::-1]))
+        if last != k:  # where it ends up: outline only
+            cv2.polylines(canvas, [_footprint(view, after, r, last)], True, color, 1, cv2.LINE_AA)
+        box = _footprint(view, after, r, k)
+        cv2.fillPoly(canvas, [box], tuple(int(c * 0.5) for c in color))
+        cv2.polylines(canvas, [box], True, color, 1, cv2.LINE_AA)
+        cv2.line(canvas, tuple(int(v) for v in box[0]), tuple(int(v) for v in box[3]), (255, 255, 255), 1)
+        label = after.object_ids[r][:14]
+        cv2.putText(canvas, label, (int(box[:, 0].max()) + 3, int(box[:, 1].min()) + 4), cv2.FONT_HERSHEY_SIMPLEX,
+                    0.36, color, 1, cv2.LINE_AA)
+
+
 def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: AgentStates, after: AgentStates, *,
              step: int | None = None, title: str = "", size: int = 640, margin_m: float = 12.0,
              min_extent_m: float = 40.0, extent: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
@@ -152,62 +225,10 @@ def edit_bev(map_features: tuple[MapFeature, ...] | list[MapFeature], before: Ag
     canvas = np.full((size, size, 3), BACKGROUND, np.uint8)
     draw_map(canvas, map_features, view)
 
-    def footprint(states: AgentStates, row: int, k: int) -> np.ndarray:
-        center = np.append(states.xy[row, k], states.z[row, k])
-        corners = box_corners_batch(center[None], states.size[row][None], states.heading[row, k:k + 1])[0, :4]
-        return view(corners)
-
-    def path(states: AgentStates, row: int) -> np.ndarray:
-        return view(states.xy[row][states.valid[row]])
-
-    # unchanged agents: boxes in their category colour (and the ego's path)
-    for r, oid in enumerate(after.object_ids):
-        if r in changed or not after.valid[r, step]:
-            continue
-        if oid == EGO_ID:
-            pts = path(after, r)
-            cv2.polylines(canvas, [pts], False, EGO_COLOR, 1, cv2.LINE_AA)
-            cv2.fillPoly(canvas, [footprint(after, r, step)], EGO_COLOR)
-            continue
-        color = CATEGORY_COLORS.get(after.categories[r], CATEGORY_COLORS["other"])
-        box = footprint(after, r, step)
-        cv2.polylines(canvas, [box], True, color, 1, cv2.LINE_AA)
-        cv2.line(canvas, tuple(int(v) for v in box[0]), tuple(int(v) for v in box[3]), (255, 255, 255), 1)
-    # old paths of the changed agents, then the removed agents
-    for r in old_rows:
-        pts = path(before, r)
-        if len(pts) > 1:
-            _dashed(canvas, pts, OLD_PATH_COLOR)
-    for r in removed:
-        pts = path(before, r)
-        if len(pts) > 1:
-            _dashed(canvas, pts, REMOVED_COLOR)
-        k = step if before.valid[r, step] else int(np.argmax(before.valid[r]))
-        box = footprint(before, r, k)
-        cv2.polylines(canvas, [box], True, REMOVED_COLOR, 1, cv2.LINE_AA)
-        cv2.line(canvas, tuple(int(v) for v in box[0]), tuple(int(v) for v in box[2]), REMOVED_COLOR, 1)
-        cv2.line(canvas, tuple(int(v) for v in box[1]), tuple(int(v) for v in box[3]), REMOVED_COLOR, 1)
-    # new paths: solid, a dot per second, the box at the step
-    seconds = np.round(after.times - after.times[0], 6)
-    for r in changed:
-        color = _SOURCE_COLOR[after.sources[r]]
-        pts = path(after, r)
-        if len(pts) > 1:
-            cv2.polylines(canvas, [pts], False, color, 2, cv2.LINE_AA)
-        ticks = after.valid[r] & (np.abs(seconds - np.round(seconds)) < 1e-3)
-        for p in view(after.xy[r][ticks]):
-            cv2.circle(canvas, (int(p[0]), int(p[1])), 2, color, -1, cv2.LINE_AA)
-        k = step if after.valid[r, step] else int(np.argmax(after.valid[r]))
-        last = int(after.num_steps - 1 - np.argmax(after.valid[r][::-1]))
-        if last != k:  # where it ends up: outline only
-            cv2.polylines(canvas, [footprint(after, r, last)], True, color, 1, cv2.LINE_AA)
-        box = footprint(after, r, k)
-        cv2.fillPoly(canvas, [box], tuple(int(c * 0.5) for c in color))
-        cv2.polylines(canvas, [box], True, color, 1, cv2.LINE_AA)
-        cv2.line(canvas, tuple(int(v) for v in box[0]), tuple(int(v) for v in box[3]), (255, 255, 255), 1)
-        label = after.object_ids[r][:14]
-        cv2.putText(canvas, label, (int(box[:, 0].max()) + 3, int(box[:, 1].min()) + 4), cv2.FONT_HERSHEY_SIMPLEX,
-                    0.36, color, 1, cv2.LINE_AA)
+    _draw_unchanged(canvas, view, after, changed, step)
+    _draw_old_paths(canvas, view, before, old_rows)
+    _draw_removed(canvas, view, before, removed, step)
+    _draw_changed(canvas, view, after, changed, step)
     entries = [("ego", EGO_COLOR, "line"), ("log agent", CATEGORY_COLORS["vehicle"], "box"),
                ("old path", OLD_PATH_COLOR, "dash"), ("edited", EDITED_COLOR, "line"),
                ("inserted", INSERTED_COLOR, "line"), ("reacted", REFINED_COLOR, "line"),

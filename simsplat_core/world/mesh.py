@@ -109,7 +109,7 @@ def _face_colors(color, n: int, overrides: dict[int, tuple] | None = None):
     return cols
 
 
-def box(
+def box(  # noqa: PLR0913 -- the six box bounds as scalars, then keyword options
     x0,
     x1,
     y0,

@@ -111,7 +111,7 @@ def _shade(
 
 
 @njit(cache=True)
-def rasterize_triangles(
+def rasterize_triangles(  # noqa: PLR0913 -- numba kernel: arrays and camera scalars, no objects
     tri_cam: np.ndarray,
     tri_tex: np.ndarray,
     tri_color: np.ndarray,

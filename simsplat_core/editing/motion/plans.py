@@ -180,7 +180,7 @@ def no_room_note(draft: Draft) -> str:
     return "the other agents replay their log and do not make room"
 
 
-def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],
+def _plan(draft: Draft, kind: str, behaviour: Behaviour, start: StartState, size: tuple[float, float, float],  # noqa: PLR0913 -- the private planning step every command kind goes through; its options are the kinds' differences
           log: LogTrajectory | None, index: int, label: str, backfill: bool,
           object_id: str | None, with_traffic: bool = True, lane_change_after_m: float = 0.0,
           pace_mps: float | None = None, sidestep_m: float = 0.0,

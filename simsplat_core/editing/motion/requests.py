@@ -206,7 +206,7 @@ class VehicleMotionRequest(_Common):
     headway_s: float = 1.5
 
     @classmethod
-    def from_behaviour(cls, behaviour: Behaviour, *, times: np.ndarray, frame_idx: np.ndarray, start: StartState,
+    def from_behaviour(cls, behaviour: Behaviour, *, times: np.ndarray, frame_idx: np.ndarray, start: StartState,  # noqa: PLR0913 -- keyword-only: the grounded agents and times of one command
                        size: tuple[float, float, float], log: LogTrajectory | None = None,
                        leader: OtherAgent | None = None, stop_behind: OtherAgent | None = None,
                        traffic: tuple[OtherAgent, ...] = (), backfill: bool = False,

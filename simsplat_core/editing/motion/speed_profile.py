@@ -353,23 +353,32 @@ def plan_speed(times: np.ndarray, *, t0: float, s0: float, v0: float, a0: float 
             braking, brake_t, brake_dir, final = _brake_now(v, a, lim.comfort_decel_mps2, lim.jerk_mps3), t, \
                 (1.0 if v >= 0 else -1.0), False
             continue
-        if caps is not None and target > 0:
-            target = min(target, caps.allowed(s, 0.8 * lim.comfort_decel_mps2))
-        want = float(np.clip(_track(target - v, lim.jerk_mps3), -lim.comfort_decel_mps2, lim.max_accel_mps2))
-        if leader is not None:
-            lead = leader.accel(times, t, s, v, max(target, 0.1), lim)
-            if lead is not None:
-                want = min(want, lead)
-        jerk_lim = lim.hard_jerk_mps3 if want < -lim.comfort_decel_mps2 else lim.jerk_mps3
-        a_new = float(np.clip(want, a - jerk_lim * dt, a + jerk_lim * dt))
-        a_new = float(np.clip(a_new, -lim.hard_decel_mps2, lim.max_accel_mps2))
-        v_new = v + 0.5 * (a + a_new) * dt
-        if (v >= 0 >= v_new and target >= 0) or (v <= 0 <= v_new and target <= 0):  # rest, not through zero
-            if v_new != 0.0 or a_new * target <= 0:
-                v_new, a_new = 0.0, 0.0
-        s += 0.5 * (v + v_new) * dt
-        v, a, t = v_new, a_new, t + dt
+        s, v, a = _track_substep(s, v, a, t=t, dt=dt, target=target, times=times, lim=lim, caps=caps, leader=leader)
+        t += dt
     return SpeedPlan(out_s, out_v, out_a, stopped_at)
+
+
+def _track_substep(s: float, v: float, a: float, *, t: float, dt: float, target: float, times: np.ndarray,
+                   lim: LongitudinalLimits, caps: SpeedCaps | None, leader: LeaderTrack | None
+                   ) -> tuple[float, float, float]:
+    """One substep of ``dt`` from ``(s, v, a)`` at ``t`` towards the signed speed ``target``, under the speed
+    ``caps`` ahead and the IDM gap to ``leader``, within the jerk and acceleration ``lim``; stops at rest
+    instead of passing through zero speed. Returns the new ``(s, v, a)``."""
+    if caps is not None and target > 0:
+        target = min(target, caps.allowed(s, 0.8 * lim.comfort_decel_mps2))
+    want = float(np.clip(_track(target - v, lim.jerk_mps3), -lim.comfort_decel_mps2, lim.max_accel_mps2))
+    if leader is not None:
+        lead = leader.accel(times, t, s, v, max(target, 0.1), lim)
+        if lead is not None:
+            want = min(want, lead)
+    jerk_lim = lim.hard_jerk_mps3 if want < -lim.comfort_decel_mps2 else lim.jerk_mps3
+    a_new = float(np.clip(want, a - jerk_lim * dt, a + jerk_lim * dt))
+    a_new = float(np.clip(a_new, -lim.hard_decel_mps2, lim.max_accel_mps2))
+    v_new = v + 0.5 * (a + a_new) * dt
+    if (v >= 0 >= v_new and target >= 0) or (v <= 0 <= v_new and target <= 0):  # rest, not through zero
+        if v_new != 0.0 or a_new * target <= 0:
+            v_new, a_new = 0.0, 0.0
+    return s + 0.5 * (v + v_new) * dt, v_new, a_new
 
 
 def _brake_now(v: float, a: float, decel: float, jerk: float) -> list[Segment]:

@@ -120,7 +120,7 @@ def _predicate_start(tokens: Sequence[str], i: int) -> bool:
     return t in lex.PREDICATE_VERBS or match(tokens, i, lex.MODALS) > 0
 
 
-def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Iterable[str] = ()) -> int:
+def chunk_np(tokens: Sequence[str], i: int, mode: str = "target", exclude: Iterable[str] = ()) -> int:  # noqa: C901 -- noun-phrase grammar: one branch per construction, in precedence order
     """End (exclusive) of the noun phrase starting at ``tokens[i]``; ``i`` when there is none.
 
     Args:

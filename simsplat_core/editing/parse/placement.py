@@ -132,7 +132,7 @@ _ANCHOR_EXCLUDE = ("at", "in front of", "behind", "next to", "ahead of", "in", "
                    "to the right of", "left of", "right of", "before", "after", "by", "beside")
 
 
-def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float, float]],
+def find_placement(tokens: Sequence[str], positions: Sequence[tuple[float, float, float]],  # noqa: C901, PLR0915 -- placement grammar: one branch per phrase form, in precedence order
                    mover: str | None = None) -> tuple[PlacementParse | None, list[str]]:
     """The placement in ``tokens`` (canonical words after the asset or target) and the words it did not use.
 

@@ -175,7 +175,7 @@ def distance_slack(distance_m: float) -> float:
     return max(NUDGE_M, DISTANCE_SLACK_SHARE * abs(distance_m))
 
 
-def resolve_placement(placement: Placement, *, category: str, size: Sequence[float], anchor: AnchorPose | None,
+def resolve_placement(placement: Placement, *, category: str, size: Sequence[float], anchor: AnchorPose | None,  # noqa: PLR0913 -- keyword-only: the scene context a placement is resolved in
                       ego_pose: np.ndarray, lanes: LaneGraph | None, map_ctx: MapContext, frame: int,
                       occupied: AgentStates | None, ignore: Sequence[str] = (), crossing: bool = False) -> PlacedPose:
     """Resolve ``placement`` for an object of ``category`` and box ``size (l, w, h)`` (module docstring).

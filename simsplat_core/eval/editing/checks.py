@@ -534,6 +534,16 @@ def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after
             if m.stop_before == "crosswalk":
                 _check_stop_before_crosswalk(truth, xy[-1], float(after.heading[row, valid][-1]),
                                              float(after.size[row, 0]), v)
+    _check_longitudinal(m, t, speed, v_start, v_end, v)
+    if label is not None:
+        _check_manoeuvre(truth, m, label, xy, v)
+    if m.delay_s is not None:
+        _check_delay(truth, m.delay_s, before, after, object_id, speed, pedestrian, v)
+
+
+def _check_longitudinal(m: MotionIntent, t: np.ndarray, speed: np.ndarray, v_start: float, v_end: float,
+                        v: Verdict) -> None:
+    """``m.longitudinal`` (brake hard / accelerate / decelerate) on the measured ``speed [K]`` at times ``t [K]``."""
     if m.longitudinal == "brake_hard":
         decel = -np.gradient(speed, t)
         v.measured["peak_decel_mps2"] = float(decel.max())
@@ -544,29 +554,31 @@ def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after
         v.require(v_end >= v_start + max(1.5, 0.2 * v_start), f"speed {v_start:.1f} -> {v_end:.1f} m/s: not faster")
     elif m.longitudinal == "decelerate":
         v.require(v_end <= v_start - max(1.5, 0.2 * v_start), f"speed {v_start:.1f} -> {v_end:.1f} m/s: not slower")
-    if label is not None:
-        if m.reverse:
-            v.require(label.motion == voc.REVERSING, f"labelled {label.motion}, not reversing")
-        if m.lane_change:
-            want = ASKED_CLASS[("lane_change", m.lane_change)]
-            v.require(label.motion == want, f"labelled {label.motion}, asked {want} (lateral {label.lateral_m:.1f} m)")
-        if m.turn in ("left", "right"):
-            want = ASKED_CLASS[("turn", m.turn)]
-            v.require(label.motion == want, f"labelled {label.motion} (heading change "
-                      f"{label.heading_change_deg:.0f} deg), asked {want}")
-        elif m.turn == "straight":
-            v.require(label.motion not in (voc.TURNING_LEFT, voc.TURNING_RIGHT)
-                      and abs(label.heading_change_deg) < 20.0,
-                      f"labelled {label.motion}, heading change {label.heading_change_deg:.0f} deg: not straight")
-        if m.cross_street:
-            v.require(label.motion in _CROSSING, f"labelled {label.motion}, not crossing the street")
-            if m.jaywalk:
-                road = truth.layout.on_road(xy)
-                share = float(truth.layout.in_crosswalk(xy[road]).mean()) if road.any() else 1.0
-                v.measured["crosswalk_share"] = share
-                v.require(share <= 0.2, f"{share:.0%} of the road steps on a crosswalk: not jaywalking")
-    if m.delay_s is not None:
-        _check_delay(truth, m.delay_s, before, after, object_id, speed, pedestrian, v)
+
+
+def _check_manoeuvre(truth: SceneTruth, m: MotionIntent, label: MotionLabel, xy: np.ndarray, v: Verdict) -> None:
+    """Reverse, lane change, turn and street crossing of ``m`` against the auto-labeller's ``label`` (``xy [K, 2]``:
+    the agent's valid positions, for the jaywalking share)."""
+    if m.reverse:
+        v.require(label.motion == voc.REVERSING, f"labelled {label.motion}, not reversing")
+    if m.lane_change:
+        want = ASKED_CLASS[("lane_change", m.lane_change)]
+        v.require(label.motion == want, f"labelled {label.motion}, asked {want} (lateral {label.lateral_m:.1f} m)")
+    if m.turn in ("left", "right"):
+        want = ASKED_CLASS[("turn", m.turn)]
+        v.require(label.motion == want, f"labelled {label.motion} (heading change "
+                  f"{label.heading_change_deg:.0f} deg), asked {want}")
+    elif m.turn == "straight":
+        v.require(label.motion not in (voc.TURNING_LEFT, voc.TURNING_RIGHT)
+                  and abs(label.heading_change_deg) < 20.0,
+                  f"labelled {label.motion}, heading change {label.heading_change_deg:.0f} deg: not straight")
+    if m.cross_street:
+        v.require(label.motion in _CROSSING, f"labelled {label.motion}, not crossing the street")
+        if m.jaywalk:
+            road = truth.layout.on_road(xy)
+            share = float(truth.layout.in_crosswalk(xy[road]).mean()) if road.any() else 1.0
+            v.measured["crosswalk_share"] = share
+            v.require(share <= 0.2, f"{share:.0%} of the road steps on a crosswalk: not jaywalking")
 
 
 def _check_stop_before_crosswalk(truth: SceneTruth, xy: np.ndarray, heading: float, length: float,

@@ -216,7 +216,7 @@ def _row_free(truth: SceneTruth, distance: float, side: int, count: int) -> bool
     return True
 
 
-def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, size: tuple[float, ...], skip: str = "",
+def _clear_run(truth: SceneTruth, path: Path, s0: float, v0: float, v1: float, size: tuple[float, ...], skip: str = "",  # noqa: PLR0913 -- the motion to test, each argument a named physical quantity
                lateral: float = 0.0, accel: float = 2.0, margin: float = CLEARANCE_M, keep_gap: bool = False) -> bool:
     """Driving ``path`` from arc length ``s0`` at ``v0`` m/s, changing to ``v1`` at ``accel`` m/s^2 (shifted
     ``lateral`` metres to the left), overlaps no agent but ``skip`` (nor the ego, ahead of it) over the log:
@@ -579,7 +579,7 @@ def _room_behind(truth: SceneTruth, agent: Agent, metres: float = 8.0) -> bool:
     return True
 
 
-def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:  # noqa: C901 -- prompt table: one guarded draft per vehicle manoeuvre
     out: list[Draft] = []
     for agent, phrase in _named(truth, rng, ("vehicle",)):
         oid, v0, label = agent.object_id, _speed0(agent), _label(truth, agent.object_id)

@@ -16,6 +16,7 @@ import dataclasses
 from collections.abc import Mapping
 
 from simsplat_core.eval.grounding.baselines import AppearanceOnlyGrounder, EngineGrounder, FrameCaptionGrounder
+from simsplat_core.eval.grounding.metrics import Grounder
 from simsplat_core.language.grounding.config import QueryConfig
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import TextEncoder
@@ -46,7 +47,7 @@ def engine_variants(engine: QueryEngine, configs: Mapping[str, QueryConfig] | No
 
 
 def grounding_methods(encoder: TextEncoder, logs: Mapping[str, SceneLog], engine: QueryEngine | None = None,
-                      configs: Mapping[str, QueryConfig] | None = None) -> dict[str, object]:
+                      configs: Mapping[str, QueryConfig] | None = None) -> dict[str, Grounder]:
     """Every method of Tables 2 and 3 by key: the two baselines and the engine's ablations.
 
     Args:
@@ -55,7 +56,7 @@ def grounding_methods(encoder: TextEncoder, logs: Mapping[str, SceneLog], engine
         configs: per-variant engine configs (see :func:`engine_variants`).
     """
     engine = engine or QueryEngine(encoder)
-    methods: dict[str, object] = {"langsplat": AppearanceOnlyGrounder(encoder),
+    methods: dict[str, Grounder] = {"langsplat": AppearanceOnlyGrounder(encoder),
                                   "4d-langsplat": FrameCaptionGrounder(encoder, dict(logs))}
     methods.update({key: EngineGrounder(variant, key) for key, variant in engine_variants(engine, configs).items()})
     return methods
