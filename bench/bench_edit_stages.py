@@ -7,7 +7,7 @@ Give it a COPY of a store (edits are written into it: ``edits/bench-<time>/``) t
 (``simsplat assets build``). Per prompt: wall seconds of load (once, shared), parse, apply (ground + place +
 plan + validate), render (40 frames x the log's cameras, edited graph, plus the original at the before/after
 frames) and write (EXR encoding, pictures, tables), the process CPU seconds of the whole edit, and the bytes
-stored. The target of issue 10 is <= 20 s per edit on 2 cores. Outputs ``<out>/edit_stages.json`` and
+stored. The target is <= 20 s per edit on 2 cores. Outputs ``<out>/edit_stages.json`` and
 ``<out>/edit_stages.md``. The numbers depend on what else runs on the machine: the CPU seconds say more than
 the wall seconds on a shared one.
 """

@@ -1,8 +1,8 @@
 """The registry of driving-log sources: name -> loader, what it reads, and how a file or folder of it is recognised.
 
-``simsplat ingest SOURCE PATH`` and the landing-folder scan both go through it. A new dataset is one loader
-module (a ``load_...(path, seq_id=None, ...) -> SceneLog`` and an ``is_...(path) -> bool``) plus one line in
-``LOG_SOURCES``.
+``simsplat ingest SOURCE PATH`` goes through it, and ``find_logs`` finds every log under a folder. A new dataset is
+one loader module (a ``load_...(path, seq_id=None, ...) -> SceneLog`` and an ``is_...(path) -> bool``) plus one
+line in ``LOG_SOURCES``.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """The edit command language: one validated pydantic schema for every edit, whoever writes it.
 
-The offline parser (``editing.parse.prompt``), a VLM's function calling (a later issue) and hand-written JSON all
-produce :class:`EditCommand` s; nothing runs before a command validates (ChatSim ``eval()``-s model text:
+The offline parser (``editing.parse.prompt``), a VLM's function calling (``mining.openai_vlm``) and hand-written
+JSON all produce :class:`EditCommand` s; nothing runs before a command validates (ChatSim ``eval()``-s model text:
 here a malformed command is a :class:`pydantic.ValidationError` that names the field). The JSON Schema
 (:func:`edit_program_json_schema`) is what a function-calling model is given.
 

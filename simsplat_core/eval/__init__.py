@@ -2,6 +2,10 @@
 
 * ``grounding/``: the grounding benchmark (queries, paraphrases, ground-truth scenes), the compared
   methods (baselines, ablations), threshold calibration, accuracy / vIoU metrics, its tables (``tables``).
+* ``editing/``: the editing benchmark (prompts from ground truth, independent checks, edit fidelity, its tables).
+* ``refinement/``: the multi-agent refinement evaluation (synthetic and real rollouts, the ``motion`` tables).
+* ``search/``: the search benchmark (queries with ground truth from the synthetic world, RefAV metrics).
+* ``mining``: mining measures (completion, attempts, plausibility, per category and stage) and their tables.
 * ``motion``: labeller agreement with the synthetic world and motion grounding accuracy.
 * ``captions``: captioner accuracy against ground-truth attributes.
 * ``table_spec``: ``TableSpec``, the declaration of an evaluation table (schema, column meanings and units,

@@ -1,5 +1,5 @@
-"""Every declared evaluation table (``TableSpec``), by name: what the CLI, Prefect artifacts, the dashboard and
-the dataset export list and render.
+"""Every declared evaluation table (``TableSpec``), by name: what ``simsplat eval all``, the run-table reader and
+Prefect table artifacts list and render.
 
     for spec in EVAL_TABLES.values(): print(spec.name, spec.title)
     spec = table_spec("motion")               # KeyError naming the known tables

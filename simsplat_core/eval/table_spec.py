@@ -2,9 +2,8 @@
 
 An evaluation table is declared once, beside the code that computes it, as a :class:`TableSpec`. Everything
 that handles tables generically works from the declaration: storage validates and writes any declared table
-(Parquet whose file metadata carries ``schema_name`` / ``schema_version``, plus Markdown), the CLI prints it,
-Prefect table artifacts and the dashboard list and render it. ``simsplat_core.eval.table_registry`` lists every
-declaration.
+(Parquet whose file metadata carries ``schema_name`` / ``schema_version``, plus Markdown), the CLI prints it and
+Prefect table artifacts render it. ``simsplat_core.eval.table_registry`` lists every declaration.
 
     SPEC = TableSpec("editing", "Editing: task completion", "(method, category)", (
         Column("method", pa.string(), "the editing method"),
@@ -131,7 +130,7 @@ class TableSpec:
         return names, [[cell(r[n], self.digits, escape=False) for n in names] for r in rows]
 
     def describe(self) -> dict[str, Any]:
-        """The declaration as plain data (for listings and the dashboard)."""
+        """The declaration as plain data (for listings: name, title, row, keys, version and every column)."""
         return {"name": self.name, "title": self.title, "row": self.row, "keys": list(self.keys),
                 "version": self.version, "detail": self.detail,
                 "columns": [{"name": c.name, "type": str(c.type), "meaning": c.meaning, "unit": c.unit,

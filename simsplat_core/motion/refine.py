@@ -4,7 +4,7 @@
     refined.states        # AgentStates; reacting agents carry source "refined"
     refined.replayed      # agents the predictor could not drive, with the reason
 
-Three modes, the rows of the issue's Table 4 analogue:
+Three modes, the rows of the ``motion`` table (a SIMSplat Table 4 analogue):
 
 * ``"none"``: nothing is refined; every agent but the edited ones replays its log (deterministic editing);
 * ``"single-agent"``: only the edited and inserted agents are driven by the predictor (their edited

@@ -1,5 +1,6 @@
 """Predictors by name: ``"log"``, ``"constant-velocity"`` (``motion.baselines``) and ``"reactive"``
-(``motion.reactive``, the default of refinement). A learned predictor registers itself with :func:`register`.
+(``motion.reactive``, the default of refinement). These three are all that is registered; :func:`register` adds
+another ``MotionPredictor`` factory under a new name (the tests register doubles this way).
 
     predictor = make_predictor("constant-velocity")
 """
@@ -22,7 +23,8 @@ _FACTORIES: dict[str, Callable[[], MotionPredictor]] = {
 
 
 def register(name: str, factory: Callable[[], MotionPredictor]) -> None:
-    """Make :func:`make_predictor` build ``factory()`` for ``name`` (e.g. a learned SMART-like model)."""
+    """Make :func:`make_predictor` build ``factory()`` for ``name`` (any ``MotionPredictor``; replaces an existing
+    name)."""
     _FACTORIES[name] = factory
 
 

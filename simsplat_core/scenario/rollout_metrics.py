@@ -1,4 +1,4 @@
-"""Metrics of a rollout of every agent against the logged future (issue 11).
+"""Metrics of a rollout of every agent against the logged future (the failure rates of the ``motion`` table).
 
 The rollout starts from the log's first steps (``start_step`` is the last logged step it was given) and
 predicts every agent after it; both are :class:`~simsplat_core.scenario.agents.AgentStates` on the same
@@ -44,7 +44,7 @@ PROGRESS_CLIP: tuple[float, float] = (0.0, 2.0)
 STOP_SPEED_MPS = 0.5
 #: An agent is stopped for good when it is stopped over this many last steps of the rollout.
 STOP_STEPS = 10
-#: Columns of :func:`rates` (the issue's table), in table order.
+#: Columns of :func:`rates` (the ``motion`` table's failure rates), in table order.
 FAILURE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "offroad", "kinematic", "failure")
 
 

@@ -18,7 +18,7 @@ or for the infeasible set. A feasible draft is one a competent editor can carry 
   headway at that speed) free ahead, since a car held back by a slower leader cannot hold the asked speed;
 * insert spots are free of every agent at the first frame.
 
-Infeasible drafts are what the issue names: an object that is not in the scene ("the purple bus"), a car
+Infeasible drafts are requests the editor must refuse: an object that is not in the scene ("the purple bus"), a car
 on the sidewalk, a turn for a vehicle driving away from the only junction, a lane change for a
 pedestrian, motion for a static object, requests that are no edit at all.
 """

@@ -1,4 +1,4 @@
-"""Evaluation of multi-agent refinement (issue 11): the ``motion`` table.
+"""Evaluation of multi-agent refinement: the ``motion`` table.
 
 * ``real``: rollouts of a predictor on real logs (Waymo Open Motion scenarios, Argoverse 2 logs) against the
   logged future: failure rates (scenario-level and per agent), progress, ADE.

@@ -16,7 +16,7 @@ true boxes per frame (centre, heading, speed of the sampled path and speed profi
 * ``move``: speed above 0.5 m/s; ``any``: every frame.
 
 Places: ``crosswalk`` / ``junction`` / ``road`` / ``sidewalk`` (off the road) from the layout; sectors from the
-true centre in the ego frame (45-degree sectors, as the issue's "in front of ego" means); the ego lane: within
+true centre in the ego frame (45-degree sectors: what "in front of ego" means in a query); the ego lane: within
 1.75 m sideways of the ego's own route ahead (its true positions of the coming frames, then straight on from
 the last one), at most 40 m along it and ahead of the ego: through a turn the lane bends with the route (a
 straight box ahead of the ego would sweep over the oncoming lane). Relations: *following* = the other agent
