@@ -13,6 +13,9 @@ VLMOption = Annotated[str, typer.Option(help="VLM client of the mining loop: rul
                                         "(SIMSPLAT_VLM_URL, SIMSPLAT_VLM_MODEL, SIMSPLAT_VLM_API_KEY).")]
 RunnerOption = Annotated[RunnerKind, typer.Option(help="Where per-sequence tasks run: a local Ray cluster or threads.")]
 WorkersOption = Annotated[int | None, typer.Option(help="Parallel workers (default: all CPUs).")]
+JsonOption = Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")]
+RunDirOption = Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")]
+AlignedSeqOption = Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")]
 IterationsOption = Annotated[int | None, typer.Option(min=1, help="Reconstruction iterations per sequence "
                                                          "(default: the ReconstructionConfig default).")]
 CaptionerOption = Annotated[str, typer.Option(

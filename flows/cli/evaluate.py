@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from flows.cli.common import stored_sequences
+from flows.cli.common import AlignedSeqOption, JsonOption, RunDirOption, stored_sequences
 from flows.cli.printers import (
     editing_notes,
     evaluation_notes,
@@ -52,7 +52,7 @@ def eval_all(
     clients: Annotated[str, typer.Option(help="Mining VLM clients, comma separated: rule, openai (run only when "
                                          "SIMSPLAT_VLM_URL and SIMSPLAT_VLM_MODEL are set).")] = "rule,openai",
     seed: Annotated[int, typer.Option(help="Seed of the prompt sets and the mining loop.")] = 0,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Every evaluation the store's contents allow (reconstruction, throughput, grounding, editing, motion,
     mining, search) into one run directory: each table as Parquet + Markdown, a manifest (code version, config,
@@ -73,8 +73,8 @@ def eval_all(
 @commands.command("grounding")
 def eval_grounding(
     store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs and aligned scenes.")],
-    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
-    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    out: RunDirOption,
+    seq: AlignedSeqOption = None,
 ) -> None:
     """Grounding benchmark (SIMSplat Tables 2 and 3): paraphrased queries from the logs' ground truth,
     accuracy and vIoU per category for the baselines, this method and its feature ablation."""
@@ -92,8 +92,8 @@ def eval_grounding(
 def eval_editing(
     store: Annotated[str, typer.Option(help="Artifact store root with synthetic logs, aligned scenes and an asset "
                                        "bank (`simsplat assets build`).")],
-    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
-    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    out: RunDirOption,
+    seq: AlignedSeqOption = None,
     per_category: Annotated[int, typer.Option(min=1, help="Prompts per category of Table 3, over all sequences.")] = 30,
     infeasible: Annotated[int, typer.Option(min=0, help="Infeasible prompts (they must be refused).")] = 20,
     methods: Annotated[list[str] | None, typer.Option(help="ours / chatsim-like / omnire-like (repeatable or comma "
@@ -101,7 +101,7 @@ def eval_editing(
     render_all: Annotated[bool, typer.Option("--render-all", help="Render every frame of every edit (default: the "
                                              "test frames and the frames where the edit is seen).")] = False,
     seed: Annotated[int, typer.Option(help="Seed of the prompt set.")] = 0,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Language editing benchmark (SIMSplat Table 3): prompts written from the synthetic worlds' ground truth,
     each edit checked against ground truth (trajectories, renders, captions), completion per category for this
@@ -125,14 +125,14 @@ def eval_editing(
 def eval_mining(
     store: Annotated[str, typer.Option(help="Artifact store root with aligned scenes and an asset bank; the mined "
                                        "scenarios are stored in it under edits/evalmine-<client>-<time>/.")],
-    out: Annotated[str, typer.Option(help="Run directory: tables/*.parquet + tables/*.md + manifest.json.")],
-    seq: Annotated[list[str] | None, typer.Option(help="Sequence (repeatable; default: every aligned log).")] = None,
+    out: RunDirOption,
+    seq: AlignedSeqOption = None,
     per_sequence: Annotated[int, typer.Option(min=1, help="Accepted scenarios wanted per sequence.")] = 3,
     max_attempts: Annotated[int, typer.Option(min=1, help="Attempts per proposal.")] = 3,
     clients: Annotated[str, typer.Option(help="VLM clients, comma separated: rule, openai (run only when "
                                          "SIMSPLAT_VLM_URL and SIMSPLAT_VLM_MODEL are set).")] = "rule,openai",
     seed: Annotated[int, typer.Option(help="Seed of the mining loop (and of the rule-based client).")] = 0,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Mining benchmark (SIMSplat Table 5 analogue): mine every sequence per VLM client; completion, mean attempts
     to acceptance, mean plausibility, accepted scenarios re-checked for collisions and off-road agents, acceptance
@@ -184,7 +184,7 @@ def eval_motion(
     per_category: Annotated[int, typer.Option(min=1, help="Editing-benchmark prompts per category (insert / "
                                               "modify), over all scenes.")] = 30,
     per_kind: Annotated[int, typer.Option(min=0, help="Interaction prompts of each kind per scene.")] = 3,
-    as_json: Annotated[bool, typer.Option("--json", help="Print the result as one JSON object on stdout.")] = False,
+    as_json: JsonOption = False,
 ) -> None:
     """Multi-agent refinement: the ``motion`` table. Synthetic rows: the editing benchmark's insert /
     modify prompts and interaction prompts applied to the store's scenes with refinement none / single-agent /

@@ -36,7 +36,7 @@ import numpy as np
 
 from simsplat_core.data.arrow_columns import read_columns
 from simsplat_core.data.av2_map import find_map_archive, load_av2_map
-from simsplat_core.data.common import BoxObservation, boxes_visible, build_track, safe_seq_id, validated
+from simsplat_core.data.common import BoxObservation, boxes_visible, build_track, loaded, safe_seq_id
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.geometry import invert_transform, quat_wxyz_to_matrix, yaw_of_rotation
 from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, Track, node_type_for_category, split_for_frame
@@ -338,13 +338,4 @@ def load_av2_log(log_dir: str | Path, seq_id: str | None = None) -> SceneLog:
         map_features=tuple(map_features),
         metadata=metadata,
     )
-    validated(log, log_dir)
-    logger.info(
-        "loaded %s: %d frames, %d objects, %d map features in %.2f s",
-        log_dir,
-        log.num_frames,
-        len(log.objects),
-        len(log.map_features),
-        time.perf_counter() - t0,
-    )
-    return log
+    return loaded(log, log_dir, t0)

@@ -42,7 +42,7 @@ import numpy as np
 
 from simsplat_core.data.arrow_columns import read_columns
 from simsplat_core.data.av2_map import archive_lane_successors, find_map_archive, load_av2_map, read_map_archive
-from simsplat_core.data.common import LANE_SUCCESSORS_KEY, BoxObservation, build_track, safe_seq_id, validated
+from simsplat_core.data.common import LANE_SUCCESSORS_KEY, BoxObservation, build_track, loaded, safe_seq_id
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.geometry import invert_transform, pose_from_yaw, transform_points, wrap_angle
 from simsplat_core.types import MapFeature, ObjectInfo, SceneLog, Track, node_type_for_category
@@ -367,14 +367,4 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
         map_features=tuple(map_features),
         metadata=metadata,
     )
-    validated(log, parquet)
-    logger.info(
-        "loaded %s: scenario %s, %d steps, %d objects, %d map features in %.2f s",
-        parquet,
-        scenario.scenario_id,
-        log.num_frames,
-        len(log.objects),
-        len(log.map_features),
-        time.perf_counter() - t0,
-    )
-    return log
+    return loaded(log, parquet, t0, scenario.scenario_id)

@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import json
+import logging
 import re
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +23,8 @@ _Parsed = TypeVar("_Parsed")
 
 #: ``SceneLog.metadata`` key of explicit lane connectivity: JSON ``{lane feature id: [successor ids]}``.
 LANE_SUCCESSORS_KEY = "lane_successors"
+
+logger = logging.getLogger(__name__)
 
 
 def lane_successors(log: SceneLog) -> dict[str, list[str]] | None:
@@ -205,3 +209,13 @@ def validated(log: SceneLog, path: str | Path) -> SceneLog:
         return log.validate()
     except LogValidationError as exc:
         raise CorruptLogError(path, "assembled scene log", str(exc)) from exc
+
+
+def loaded(log: SceneLog, path: str | Path, started: float, name: str = "") -> SceneLog:
+    """A loader's last step: ``validated(log, path)``, then one INFO line with what the log holds and the seconds
+    since ``started`` (a ``time.perf_counter()`` value); ``name`` is the record's own id (a scenario's), if any."""
+    validated(log, path)
+    logger.info("loaded %s%s: %d frames, %d images, %d objects, %d map features in %.2f s", path,
+                f" (scenario {name})" if name else "", log.num_frames, len(log.images), len(log.objects),
+                len(log.map_features), time.perf_counter() - started)
+    return log

@@ -41,9 +41,9 @@ from simsplat_core.data.common import (
     boxes_visible,
     build_track,
     first_record_has,
+    loaded,
     parse_tfrecords,
     safe_seq_id,
-    validated,
 )
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.data.waymo_proto import (
@@ -303,13 +303,4 @@ def load_waymo_frames(path: str | Path, image_scale: float = 1.0, seq_id: str | 
         objects=objects,
         metadata=metadata,
     )
-    validated(log, path)
-    logger.info(
-        "loaded %s: %d frames, %d images, %d objects in %.2f s",
-        path,
-        log.num_frames,
-        len(log.images),
-        len(log.objects),
-        time.perf_counter() - t0,
-    )
-    return log
+    return loaded(log, path, t0)

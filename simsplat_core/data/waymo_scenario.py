@@ -45,9 +45,9 @@ from simsplat_core.data.common import (
     BoxObservation,
     build_track,
     first_record_has,
+    loaded,
     parse_tfrecords,
     safe_seq_id,
-    validated,
 )
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.data.waymo_scenario_proto import (
@@ -297,14 +297,4 @@ def load_waymo_scenario(path: str | Path, record_index: int = 0, seq_id: str | N
         map_features=tuple(map_features),
         metadata=metadata,
     )
-    validated(log, path)
-    logger.info(
-        "loaded %s: scenario %s, %d steps, %d objects, %d map features in %.2f s",
-        path,
-        scenario.scenario_id,
-        log.num_frames,
-        len(log.objects),
-        len(log.map_features),
-        time.perf_counter() - t0,
-    )
-    return log
+    return loaded(log, path, t0, scenario.scenario_id)
