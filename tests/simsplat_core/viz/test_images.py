@@ -1,4 +1,4 @@
-"""Image conversions: float to uint8, PNG and MP4 bytes."""
+"""Image conversions: float to uint8, PNG bytes."""
 
 from __future__ import annotations
 
@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from simsplat_core.viz.images import encode_png, to_uint8
-from storage.pictures import encode_mp4
 
 
 def test_to_uint8_rounds_and_clips() -> None:
@@ -34,10 +33,3 @@ def test_png_round_trip_keeps_rgb_order() -> None:
 def test_png_rejects_what_is_not_uint8_rgb(bad: np.ndarray) -> None:
     with pytest.raises(ValueError, match=r"expected an \[H, W, 3\] uint8 image"):
         encode_png(bad)
-
-
-def test_mp4_rejects_no_frames_and_float_frames() -> None:
-    with pytest.raises(ValueError, match="no frames"):
-        encode_mp4([])
-    with pytest.raises(ValueError, match="frame 0 is"):
-        encode_mp4([np.zeros((16, 16, 3), np.float32)])
