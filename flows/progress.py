@@ -27,13 +27,15 @@ from typing import Any
 from prefect.artifacts import create_progress_artifact, update_progress_artifact
 from rich.progress import Progress
 
-from flows.bars import new_bar, want_bar
+from flows.bars import ProgressLines, new_bar, want_bar, want_lines
 from tasks.progress import RELAY_ENV, Listener, listening, read_step_reports
 
 logger = logging.getLogger(__name__)
 
 #: The live display of an active ``StepBars``; ``FlowProgress`` adds its bar to it instead of starting one.
 _shared_bar: Progress | None = None
+#: Whether a ``StepBars`` is already writing progress lines (nested blocks then write none of their own).
+_lines_active = False
 
 
 @dataclass
@@ -159,8 +161,9 @@ class StepBars:
     """One live bar per unit of work (e.g. per sequence), fed by ``tasks.progress`` step reports.
 
     Reports made in this process arrive through a listener; with ``relay=True`` those of tasks in other
-    processes (Ray workers) arrive through a ``RelayedSteps`` folder. Does nothing unless a bar is wanted
-    (interactive terminal or ``SIMSPLAT_PROGRESS=1``)::
+    processes (Ray workers) arrive through a ``RelayedSteps`` folder. On an interactive terminal (or with
+    ``SIMSPLAT_PROGRESS=1``) they drive live bars; without one (a CI log) plain lines every tenth of each unit's
+    work (``flows.bars.ProgressLines``); ``SIMSPLAT_PROGRESS=0`` shows nothing::
 
         with StepBars(relay=runner == RunnerKind.ray):
             flow(...)
@@ -174,12 +177,17 @@ class StepBars:
         self._lock = threading.Lock()
         self._listening: Any = None
         self._relayed: RelayedSteps | None = None
+        self._lines: ProgressLines | None = None
 
     def __enter__(self) -> StepBars:
-        global _shared_bar
+        global _shared_bar, _lines_active
         if _shared_bar is None and want_bar():
             self._bar = _shared_bar = new_bar()
             self._bar.start()
+        elif _shared_bar is None and not _lines_active and want_lines():
+            self._lines = ProgressLines()
+            _lines_active = True
+        if self._bar is not None or self._lines is not None:
             self._listening = listening(self._on_step)
             self._listening.__enter__()
             if self.relay:
@@ -188,8 +196,12 @@ class StepBars:
 
     def _on_step(self, label: str, step: int, total: int, metrics: Mapping[str, float]) -> None:
         description = label + (f" {self.headline} {metrics[self.headline]:.2f}" if self.headline in metrics else "")
+        if self._lines is not None:
+            with self._lock:
+                self._lines.update(label, step, total, description)
+            return
         bar = self._bar
-        if bar is None:  # steps are listened to only while a bar is shown
+        if bar is None:  # steps are listened to only while a bar or lines are shown
             return
         with self._lock:
             if label not in self._tasks:
@@ -197,10 +209,14 @@ class StepBars:
             bar.update(self._tasks[label], completed=step, total=total, description=description)
 
     def __exit__(self, *exc: object) -> None:
-        global _shared_bar
+        global _shared_bar, _lines_active
+        if self._bar is None and self._lines is None:
+            return
+        if self._relayed is not None:
+            self._relayed.__exit__(None, None, None)
+        self._listening.__exit__(None, None, None)
         if self._bar is not None:
-            if self._relayed is not None:
-                self._relayed.__exit__(None, None, None)
-            self._listening.__exit__(None, None, None)
             self._bar.stop()
             _shared_bar = None
+        else:
+            _lines_active = False

@@ -67,3 +67,22 @@ def test_step_bars_draw_the_reports_of_another_process(monkeypatch):
         shown = {t.description: (t.completed, t.total) for t in bars._bar.tasks}
     assert shown == {"reconstruct w psnr 18.50": (7, 20)}
     assert RELAY_ENV not in os.environ
+
+
+def test_without_a_terminal_progress_is_plain_lines_every_tenth(monkeypatch, capsys):
+    monkeypatch.setenv("SIMSPLAT_PROGRESS", "lines")
+    with StepBars() as bars:
+        step = StepProgress("reconstruct a")
+        for i in range(1, 101):
+            step(i, 100, {"psnr": 20.0 + i / 100})
+    assert bars._bar is None and not flows.progress._lines_active
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[0] == "reconstruct a psnr 20.01: 1/100 (1 %)"
+    assert [line.split(": ")[1] for line in lines[1:]] == [f"{10 * k}/100 ({10 * k} %)" for k in range(1, 11)]
+
+
+def test_nested_step_bars_write_each_line_once(monkeypatch, capsys):
+    monkeypatch.setenv("SIMSPLAT_PROGRESS", "lines")
+    with StepBars(), StepBars(headline=""):
+        StepProgress("x")(2, 2, {})
+    assert capsys.readouterr().err.splitlines() == ["x: 2/2 (100 %)"]
