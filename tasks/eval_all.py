@@ -38,7 +38,7 @@ from simsplat_core.eval.store_tables import (
     reconstruction_table,
     throughput_table,
 )
-from simsplat_core.eval.table_registry import table_spec
+from simsplat_core.eval.table_registry import summary_markdown, table_spec
 from simsplat_core.types import SYNTHETIC_SOURCE
 from storage import ArtifactStore, list_logs, list_scenes, read_scene_manifest, require_log_manifest
 from storage.alignment import list_aligner_models, read_aligner_manifest
@@ -226,21 +226,6 @@ def _runners(store_root: str, out_root: str, rel: str, config: EvalAllConfig,
             "motion": motion, "mining": mining, "search": search}
 
 
-def summary_markdown(run_id: str, tables: dict[str, pa.Table], skipped: dict[str, str],
-                     seconds: dict[str, float]) -> str:
-    """The run's ``summary.md``: each table under its title (what a row is, its Markdown), then the skipped
-    evaluations with their reasons."""
-    parts = [f"# Evaluation {run_id}\n", "| table | rows | title |\n|:---|---:|:---|\n" + "".join(
-        f"| {name} | {table.num_rows} | {table_spec(name).title} |\n" for name, table in tables.items())]
-    for name, table in tables.items():
-        spec = table_spec(name)
-        parts.append(f"## {spec.title} (`{name}`)\n\nOne row per {spec.row}.\n\n{spec.render_markdown(table)}")
-    if skipped:
-        parts.append("## Skipped\n\n" + "".join(f"- {group}: {why}\n" for group, why in skipped.items()))
-    parts.append("## Wall time\n\n" + "".join(f"- {group}: {s:.1f} s\n" for group, s in seconds.items()))
-    return "\n".join(parts)
-
-
 def evaluate_all(store_root: str, out_root: str | None = None, run_id: str | None = None,
                  config: EvalAllConfig | None = None) -> EvalAllResult:
     """Compute every table the store allows into one run directory (module docstring).
@@ -301,4 +286,4 @@ def evaluate_all(store_root: str, out_root: str | None = None, run_id: str | Non
 
 
 __all__ = ["EvalAllConfig", "EvalAllResult", "code_version", "content_keys", "evaluate_all", "reconstruction_rows",
-           "stage_timings", "store_contents", "summary_markdown"]
+           "stage_timings", "store_contents"]

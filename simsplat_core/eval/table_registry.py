@@ -7,6 +7,10 @@ Prefect table artifacts list and render.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+import pyarrow as pa
+
 from simsplat_core.eval.editing.outcomes import EDITING_SPECS
 from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC
 from simsplat_core.eval.grounding.tables import OUTCOMES_SPEC as GROUNDING_OUTCOMES_SPEC
@@ -34,4 +38,19 @@ def table_spec(name: str) -> TableSpec:
     return EVAL_TABLES[name]
 
 
-__all__ = ["EVAL_TABLES", "table_spec"]
+__all__ = ["EVAL_TABLES", "summary_markdown", "table_spec"]
+
+
+def summary_markdown(run_id: str, tables: Mapping[str, pa.Table], skipped: Mapping[str, str],
+                     seconds: Mapping[str, float]) -> str:
+    """The run's ``summary.md``: each table under its title (what a row is, its Markdown), then the skipped
+    evaluations with their reasons."""
+    parts = [f"# Evaluation {run_id}\n", "| table | rows | title |\n|:---|---:|:---|\n" + "".join(
+        f"| {name} | {table.num_rows} | {table_spec(name).title} |\n" for name, table in tables.items())]
+    for name, table in tables.items():
+        spec = table_spec(name)
+        parts.append(f"## {spec.title} (`{name}`)\n\nOne row per {spec.row}.\n\n{spec.render_markdown(table)}")
+    if skipped:
+        parts.append("## Skipped\n\n" + "".join(f"- {group}: {why}\n" for group, why in skipped.items()))
+    parts.append("## Wall time\n\n" + "".join(f"- {group}: {s:.1f} s\n" for group, s in seconds.items()))
+    return "\n".join(parts)
