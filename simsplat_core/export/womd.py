@@ -108,7 +108,12 @@ def _check_tracks(scenario: ExportScenario, where: str) -> None:
 
 
 def _track_states_wire(states: np.ndarray, valid: np.ndarray) -> list[bytes]:
-    """Per track row, the serialized ``repeated ObjectState states`` (``states`` ``[A, T, 9]``, ``valid`` ``[A, T]``)."""
+    """Per track row, the serialized ``repeated ObjectState states``.
+
+    Args:
+        states: ``[A, T, 9]`` box states (``record.STATE_COLUMNS``).
+        valid: ``[A, T]`` bool.
+    """
     a, t = valid.shape
     values = np.concatenate([states.reshape(a * t, -1), np.ones((a * t, 1))], axis=1)
     full = fixed_width_records(_STATES_FIELD, (*STATE_COLUMNS, "valid"), values).reshape(a, t, -1)  # [A, T, R]
@@ -157,7 +162,8 @@ def _fill_lane(lane: Any, feature: ExportMapFeature, polyline_sizes: dict[int, i
     lane.entry_lanes.extend(int(i) for i in feature.entry_lanes)
     lane.exit_lanes.extend(int(i) for i in feature.exit_lanes)
     last = len(feature.points) - 1
-    for neighbors, ids in ((lane.left_neighbors, feature.left_neighbors), (lane.right_neighbors, feature.right_neighbors)):
+    sides = ((lane.left_neighbors, feature.left_neighbors), (lane.right_neighbors, feature.right_neighbors))
+    for neighbors, ids in sides:
         for lane_id in ids:
             neighbor = neighbors.add(feature_id=int(lane_id), self_start_index=0, self_end_index=last)
             if lane_id in polyline_sizes:
