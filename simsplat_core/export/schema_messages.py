@@ -155,6 +155,27 @@ _FIXED_WIDTH: dict[str, tuple[int, str]] = {
 }
 
 
+def _record_layout(field: Field, columns: Sequence[str]) -> tuple[np.dtype, dict[str, bytes]]:
+    """The numpy record of one occurrence of ``field`` with ``columns`` set: a structured dtype of constant parts
+    (``head``: tag and length of ``field``; ``tag<k>``: tag of column ``k``) and values (``value<k>``), and the
+    constant parts' bytes."""
+    assert field.message is not None
+    constants: dict[str, bytes] = {}
+    parts: list[tuple[str, str]] = []  # (name, numpy format), in wire order
+    for k, name in enumerate(columns):
+        sub = field_named(field.message, name)
+        if sub.repeated or sub.kind not in _FIXED_WIDTH:
+            raise ValueError(f"{field.message.name}.{name}: not a singular fixed-width field ({sub.kind})")
+        wire, dtype = _FIXED_WIDTH[sub.kind]
+        constants[f"tag{k}"] = _varint(sub.number << 3 | wire)
+        parts += [(f"tag{k}", f"V{len(constants[f'tag{k}'])}"), (f"value{k}", dtype)]
+    size = sum(np.dtype(fmt).itemsize for _, fmt in parts)
+    constants["head"] = _varint(field.number << 3 | WIRE_LEN) + _varint(size)
+    parts.insert(0, ("head", f"V{len(constants['head'])}"))
+    record = np.dtype([(name, fmt) for name, fmt in parts])  # packed: no alignment padding
+    return record, constants
+
+
 def fixed_width_records(field: Field, columns: Sequence[str], values: np.ndarray) -> np.ndarray:
     """``[N, R]`` uint8: row ``n`` is one occurrence of the repeated message field ``field`` (its tag, the message's
     length and the message) whose fields ``columns`` hold ``values[n]``, in the order given.
@@ -174,29 +195,11 @@ def fixed_width_records(field: Field, columns: Sequence[str], values: np.ndarray
     values = np.asarray(values)
     if values.ndim != 2 or values.shape[1] != len(columns):
         raise ValueError(f"field {field.name!r}: values must be [N, {len(columns)}], got {list(values.shape)}")
-    names, formats, offsets, constants = [], [], [], {}
-    size = 0
-    for k, name in enumerate(columns):
-        sub = field_named(field.message, name)
-        if sub.repeated or sub.kind not in _FIXED_WIDTH:
-            raise ValueError(f"{field.message.name}.{name}: not a singular fixed-width field ({sub.kind})")
-        wire, dtype = _FIXED_WIDTH[sub.kind]
-        tag = _varint(sub.number << 3 | wire)
-        constants[f"tag{k}"] = tag
-        names += [f"tag{k}", f"value{k}"]
-        formats += [f"V{len(tag)}", dtype]
-        offsets += [size, size + len(tag)]
-        size += len(tag) + np.dtype(dtype).itemsize
-    head = _varint(field.number << 3 | WIRE_LEN) + _varint(size)
-    record = np.dtype({
-        "names": ["head", *names],
-        "formats": [f"V{len(head)}", *formats],
-        "offsets": [0, *(o + len(head) for o in offsets)],
-        "itemsize": len(head) + size,
-    })
+    record, constants = _record_layout(field, columns)
     out = np.empty(len(values), record)
-    out["head"] = np.void(head)
-    for k in range(len(columns)):
-        out[f"tag{k}"] = np.void(constants[f"tag{k}"])
-        out[f"value{k}"] = values[:, k] != 0 if record[f"value{k}"] == np.dtype("u1") else values[:, k]
+    for name, data in constants.items():
+        out[name] = np.void(data)
+    for k, name in enumerate(columns):
+        column = values[:, k]
+        out[f"value{k}"] = column != 0 if field_named(field.message, name).kind == "bool" else column
     return out.view(np.uint8).reshape(len(values), record.itemsize)
