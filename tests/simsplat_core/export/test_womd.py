@@ -11,6 +11,7 @@ import pytest
 from google.protobuf import unknown_fields
 
 from simsplat_core.data import load_waymo_scenario
+from simsplat_core.data.common import LANE_SUCCESSORS_KEY
 from simsplat_core.data.tfrecord import iter_tfrecords
 from simsplat_core.data.waymo_scenario import MAP_FEATURE_ATTRIBUTES_KEY
 from simsplat_core.data.waymo_scenario_proto import (
@@ -185,7 +186,7 @@ def test_the_loader_reads_a_written_scenario(tmp_path: Path) -> None:
     assert attributes["road_line_300"] == {"type": "TYPE_BROKEN_SINGLE_WHITE"}
     assert [d["id"] for d in json.loads(log.metadata["driveways"])] == [700]
     assert [s["lanes"] for s in json.loads(log.metadata["stop_signs"])] == [["lane_100"]]
-    assert json.loads(log.metadata["lane_successors"])["lane_102"] == ["lane_103", "lane_104"]
+    assert json.loads(log.metadata[LANE_SUCCESSORS_KEY])["lane_102"] == ["lane_103", "lane_104"]
     assert json.loads(log.metadata["traffic_signals"])[60][0][:2] == ["lane_101", "LANE_STATE_STOP"]
 
 
