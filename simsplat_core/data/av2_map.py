@@ -277,7 +277,8 @@ def archive_lane_attributes(doc: Mapping[str, Any], path: str | Path) -> dict[st
     for key in sorted(drivable):
         predecessors = lanes[key].get("predecessors") or []
         if not isinstance(predecessors, list):
-            raise CorruptLogError(path, f"field {f'lane_segments[{key}].predecessors'!r}", "expected a list of lane ids")
+            field = f"lane_segments[{key}].predecessors"
+            raise CorruptLogError(path, f"field {field!r}", "expected a list of lane ids")
         attributes: dict[str, Any] = {"type": WOMD_LANE_TYPES[lanes[key]["lane_type"]]}
         entry = [f"lane_{p}" for p in predecessors if str(p) in drivable]
         if entry:
