@@ -58,24 +58,27 @@ def _write_parquet(folder: DatasetFolder, split: str, increment: int, scenarios:
 
 def _write_scenarionet(folder: DatasetFolder, split: str, increment: int, scenarios: Sequence[ExportScenario],
                        shard_size: int, refs: Mapping[str, RenderRefs]) -> list[ShardRecord]:
+    """One pickle per scenario in ``scenarionet/<split>/part-<increment>/`` with that part's summary and mapping,
+    then the split's summary and mapping over every part (ScenarioNet's layout for combined datasets)."""
     part = f"part-{increment:05d}"
     base = f"scenarionet/{split}"
-    out, summary = [], {}
+    out, descriptions = [], {}
     for s in scenarios:
         description = scenarionet.scenario_description(s)
-        name = scenarionet.file_name(s)
-        out.append(folder.write_shard(f"{base}/{part}/{name}", scenarionet.to_pickle(description), fmt="scenarionet",
-                                      split=split, scenarios=1))
-        summary[name] = scenarionet.summary_entry(description)
-    mapping = {name: "" for name in summary}
-    folder.write_index(f"{base}/{part}/{scenarionet.SUMMARY_FILE}", pickle.dumps(summary))
-    folder.write_index(f"{base}/{part}/{scenarionet.MAPPING_FILE}", pickle.dumps(mapping))
-    top_summary = _read_pickle(folder, f"{base}/{scenarionet.SUMMARY_FILE}")
-    top_mapping = _read_pickle(folder, f"{base}/{scenarionet.MAPPING_FILE}")
+        name = scenarionet.scenario_file_name(s.scenario_id)
+        out.append(folder.write_shard(f"{base}/{part}/{name}", scenarionet.to_pickle(description),
+                                      fmt="scenarionet", split=split, scenarios=1))
+        descriptions[name] = description
+    summary = scenarionet.dataset_summary(descriptions)
+    folder.write_index(f"{base}/{part}/{scenarionet.SUMMARY_FILE_NAME}", scenarionet.to_pickle(summary))
+    folder.write_index(f"{base}/{part}/{scenarionet.MAPPING_FILE_NAME}",
+                       scenarionet.to_pickle(scenarionet.dataset_mapping(summary)))
+    top_summary = _read_pickle(folder, f"{base}/{scenarionet.SUMMARY_FILE_NAME}")
+    top_mapping = _read_pickle(folder, f"{base}/{scenarionet.MAPPING_FILE_NAME}")
     top_summary.update(summary)
-    top_mapping.update({name: part for name in summary})
-    folder.write_index(f"{base}/{scenarionet.SUMMARY_FILE}", pickle.dumps(top_summary))
-    folder.write_index(f"{base}/{scenarionet.MAPPING_FILE}", pickle.dumps(top_mapping))
+    top_mapping.update(scenarionet.dataset_mapping(summary, part))
+    folder.write_index(f"{base}/{scenarionet.SUMMARY_FILE_NAME}", scenarionet.to_pickle(top_summary))
+    folder.write_index(f"{base}/{scenarionet.MAPPING_FILE_NAME}", scenarionet.to_pickle(top_mapping))
     return out
 
 
@@ -106,7 +109,7 @@ def format_versions(formats: Sequence[str]) -> dict[str, Any]:
     """The schema version of each format (the manifest's ``schema_versions``)."""
     versions: dict[str, Any] = {
         "womd": womd.FORMAT_VERSION,
-        "scenarionet": scenarionet.VERSION,
+        "scenarionet": scenarionet.SCENARIO_VERSION,
         "parquet": {name: schema.metadata[b"schema_version"].decode() for name, schema
                     in parquet_tables.TABLE_SCHEMAS.items()},
     }

@@ -20,13 +20,11 @@ from typing import Any
 
 import numpy as np
 
-from simsplat_core.data.common import lane_successors
+from simsplat_core.data.common import lane_successors, map_feature_attributes
 from simsplat_core.export.ids import feature_ids
 from simsplat_core.export.record import MAP_TYPES, ExportMapFeature, SignalState
 from simsplat_core.types import SceneLog
 
-#: ``SceneLog.metadata`` key of per-feature attributes the loaders keep (module docstring).
-MAP_FEATURE_ATTRIBUTES_KEY = "map_feature_attributes"
 #: ``MapFeature.kind`` -> exported kind (kinds absent here are derived or left out, see the module docstring).
 KIND_OF_LOG_KIND: dict[str, str] = {
     "lane": "lane", "road_edge": "road_edge", "lane_marking": "road_line", "crosswalk": "crosswalk",
@@ -100,7 +98,7 @@ def export_map(log: SceneLog) -> ExportMap:
     """The exported map of ``log`` (module docstring)."""
     collected, controlled, notes = _collect(log)
     ids = feature_ids([sid for sid, _, _ in collected])
-    attributes: dict[str, dict[str, Any]] = _json(log, MAP_FEATURE_ATTRIBUTES_KEY, {})
+    attributes = map_feature_attributes(log) or {}
     successors = lane_successors(log) or {}
     predecessors: dict[str, list[str]] = defaultdict(list)
     for lane, nexts in successors.items():
@@ -114,15 +112,17 @@ def export_map(log: SceneLog) -> ExportMap:
     for sid, kind, points in collected:
         attrs = attributes.get(sid, {})
         kind_type = str(attrs.get("type", ""))
+        neighbours = {side: [str(n) for n in attrs.get(side, [])]  # type: ignore[attr-defined]
+                      for side in ("left_neighbors", "right_neighbors", "entry_lanes")}
         features.append(ExportMapFeature(
             feature_id=ids[sid], kind=kind, points=points, source_id=sid,
             type=kind_type if kind_type in MAP_TYPES.get(kind, ()) else "",
-            entry_lanes=linked(attrs.get("entry_lanes", predecessors.get(sid, []))) if kind == "lane" else (),
+            entry_lanes=linked(neighbours["entry_lanes"] or predecessors.get(sid, [])) if kind == "lane" else (),
             exit_lanes=linked(successors.get(sid, [])) if kind == "lane" else (),
-            left_neighbors=linked(attrs.get("left_neighbors", [])),
-            right_neighbors=linked(attrs.get("right_neighbors", [])),
+            left_neighbors=linked(neighbours["left_neighbors"]),
+            right_neighbors=linked(neighbours["right_neighbors"]),
             controlled_lanes=linked(controlled.get(sid, [])),
-            speed_limit_mph=float(attrs.get("speed_limit_mph", 0.0)),
+            speed_limit_mph=float(attrs.get("speed_limit_mph", 0.0)),  # type: ignore[arg-type]
         ))
     return ExportMap(tuple(features), ids, tuple(notes))
 
