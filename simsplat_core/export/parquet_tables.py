@@ -82,6 +82,10 @@ META_STRING_KEYS: tuple[str, ...] = (
 _TRUE, _FALSE = frozenset({"true", "1", "yes"}), frozenset({"false", "0", "no"})
 
 
+class MissingTableError(ValueError):
+    """A dataset has no folder for a table, or no files of the asked split in it."""
+
+
 @dataclass(frozen=True)
 class RenderRef:
     """One rendered view of a scenario.
@@ -374,24 +378,24 @@ def read_dataset_table(root: str | Path, table: str, split: str | None = None,
         read their missing nullable columns as nulls.
 
     Raises:
-        ValueError: an unknown table, a missing table folder, no files for ``split``, or a file whose
-            ``schema_name`` is not the table's.
+        MissingTableError: no folder for ``table``, or no files of ``split`` in it.
+        ValueError: an unknown table, or a file whose ``schema_name`` is not the table's (or of a newer version).
     """
     if table not in TABLE_SCHEMAS:
         raise ValueError(f"unknown dataset table {table!r}; known: {list(TABLE_SCHEMAS)}")
     folder = Path(root) / table
     if not folder.is_dir():
-        raise ValueError(f"{folder}: no such dataset table folder")
+        raise MissingTableError(f"{folder}: no such dataset table folder")
     declared = TABLE_SCHEMAS[table]
     schema = declared if PARTITION_COLUMN in declared.names else declared.append(
         pa.field(PARTITION_COLUMN, pa.string()))
     partitioning = pads.partitioning(pa.schema([(PARTITION_COLUMN, pa.string())]), flavor="hive")
     dataset = pads.dataset(str(folder), schema=schema, format="parquet", partitioning=partitioning)
-    files = [Path(f) for f in dataset.files]
+    files = sorted(Path(f) for f in dataset.files)
     if split is not None:
         files = [f for f in files if f.parent.name == f"{PARTITION_COLUMN}={split}"]
-        if not files:
-            raise ValueError(f"{folder}: no files for split {split!r}")
+    if not files:
+        raise MissingTableError(f"{folder}: no files" + (f" for split {split!r}" if split is not None else ""))
     _check_schema_names(files, table, declared)
     chosen = pads.dataset([str(f) for f in files], schema=schema, format="parquet", partitioning=partitioning,
                           partition_base_dir=str(folder))
