@@ -241,8 +241,9 @@ def load_scenario_arrays(root: str | Path, split: str | None = "train") -> tuple
     grids = _agent_grids(read_dataset_table(root, "agents", split), facts)
     maps = _map_arrays(_optional_table(root, "map_features", split))
     signals = _signal_grids(_optional_table(root, "signals", split), facts, maps)
-    empty_map = {"feature_ids": np.zeros(0, np.int64), "feature_kinds": np.zeros(0, np.int64),
-                 "map_points": np.zeros((0, 3), np.float32), "map_point_feature": np.zeros(0, np.int64)}
+    empty_map: dict[str, np.ndarray] = {"feature_ids": np.zeros(0, np.int64), "feature_kinds": np.zeros(0, np.int64),
+                                        "map_points": np.zeros((0, 3), np.float32),
+                                        "map_point_feature": np.zeros(0, np.int64)}
     out = []
     for sid in sorted(grids):
         grid, fact, feature_map = grids[sid], facts[sid], maps.get(sid, empty_map)
