@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.export.dataset_arrays import ScenarioArrays
+from simsplat_core.export.map_polylines import local_polylines
 from simsplat_core.export.record import HEADING, HEIGHT, LENGTH, MAP_FEATURE_KINDS, VX, VY, WIDTH, X, Y, Z
 
 #: Per-step features of ``history`` and ``neighbors`` (agent frame).
@@ -126,58 +127,30 @@ def _window(scene: ScenarioArrays, start: int, length: int) -> tuple[np.ndarray,
 
 
 # ----------------------------------------------------------------------------- the map
-def _resample(points: np.ndarray, count: int) -> np.ndarray:
-    """``[K, 3]`` polyline -> ``[count, 3]`` points evenly spaced along its length (a point repeats)."""
-    if len(points) == 1:
-        return np.repeat(points, count, axis=0)
-    along = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(points, axis=0), axis=1))])
-    targets = np.linspace(0.0, along[-1], count)
-    return np.stack([np.interp(targets, along, points[:, k]) for k in range(3)], -1)
-
-
 def _directions(points: np.ndarray) -> np.ndarray:
-    """``[P, 3]`` -> ``[P, 2]`` unit ground-plane direction to the next point (the last repeats; zero if none)."""
-    delta = np.diff(points[:, :2], axis=0)
-    if len(delta) == 0:
-        return np.zeros((len(points), 2))
-    delta = np.concatenate([delta, delta[-1:]])
-    norm = np.linalg.norm(delta, axis=1, keepdims=True)
+    """``[M, P, 3]`` -> ``[M, P, 2]`` unit ground-plane direction to the next point (the last repeats its
+    predecessor's; zero for one point or a zero-length step)."""
+    if points.shape[1] < 2:
+        return np.zeros((*points.shape[:2], 2))
+    delta = np.diff(points[..., :2], axis=1)
+    delta = np.concatenate([delta, delta[:, -1:]], axis=1)
+    norm = np.linalg.norm(delta, axis=-1, keepdims=True)
     return np.divide(delta, norm, out=np.zeros_like(delta), where=norm > 1e-9)
-
-
-def _run_around(inside: np.ndarray, at: int) -> slice:
-    """The run of consecutive ``True`` in ``inside`` that contains index ``at``."""
-    outside = np.flatnonzero(~inside)
-    left = outside[outside < at]
-    right = outside[outside > at]
-    return slice(int(left[-1]) + 1 if len(left) else 0, int(right[0]) if len(right) else len(inside))
 
 
 def map_polylines(scene: ScenarioArrays, origin: np.ndarray, config: SampleConfig) -> dict[str, np.ndarray]:
     """The ``map_*`` entries of a sample (module docstring) around ``origin``."""
-    p, kinds = config.points_per_polyline, len(MAP_FEATURE_KINDS)
     local = to_agent_frame(scene.map_points.astype(np.float64), origin)  # [Q, 3]
-    distance = np.hypot(local[:, 0], local[:, 1])
-    num_features = len(scene.feature_ids)
-    nearest = np.full(num_features, np.inf)
-    np.minimum.at(nearest, scene.map_point_feature, distance)
-    chosen = np.flatnonzero(nearest <= config.map_radius_m)
-    chosen = chosen[np.lexsort([scene.feature_ids[chosen], nearest[chosen]])][:config.max_polylines]
-    starts = np.searchsorted(scene.map_point_feature, np.arange(num_features + 1))
-    polylines = np.zeros((len(chosen), p, 5 + kinds), np.float32)
-    valid = np.zeros((len(chosen), p), bool)
-    for m, f in enumerate(chosen):
-        pts, dist = local[starts[f]:starts[f + 1]], distance[starts[f]:starts[f + 1]]
-        run = pts[_run_around(dist <= config.map_radius_m, int(np.argmin(dist)))]
-        resampled = _resample(run, p)
-        polylines[m, :, :3] = resampled
-        polylines[m, :, 3:5] = _directions(resampled)
-        polylines[m, :, 5 + scene.feature_kinds[f]] = 1.0
-        valid[m] = True if len(run) > 1 else np.arange(p) == 0
-    signal = scene.signal_states[scene.current_time_index, chosen]
-    return {"map_polylines": polylines, "map_valid": valid, "map_kind": scene.feature_kinds[chosen].astype(np.int64),
-            "map_feature_id": scene.feature_ids[chosen].astype(np.int64),
-            "map_signal_state": np.asarray(signal, np.int64)}
+    near = local_polylines(local, scene.map_point_feature, len(scene.feature_ids), config.map_radius_m,
+                           config.max_polylines, config.points_per_polyline, tie_break=scene.feature_ids)
+    kinds = scene.feature_kinds[near.features].astype(np.int64)
+    one_hot = np.eye(len(MAP_FEATURE_KINDS))[kinds]  # [M, K]
+    polylines = np.concatenate([near.points, _directions(near.points),
+                                np.broadcast_to(one_hot[:, None], (len(kinds), config.points_per_polyline,
+                                                                   len(MAP_FEATURE_KINDS)))], axis=-1)
+    return {"map_polylines": polylines.astype(np.float32), "map_valid": near.valid, "map_kind": kinds,
+            "map_feature_id": scene.feature_ids[near.features].astype(np.int64),
+            "map_signal_state": scene.signal_states[scene.current_time_index, near.features].astype(np.int64)}
 
 
 # ----------------------------------------------------------------------------- one sample

@@ -81,22 +81,26 @@ class ScenarioArrays:
         return int(self.valid.shape[1])
 
 
+def _encode(column: pa.ChunkedArray | pa.Array) -> tuple[list[str], np.ndarray]:
+    """A string column as its distinct values and ``[N]`` int64 codes into them."""
+    array = column.combine_chunks() if isinstance(column, pa.ChunkedArray) else column
+    encoded = pc.dictionary_encode(array)
+    return encoded.dictionary.to_pylist(), encoded.indices.to_numpy(zero_copy_only=False).astype(np.int64)
+
+
 def _codes(column: pa.ChunkedArray | pa.Array, names: tuple[str, ...], what: str) -> np.ndarray:
     """Strings -> their index in ``names``; an unknown value raises naming ``what``."""
-    values = np.asarray(column.to_numpy(zero_copy_only=False), dtype=object)
-    index = {name: k for k, name in enumerate(names)}
-    unknown = sorted(set(values.tolist()) - set(index))
+    values, codes = _encode(column)
+    unknown = sorted(set(values) - set(names))
     if unknown:
         raise ValueError(f"{what}: unknown values {unknown[:5]}; known: {list(names)}")
-    return np.fromiter((index[v] for v in values), dtype=np.int64, count=len(values))
+    return np.array([names.index(v) for v in values], np.int64)[codes]
 
 
 def _groups(keys: pa.ChunkedArray, order_by: list[np.ndarray]) -> tuple[list[str], np.ndarray, np.ndarray]:
-    """Rows grouped by ``keys`` (string column): the distinct keys, the row order (by key, then ``order_by``,
-    last key most significant first) and the start of each key's rows in that order (``[K + 1]``)."""
-    encoded = pc.dictionary_encode(keys).combine_chunks()
-    names = encoded.dictionary.to_pylist()
-    codes = encoded.indices.to_numpy(zero_copy_only=False).astype(np.int64)
+    """Rows grouped by ``keys`` (string column): the distinct keys, the row order (by key, then ``order_by`` in
+    turn) and the start of each key's rows in that order (``[K + 1]``)."""
+    names, codes = _encode(keys)
     order = np.lexsort([*order_by[::-1], codes])
     bounds = np.searchsorted(codes[order], np.arange(len(names) + 1))
     return names, order, bounds
