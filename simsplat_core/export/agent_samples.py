@@ -42,7 +42,19 @@ import numpy as np
 
 from simsplat_core.export.dataset_arrays import ScenarioArrays
 from simsplat_core.export.map_polylines import local_polylines
-from simsplat_core.export.record import HEADING, HEIGHT, LENGTH, MAP_FEATURE_KINDS, VX, VY, WIDTH, X, Y, Z
+from simsplat_core.export.record import (
+    HEADING,
+    HEIGHT,
+    LENGTH,
+    MAP_FEATURE_KINDS,
+    TRACK_SOURCES,
+    VX,
+    VY,
+    WIDTH,
+    X,
+    Y,
+    Z,
+)
 
 #: Per-step features of ``history`` and ``neighbors`` (agent frame).
 HISTORY_FEATURES: tuple[str, ...] = (
@@ -56,7 +68,6 @@ MAP_POINT_FEATURES: tuple[str, ...] = ("x", "y", "z", "dir_x", "dir_y") + tuple(
 #: ``edit_flags`` entries: the agent's track source is edited / inserted / refined, it is an object of interest, it
 #: is a track to predict, the scenario comes from an edit.
 EDIT_FLAGS: tuple[str, ...] = ("edited", "inserted", "refined", "of_interest", "to_predict", "scenario_edited")
-_SOURCE_FLAGS = {"edited": 1, "inserted": 2, "refined": 3}  # record.TRACK_SOURCES indices
 
 
 @dataclass(frozen=True)
@@ -104,7 +115,13 @@ def to_agent_frame(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
     return out
 
 
+def _rotate(vectors: np.ndarray, heading: float) -> np.ndarray:
+    """World ``[..., 2]`` vectors (velocities) -> the axes of a frame turned by ``heading``."""
+    return to_agent_frame(vectors.astype(np.float64), np.array([0.0, 0.0, 0.0, heading]))
+
+
 def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles to (-pi, pi]."""
     return np.pi - np.mod(np.pi - angle, 2 * np.pi)
 
 
@@ -112,18 +129,19 @@ def _step_features(states: np.ndarray, valid: np.ndarray, origin: np.ndarray) ->
     """``[..., 9]`` world box states -> ``[..., 10]`` :data:`HISTORY_FEATURES`, zeros where not ``valid``."""
     local = to_agent_frame(states[..., [X, Y, Z]].astype(np.float64), origin)
     heading = states[..., HEADING] - origin[3]
-    velocity = to_agent_frame(states[..., [VX, VY]].astype(np.float64), np.array([0.0, 0.0, 0.0, origin[3]]))
+    velocity = _rotate(states[..., [VX, VY]], origin[3])
     out = np.stack([local[..., 0], local[..., 1], np.cos(heading), np.sin(heading), velocity[..., 0],
                     velocity[..., 1], states[..., LENGTH], states[..., WIDTH], states[..., HEIGHT], local[..., 2]], -1)
     return np.where(valid[..., None], out, 0.0).astype(np.float32)
 
 
-def _window(scene: ScenarioArrays, start: int, length: int) -> tuple[np.ndarray, np.ndarray]:
-    """``[A, length, 9]`` states and ``[A, length]`` validity of steps ``start ..``, invalid outside the scenario."""
+def _window(scene: ScenarioArrays, rows: np.ndarray, start: int, length: int) -> tuple[np.ndarray, np.ndarray]:
+    """``[R, length, 9]`` states and ``[R, length]`` validity of track ``rows`` at steps ``start ..``; steps outside
+    the scenario are invalid."""
     steps = np.arange(start, start + length)
     inside = (steps >= 0) & (steps < scene.num_steps)
     clipped = steps.clip(0, scene.num_steps - 1)
-    return scene.states[:, clipped], scene.valid[:, clipped] & inside
+    return scene.states[rows[:, None], clipped], scene.valid[rows[:, None], clipped] & inside
 
 
 # ----------------------------------------------------------------------------- the map
@@ -160,25 +178,26 @@ def agent_origin(scene: ScenarioArrays, row: int) -> np.ndarray:
     return np.array([state[X], state[Y], state[Z], state[HEADING]])
 
 
-def _neighbors(scene: ScenarioArrays, row: int, origin: np.ndarray, config: SampleConfig,
-               history: tuple[np.ndarray, np.ndarray]) -> dict[str, np.ndarray]:
-    states, valid = history
-    now = scene.valid[:, scene.current_time_index].copy()
-    now[row] = False
-    local_now = to_agent_frame(scene.states[:, scene.current_time_index, :2].astype(np.float64), origin)
+def _neighbors(scene: ScenarioArrays, row: int, origin: np.ndarray, config: SampleConfig) -> dict[str, np.ndarray]:
+    """The ``neighbor*`` entries: other tracks valid now within ``map_radius_m``, nearest (then lowest id) first."""
+    now = scene.current_time_index
+    valid_now = scene.valid[:, now].copy()
+    valid_now[row] = False
+    local_now = to_agent_frame(scene.states[:, now, :2].astype(np.float64), origin)
     distance = np.hypot(local_now[:, 0], local_now[:, 1])
-    others = np.flatnonzero(now & (distance <= config.map_radius_m))
+    others = np.flatnonzero(valid_now & (distance <= config.map_radius_m))
     others = others[np.lexsort([scene.track_ids[others], distance[others]])][:config.max_neighbors]
-    return {"neighbors": _step_features(states[others], valid[others], origin), "neighbors_valid": valid[others],
+    states, valid = _window(scene, others, now - config.history_steps + 1, config.history_steps)
+    return {"neighbors": _step_features(states, valid, origin), "neighbors_valid": valid,
             "neighbor_type": scene.agent_types[others].astype(np.int64),
             "neighbor_track_id": scene.track_ids[others].astype(np.int64)}
 
 
 def _edit_flags(scene: ScenarioArrays, row: int) -> np.ndarray:
-    source = int(scene.sources[row])
-    flags = [source == _SOURCE_FLAGS["edited"], source == _SOURCE_FLAGS["inserted"],
-             source == _SOURCE_FLAGS["refined"], bool(scene.of_interest[row]), bool(scene.to_predict[row]),
-             scene.edited]
+    """``[6]`` :data:`EDIT_FLAGS` of track ``row``."""
+    source = TRACK_SOURCES[int(scene.sources[row])]
+    flags = [source == "edited", source == "inserted", source == "refined", bool(scene.of_interest[row]),
+             bool(scene.to_predict[row]), scene.edited]
     return np.array(flags, np.float32)
 
 
@@ -189,20 +208,20 @@ def agent_sample(scene: ScenarioArrays, row: int, config: SampleConfig) -> dict[
         raise ValueError(f"scenario {scene.scenario_id!r}: track {int(scene.track_ids[row])} is not valid at the "
                          f"current step {now}")
     origin = agent_origin(scene, row)
-    history = _window(scene, now - config.history_steps + 1, config.history_steps)
-    future_states, future_valid = _window(scene, now + 1, config.future_steps)
-    own = future_states[row]
-    future_xy = to_agent_frame(own[:, [X, Y]].astype(np.float64), origin)
-    future_v = to_agent_frame(own[:, [VX, VY]].astype(np.float64), np.array([0.0, 0.0, 0.0, origin[3]]))
-    future = np.concatenate([future_xy, _wrap(own[:, [HEADING]] - origin[3]), future_v], axis=1)
+    own = np.array([row])
+    history, history_valid = _window(scene, own, now - config.history_steps + 1, config.history_steps)
+    future_states, future_valid = _window(scene, own, now + 1, config.future_steps)
+    ahead, ahead_valid = future_states[0], future_valid[0]
+    future = np.concatenate([to_agent_frame(ahead[:, [X, Y]].astype(np.float64), origin),
+                             _wrap(ahead[:, [HEADING]] - origin[3]), _rotate(ahead[:, [VX, VY]], origin[3])], axis=1)
     return {
-        "history": _step_features(history[0][row], history[1][row], origin),
-        "history_valid": history[1][row],
-        "future": np.where(future_valid[row][:, None], future, 0.0).astype(np.float32),
-        "future_valid": future_valid[row],
+        "history": _step_features(history[0], history_valid[0], origin),
+        "history_valid": history_valid[0],
+        "future": np.where(ahead_valid[:, None], future, 0.0).astype(np.float32),
+        "future_valid": ahead_valid,
         "agent_type": np.int64(scene.agent_types[row]),
         "edit_flags": _edit_flags(scene, row),
-        **_neighbors(scene, row, origin, config, history),
+        **_neighbors(scene, row, origin, config),
         **map_polylines(scene, origin, config),
         "origin": origin,
         "track_id": np.int64(scene.track_ids[row]),

@@ -97,6 +97,24 @@ def test_agent_frame_puts_the_agent_at_the_origin_heading_along_x(dataset_root):
     np.testing.assert_allclose(world.numpy(), expected, atol=1e-3)
 
 
+def test_neighbors_are_other_agents_in_the_agent_frame_nearest_first(dataset_root):
+    sample = AgentCentricDataset(dataset_root, "train")[0]
+    scene = _turned_scenario("a")
+    c, s = np.cos(TURNED), np.sin(TURNED)
+    rotation = np.array([[c, s], [-s, c]])
+    ids = sample["neighbor_track_id"].tolist()
+    assert ids and 8 not in ids
+    for n, track_id in enumerate(ids):
+        row = list(scene.track_ids).index(track_id)
+        expected = rotation @ (scene.states[row, 10, :2] - sample["origin"].numpy()[:2])
+        np.testing.assert_allclose(sample["neighbors"][n, -1, :2].numpy(), expected, atol=1e-4)
+        heading = scene.states[row, 10, HEADING] - TURNED
+        np.testing.assert_allclose(sample["neighbors"][n, -1, 2:4].numpy(), [np.cos(heading), np.sin(heading)],
+                                   atol=1e-5)
+    distances = sample["neighbors"][:, -1, :2].norm(dim=-1)
+    assert torch.all(distances[1:] >= distances[:-1])
+
+
 def test_validity_masks_cover_steps_outside_the_track_and_the_scenario(dataset_root):
     data = AgentCentricDataset(dataset_root, "train", history_steps=15, future_steps=80, agents="all_valid")
     sample = data[1]  # track 8 of scenario "a": 50 steps, current step 10
