@@ -278,7 +278,7 @@ def scenarios_table(s: ExportScenario, split: str, renders: Sequence[RenderRef] 
         dt_s=float(np.median(steps)) if len(steps) else 0.0,
         sdc_track_id=int(ids[s.sdc_index]),
         objects_of_interest=[int(i) for i in s.objects_of_interest],
-        tracks_to_predict=[int(ids[row]) for row in s.tracks_to_predict],
+        tracks_to_predict=[int(ids[r]) for r in s.tracks_to_predict],
         window_start_s=float(s.timestamps_s[0]),
         metadata_json=json.dumps(dict(s.metadata), sort_keys=True),
         renders=[{"camera": r.camera, "frame": int(r.frame), "exr_path": r.exr_path, "png_path": r.png_path}
