@@ -22,6 +22,7 @@ from simsplat_core.world import WorldConfig
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
 from tasks.assets import BuiltBank, build_asset_bank
+from tasks.export import ExportConfig, ExportResult, export_dataset_task
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task
@@ -206,6 +207,29 @@ class MiningPlan:
     seed: int = 0
 
 
+@dataclass(frozen=True)
+class ExportPlan:
+    """The main job's export stage: the run's accepted scenarios as a dataset.
+
+    Attributes:
+        out: the folder the dataset goes in (``<out>/<name>/``); ``None``: the store's ``datasets/``.
+        name: the dataset's name; ``None``: the run id (so every run is a dataset of its own).
+        formats: export formats (default: every one).
+    """
+
+    out: str | None = None
+    name: str | None = None
+    formats: tuple[str, ...] = ()
+
+    def config(self, run_id: str) -> ExportConfig:
+        """The export's configuration for run ``run_id`` (its accepted scenarios only)."""
+        from tasks.export_inputs import ExportFilters
+
+        base = ExportConfig()
+        return dataclasses.replace(base, name=self.name or run_id, formats=self.formats or base.formats,
+                                   filters=ExportFilters(include="accepted", runs=(run_id,)))
+
+
 def minable(language: list[StoredLanguageScene]) -> list[str]:
     """Sequences the loop can mine: aligned from a reconstructed scene (an image-less log has nothing to render)."""
     return [s.seq_id for s in language if s.scene_hash]
@@ -264,6 +288,7 @@ class MainResult:
     run_id: str = ""
     stages: list[LogStages] = dataclasses.field(default_factory=list)
     mining: list[MiningSummary] = dataclasses.field(default_factory=list)
+    export: ExportResult | None = None
 
 
 def _summary_markdown(result: MainResult) -> str:
@@ -291,11 +316,13 @@ def _summary_markdown(result: MainResult) -> str:
     for summary in result.mining:
         lines.append(f"\nMined {summary.seq_id}: {summary.accepted} scenario(s) accepted in {summary.attempts} "
                      f"attempt(s) ({summary.client}; {summary.seconds.get('total', 0.0):.0f} s)")
+    if result.export is not None:
+        lines.append(f"\nExported {result.export.written} scenario(s) to {result.export.dataset_uri}")
     return "\n".join(lines)
 
 
 @flow(name="simsplat-main")
-def main_flow(
+def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's inputs, shown and set in the UI
     store_root: str,
     seeds: list[int],
     config: WorldConfig,
@@ -306,6 +333,7 @@ def main_flow(
     evaluate: bool = True,
     run_id: str | None = None,
     mining: MiningPlan | None = None,
+    export: ExportPlan | None = None,
 ) -> MainResult:
     """The main job over every log in the store: ``seeds`` synthetic logs generated first (none: only the
     stored ones, ingested real logs included), one reconstructed scene per log with camera images, language
@@ -324,6 +352,7 @@ def main_flow(
         run_id: names the run directory (default: ``main-<UTC time>``); mined scenarios go to ``edits/<run_id>/``.
         mining: after alignment, mine every sequence with a reconstructed scene for scenarios (asset bank built
             first when missing; ``None``: no mining).
+        export: after mining, export this run's accepted scenarios as a dataset (``None``: no export).
 
     Raises:
         MissingInputError: the store holds no log and ``seeds`` is empty.
@@ -347,7 +376,10 @@ def main_flow(
     mined: list[MiningSummary] = []
     if mining is not None and (to_mine := minable(language)):
         mined = mine_scenarios(store_root, to_mine, run_id, mining)
-    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans, mined)
+    exported: ExportResult | None = None
+    if export is not None and any(s.accepted for s in mined):
+        exported = export_dataset_task.submit(store_root, export.out, export.config(run_id)).result()
+    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans, mined, exported)
     create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
     return result
 

@@ -218,6 +218,70 @@ def read_trajectories(store: ArtifactStore, run_id: str, seq_id: str, edit_id: s
                             TRAJECTORIES_SCHEMA)
 
 
+#: Box (length, width, height) of an inserted agent of a ``trajectories`` table without sizes, per category.
+_FALLBACK_SIZES: dict[str, tuple[float, float, float]] = {
+    "vehicle": (4.8, 2.0, 1.6), "pedestrian": (0.6, 0.6, 1.75), "cyclist": (1.8, 0.6, 1.7),
+}
+
+
+def _optional_column(table: pa.Table, name: str) -> np.ndarray | None:
+    """``[N]`` float64 values of a column added in a later version (NaN where null), ``None`` when absent."""
+    if name not in table.column_names or table.column(name).null_count == len(table):
+        return None
+    return np.asarray(table.column(name).to_numpy(zero_copy_only=False), np.float64)
+
+
+def trajectory_states(table: pa.Table, log_states: AgentStates) -> AgentStates:
+    """The agents of a stored edit's ``trajectories`` table as ``AgentStates`` on the log's frames.
+
+    ``log_states``: the unedited log's agents (``AgentStates.from_log``), whose frames the steps index. Heights and
+    boxes come from the table when it has them; a table without (written before those columns) takes them from the
+    log for logged agents and, for inserted ones, a box of their category standing on the ego's ground height.
+    """
+    cols = {name: table.column(name).to_pylist() for name in ("object_id", "category", "source")}
+    steps = np.asarray(table.column("step").to_numpy(), np.int64)
+    order = list(dict.fromkeys(cols["object_id"]))
+    row_of = {o: k for k, o in enumerate(order)}
+    rows = np.array([row_of[o] for o in cols["object_id"]], np.int64)
+    a, t = len(order), log_states.num_steps
+    if steps.size and (steps.min() < 0 or steps.max() >= t):
+        raise ValueError(f"trajectories: step {int(steps.max())} is not a frame of the log ({t} frames)")
+    first = {o: cols["object_id"].index(o) for o in order}
+    categories = tuple(cols["category"][first[o]] for o in order)
+    sources = tuple(cols["source"][first[o]] for o in order)
+    xy, heading, speed = np.zeros((a, t, 2)), np.zeros((a, t)), np.zeros((a, t))
+    valid = np.zeros((a, t), bool)
+    xy[rows, steps, 0] = table.column("x").to_numpy()
+    xy[rows, steps, 1] = table.column("y").to_numpy()
+    heading[rows, steps] = table.column("heading").to_numpy()
+    speed[rows, steps] = table.column("speed").to_numpy()
+    valid[rows, steps] = True
+    size, z = np.zeros((a, 3)), np.zeros((a, t))
+    ground = log_states.z[log_states.index("ego")] - log_states.size[log_states.index("ego"), 2] / 2.0
+    for k, (o, category) in enumerate(zip(order, categories)):
+        if o in log_states.object_ids:
+            j = log_states.index(o)
+            size[k] = log_states.size[j]
+            z[k] = np.where(log_states.valid[j], log_states.z[j], np.median(log_states.z[j][log_states.valid[j]]))
+        else:
+            size[k] = _FALLBACK_SIZES.get(category, (1.0, 1.0, 1.0))
+            z[k] = ground + size[k, 2] / 2.0
+    stored = {name: _optional_column(table, name) for name in ("z", "length", "width", "height")}
+    if stored["z"] is not None:
+        z[rows, steps] = np.where(np.isnan(stored["z"]), z[rows, steps], stored["z"])
+    for axis, name in enumerate(("length", "width", "height")):
+        values = stored[name]
+        if values is not None:
+            for k in range(a):
+                mine = values[rows == k]
+                mine = mine[~np.isnan(mine)]
+                if mine.size:
+                    size[k, axis] = float(np.median(mine))
+    return AgentStates(object_ids=tuple(order), categories=categories, sources=sources,
+                       node_ids=np.full(a, -1, np.int64), frame_idx=log_states.frame_idx, times=log_states.times,
+                       xy=xy, z=z, heading=heading, speed=speed, size=size, valid=valid)
+
+
 # ----------------------------------------------------------------------------- delta
 @dataclass(frozen=True)
 class DeltaBase:

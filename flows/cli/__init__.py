@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from flows.cli import assets, evaluate, explore, ingest, logs, scenarios, scenes
+from flows.cli import assets, evaluate, explore, export, ingest, logs, scenarios, scenes
 
 # Our own loggers go to the Prefect UI too when they log inside a flow or task.
 os.environ.setdefault("PREFECT_LOGGING_EXTRA_LOGGERS", "simsplat_core,storage,tasks,flows")
@@ -30,6 +30,7 @@ GROUPS: tuple[tuple[typer.Typer, str | None], ...] = (
     (evaluate.commands, "eval"),
     (ingest.commands, None),  # ingest SOURCE PATH
     (logs.commands, None),  # world, inspect
+    (export.commands, None),  # export
 )
 
 app = typer.Typer(help="SIMSplat scenario-mining pipeline.", no_args_is_help=True, add_completion=False)

@@ -312,3 +312,30 @@ def evaluation_notes(result: Any) -> list[str]:
 def print_text(text: Any) -> None:
     """A line (or any printable) as it is, e.g. the search benchmark's summary."""
     console().print(text)
+
+
+# ------------------------------------------------------------------------------------------- export
+def print_export(result: Any) -> None:
+    """What ``simsplat export`` wrote (``tasks.export.ExportResult``): new scenarios by split, shards by format,
+    the dataset's counts, what was left out and why."""
+    out = console()
+    table = Table(title=f"Dataset {result.dataset_uri}")
+    for col in ("split", "new scenarios", "in dataset"):
+        table.add_column(col)
+    for split, total in sorted(result.counts.get("by_split", {}).items()):
+        table.add_row(split, str(len(result.new_scenarios.get(split, ()))), str(total))
+    out.print(table)
+    shards = Table(title="Shards written" if result.shards else "No new shards: the dataset was up to date")
+    for col in ("format", "files", "MB"):
+        shards.add_column(col)
+    by_format: dict[str, list[Any]] = {}
+    for shard in result.shards:
+        by_format.setdefault(shard.format, []).append(shard)
+    for fmt, items in by_format.items():
+        shards.add_row(fmt, str(len(items)), f"{sum(s.bytes for s in items) / 1e6:.2f}")
+    out.print(shards)
+    lines = [f"{result.written} new, {result.skipped_existing} already in the dataset, {len(result.left_out)} left "
+             f"out, in {result.seconds.get('total', 0.0):.1f} s (read {result.seconds.get('read', 0.0):.1f}, validate "
+             f"{result.seconds.get('validate', 0.0):.1f}, write {result.seconds.get('write', 0.0):.1f})"]
+    lines += [f"left out {sid}: {why}" for sid, why in result.left_out.items()]
+    print_lines(lines)

@@ -20,6 +20,7 @@ from flows.cli.common import (
 )
 from flows.cli.printers import (
     print_artifacts,
+    print_export,
     print_language,
     print_logs,
     print_mining,
@@ -58,22 +59,30 @@ def run(
                                       "with a reconstructed scene (0: no mining; the asset bank is built first "
                                       "when missing).")] = 0,
     vlm: VLMOption = "rule",
+    export: Annotated[str | None, typer.Option(help="With --mine: export the run's accepted scenarios as a dataset "
+                                               "into EXPORT/<run_id>/ (WOMD shards, ScenarioNet, Parquet; see "
+                                               "`simsplat export`).")] = None,
 ) -> None:
     """Run the main job over every log in the store (ingested real logs included), after generating
     --sequences synthetic ones: one reconstructed scene per log with camera images, then language
     alignment (motion aligner trained on every log + one queryable language scene per log; a log without
     images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K,
-    scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/)."""
-    from flows.pipeline import MiningPlan, main_flow, reconstruction_config
+    scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/) and, with --export
+    DIR, their export as a dataset for planner training."""
+    from flows.pipeline import ExportPlan, MiningPlan, main_flow, reconstruction_config
     from tasks.answers import mining_as_dict
 
     alignment = alignment_config(captioner)
     check_vlm(vlm)
+    if export is not None and not mine:
+        raise typer.BadParameter("--export exports mined scenarios: give --mine K too (or run `simsplat export`)",
+                                 param_hint="--export")
     if sequences == 0:
         stored_sequences(store, param_hint="--sequences")
     result = run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                       config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
-                      alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None)
+                      alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
+                      export=ExportPlan(out=export) if export is not None else None)
     print_logs(result.logs)
     print_stages(result.stages)
     if result.scenes:
@@ -87,6 +96,8 @@ def run(
         print_tables(load_run_tables(store, run_dir(result.run_id)))
     if result.mining:
         print_mining(mining_as_dict(result.run_id, result.mining))
+    if result.export is not None:
+        print_export(result.export)
     print_artifacts(store)
 
 

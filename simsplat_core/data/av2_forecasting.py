@@ -25,7 +25,15 @@ Decoded with ``pyarrow`` alone. Conventions of the result:
 * ``metadata["current_time_index"]`` = the last step with ``observed`` rows (49 for the 5 s history of the
   public scenarios);
 * map: see ``av2_map`` (the same archive format as the sensor logs); lane successors from the archive go to
-  ``metadata[LANE_SUCCESSORS_KEY]``.
+  ``metadata[LANE_SUCCESSORS_KEY]``, the other lane attributes to ``metadata[MAP_FEATURE_ATTRIBUTES_KEY]``
+  (``"map_feature_attributes"``, read with ``common.map_feature_attributes``): JSON ``{lane feature id ("lane_123"):
+  {"type": "TYPE_SURFACE_STREET", "entry_lanes": [feature ids], "left_neighbors": [feature ids],
+  "right_neighbors": [feature ids]}}``. The type is the WOMD lane type of the AV2 ``lane_type`` (VEHICLE and BUS:
+  ``TYPE_SURFACE_STREET``; BIKE lanes are not map features); entry lanes are the AV2 ``predecessors``; a
+  neighbour is the AV2 ``left_neighbor_id`` / ``right_neighbor_id`` when that lane is a map feature running the same
+  way (AV2 also names the opposite-direction lane across a centre line; WOMD neighbours are lanes one can change
+  into). Keys with nothing to say are left out; AV2 has no speed limits, so ``speed_limit_mph`` never appears. The
+  Waymo scenario loader writes the same entry in the same shape.
 
 Bad input raises ``CorruptLogError`` naming the file and the column (or JSON field) and the offending value.
 """
@@ -41,8 +49,21 @@ from pathlib import Path
 import numpy as np
 
 from simsplat_core.data.arrow_columns import read_columns
-from simsplat_core.data.av2_map import archive_lane_successors, find_map_archive, load_av2_map, read_map_archive
-from simsplat_core.data.common import LANE_SUCCESSORS_KEY, BoxObservation, build_track, loaded, safe_seq_id
+from simsplat_core.data.av2_map import (
+    archive_lane_attributes,
+    archive_lane_successors,
+    find_map_archive,
+    load_av2_map,
+    read_map_archive,
+)
+from simsplat_core.data.common import (
+    LANE_SUCCESSORS_KEY,
+    MAP_FEATURE_ATTRIBUTES_KEY,
+    BoxObservation,
+    build_track,
+    loaded,
+    safe_seq_id,
+)
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.geometry import invert_transform, pose_from_yaw, transform_points, wrap_angle
 from simsplat_core.types import MapFeature, ObjectInfo, SceneLog, Track, node_type_for_category
@@ -336,7 +357,9 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
     ego_poses[0] = np.eye(4)
     tracks, objects = _tracks_and_objects(cols, by_track, ground, world_from_city, timestamps_us)
     map_features = [MapFeature(f.feature_id, f.kind, transform_points(world_from_city, f.points)) for f in city_map]
-    successors = archive_lane_successors(read_map_archive(map_path), map_path)
+    archive = read_map_archive(map_path)
+    successors = archive_lane_successors(archive, map_path)
+    lane_attributes = archive_lane_attributes(archive, map_path)
 
     observed_steps = cols["timestep"][cols["observed"]]
     scored = sorted(t for t, rows in by_track.items() if int(cols["object_category"][rows[0]]) >= 2)
@@ -356,6 +379,7 @@ def load_av2_forecasting(path: str | Path, seq_id: str | None = None) -> SceneLo
         "box_size": "nominal per object type; the scenario has positions and headings only",
         "city_SE3_world": json.dumps(city_from_ego[0].round(9).tolist()),
         LANE_SUCCESSORS_KEY: json.dumps(successors, sort_keys=True),
+        MAP_FEATURE_ATTRIBUTES_KEY: json.dumps(lane_attributes, sort_keys=True),
     }
     log = SceneLog(
         seq_id=seq_id if seq_id is not None else safe_seq_id(scenario.scenario_id),

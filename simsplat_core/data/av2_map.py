@@ -14,7 +14,10 @@ What becomes what (all points moved from the city frame to the log's world frame
   dead-ends) (AV2 has no explicit curbs). A crop line across a shoulder or parking strip with no
   lane may remain as a short road edge.
 
-Lane connectivity (``successors`` of the drivable lanes) comes from ``archive_lane_successors``.
+Lane connectivity (``successors`` of the drivable lanes) comes from ``archive_lane_successors``; the other lane
+attributes a Waymo Open Motion export needs (``archive_lane_attributes``: WOMD lane type, entry lanes = AV2
+``predecessors``, same-direction left / right neighbours) are read from the same archive. AV2 archives carry no
+speed limits; lane markings are not turned into features, so no road-line types are given.
 Malformed content raises ``CorruptLogError`` naming the file and the JSON field.
 """
 
@@ -36,6 +39,12 @@ logger = logging.getLogger(__name__)
 
 #: Lane types kept as drivable ``"lane"`` features.
 DRIVABLE_LANE_TYPES = frozenset({"VEHICLE", "BUS"})
+#: AV2 ``lane_type`` -> Waymo Open Motion lane type (``LaneCenter.type``). BIKE lanes are not kept as features.
+WOMD_LANE_TYPES: dict[str, str] = {
+    "VEHICLE": "TYPE_SURFACE_STREET",
+    "BUS": "TYPE_SURFACE_STREET",
+    "BIKE": "TYPE_BIKE_LANE",
+}
 #: Two drivable-area edges closer than this (metres, at sampled points) count as shared.
 SHARED_EDGE_TOL_M = 0.1
 #: Drivable-area edges within this distance (metres) of a dangling lane's end cross-section are map crops.
@@ -223,6 +232,62 @@ def archive_lane_successors(doc: Mapping[str, Any], path: str | Path) -> dict[st
         if not isinstance(successors, list):
             raise CorruptLogError(path, f"field {f'lane_segments[{key}].successors'!r}", "expected a list of lane ids")
         out[f"lane_{key}"] = [f"lane_{s}" for s in successors if str(s) in drivable]
+    return out
+
+
+def _heading_vector(lane: Mapping[str, Any], path: Path, where: str) -> np.ndarray:
+    """``[2]`` start-to-end direction of a lane (mean of its two boundaries' chords), not normalised."""
+    chords = []
+    for side in ("left_lane_boundary", "right_lane_boundary"):
+        points = _points(_entry_field(lane, side, path, where), path, f"{where}.{side}", 2)
+        chords.append(points[-1, :2] - points[0, :2])
+    return 0.5 * (chords[0] + chords[1])
+
+
+def _same_direction_neighbour(
+    lanes: Mapping[str, Any], key: str, side: str, drivable: set[str], path: Path
+) -> str | None:
+    """Feature id of the drivable lane AV2 names as ``key``'s ``side`` (``"left"`` / ``"right"``) neighbour when it
+    runs the same way (AV2 also names the opposite-direction lane across a centre line); ``None`` otherwise."""
+    where = f"lane_segments[{key}]"
+    neighbour = lanes[key].get(f"{side}_neighbor_id")
+    if neighbour is None or str(neighbour) not in drivable:
+        return None
+    own = _heading_vector(lanes[key], path, where)
+    other = _heading_vector(lanes[str(neighbour)], path, f"lane_segments[{neighbour}]")
+    return f"lane_{neighbour}" if float(own @ other) > 0.0 else None
+
+
+def archive_lane_attributes(doc: Mapping[str, Any], path: str | Path) -> dict[str, dict[str, Any]]:
+    """``{lane feature id: attributes}`` of the drivable lanes of a parsed map archive, in the shape of
+    ``common.MAP_FEATURE_ATTRIBUTES_KEY``: ``type`` (``WOMD_LANE_TYPES``), ``entry_lanes`` (the AV2
+    ``predecessors``), ``left_neighbors`` / ``right_neighbors`` (the AV2 neighbour when it is a drivable lane running
+    the same way). Ids follow ``load_av2_map``; lanes that are not drivable lanes of the archive are left out, and so
+    is a list key with nothing in it.
+
+    Raises:
+        CorruptLogError: ``lane_segments`` missing, a lane without a ``lane_type``, ``predecessors`` that is not a
+            list, or malformed lane boundaries (named by the JSON field).
+    """
+    path = Path(path)
+    lanes = {str(key): lane for key, lane in _section(doc, "lane_segments", path).items()}
+    drivable = {key for key, lane in lanes.items()
+                if _entry_field(lane, "lane_type", path, f"lane_segments[{key}]") in DRIVABLE_LANE_TYPES}
+    out: dict[str, dict[str, Any]] = {}
+    for key in sorted(drivable):
+        predecessors = lanes[key].get("predecessors") or []
+        if not isinstance(predecessors, list):
+            field = f"lane_segments[{key}].predecessors"
+            raise CorruptLogError(path, f"field {field!r}", "expected a list of lane ids")
+        attributes: dict[str, Any] = {"type": WOMD_LANE_TYPES[lanes[key]["lane_type"]]}
+        entry = [f"lane_{p}" for p in predecessors if str(p) in drivable]
+        if entry:
+            attributes["entry_lanes"] = entry
+        for side in ("left", "right"):
+            neighbour = _same_direction_neighbour(lanes, key, side, drivable, path)
+            if neighbour is not None:
+                attributes[f"{side}_neighbors"] = [neighbour]
+        out[f"lane_{key}"] = attributes
     return out
 
 

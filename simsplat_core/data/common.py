@@ -23,6 +23,10 @@ _Parsed = TypeVar("_Parsed")
 
 #: ``SceneLog.metadata`` key of explicit lane connectivity: JSON ``{lane feature id: [successor ids]}``.
 LANE_SUCCESSORS_KEY = "lane_successors"
+#: ``SceneLog.metadata`` key of the map-feature attributes a Waymo Open Motion / ScenarioNet export needs: JSON
+#: ``{feature id: {"type": WOMD type name, "entry_lanes": [ids], "left_neighbors": [ids], "right_neighbors": [ids],
+#: "speed_limit_mph": float}}`` with only the keys the source gives (exit lanes are ``LANE_SUCCESSORS_KEY``).
+MAP_FEATURE_ATTRIBUTES_KEY = "map_feature_attributes"
 
 logger = logging.getLogger(__name__)
 
@@ -39,6 +43,24 @@ def lane_successors(log: SceneLog) -> dict[str, list[str]] | None:
     if not isinstance(value, dict):
         raise ValueError(f"{log.seq_id}: metadata {LANE_SUCCESSORS_KEY!r} is not a JSON object")
     return {str(k): [str(v) for v in vs] for k, vs in value.items()}
+
+
+def map_feature_attributes(log: SceneLog) -> dict[str, dict[str, object]] | None:
+    """The map-feature attributes a loader stored (``MAP_FEATURE_ATTRIBUTES_KEY``), or ``None`` when absent.
+
+    Raises:
+        ValueError: the entry is not a JSON object of objects (names the sequence and the feature).
+    """
+    raw = log.metadata.get(MAP_FEATURE_ATTRIBUTES_KEY)
+    if raw is None:
+        return None
+    value = json.loads(raw)
+    if not isinstance(value, dict):
+        raise ValueError(f"{log.seq_id}: metadata {MAP_FEATURE_ATTRIBUTES_KEY!r} is not a JSON object")
+    for feature_id, attributes in value.items():
+        if not isinstance(attributes, dict):
+            raise ValueError(f"{log.seq_id}: metadata {MAP_FEATURE_ATTRIBUTES_KEY!r}[{feature_id!r}] is not an object")
+    return {str(k): dict(v) for k, v in value.items()}
 
 
 def parse_tfrecords(path: Path, parse: Callable[[bytes], _Parsed]) -> list[tuple[int, _Parsed]]:

@@ -13,7 +13,7 @@ import pytest
 from simsplat_core.data import CorruptLogError, load_av2_forecasting
 from simsplat_core.data.av2_forecasting import FORECASTING_SOURCE, NOMINAL_SIZES, STEP_US
 from simsplat_core.data.av2_map import resample_polyline
-from simsplat_core.data.common import lane_successors
+from simsplat_core.data.common import lane_successors, map_feature_attributes
 from simsplat_core.types import SceneLog
 from tests.simsplat_core.data.forecasting_files import (
     GROUND_Z,
@@ -180,3 +180,32 @@ def test_sample_map_and_agents_on_it(sample: SceneLog, shared_data: Path) -> Non
     assert moving.shape[0] > 200 and np.median(lane_gap(moving)) < 1.0
     # heights follow the map: boxes stand on the ground within a metre
     assert abs(np.median(np.concatenate([t.center[:, 2] - t.size[:, 2] / 2 for t in sample.tracks]))) < 1.0
+
+
+@pytest.mark.shared_data
+def test_sample_lane_attributes_reference_lanes_and_agree_with_the_archive(sample: SceneLog, shared_data: Path) -> None:
+    attrs = map_feature_attributes(sample)
+    assert attrs is not None
+    lanes = {f.feature_id for f in sample.map_features if f.kind == "lane"}
+    assert set(attrs) == lanes
+    for attributes in attrs.values():
+        assert attributes["type"] == "TYPE_SURFACE_STREET"  # the sample's drivable lanes are all VEHICLE lanes
+        for key in ("entry_lanes", "left_neighbors", "right_neighbors"):
+            assert set(attributes.get(key, [])) <= lanes
+    doc = json.loads(next((shared_data / SAMPLE).glob("log_map_archive_*.json")).read_text())
+    archive = {f"lane_{k}": v for k, v in doc["lane_segments"].items()}
+    reciprocal = 0
+    for lane_id in lanes:
+        entry = {f"lane_{p}" for p in archive[lane_id]["predecessors"]} & lanes
+        assert set(attrs[lane_id].get("entry_lanes", [])) == entry
+        for side, other in (("left", "right"), ("right", "left")):
+            neighbour = f"lane_{archive[lane_id][f'{side}_neighbor_id']}"
+            if neighbour in lanes and archive[neighbour][f"{other}_neighbor_id"] == archive[lane_id]["id"]:
+                # AV2 names the pair from both sides the same way round: same direction, kept on both.
+                assert attrs[lane_id][f"{side}_neighbors"] == [neighbour]
+                assert attrs[neighbour][f"{other}_neighbors"] == [lane_id]
+                reciprocal += 1
+            elif neighbour in lanes and archive[neighbour][f"{side}_neighbor_id"] == archive[lane_id]["id"]:
+                # opposite direction (each names the other on the same side): not a WOMD neighbour.
+                assert neighbour not in attrs[lane_id].get(f"{side}_neighbors", [])
+    assert reciprocal > 0  # the sample has multi-lane roads

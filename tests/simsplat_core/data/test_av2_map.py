@@ -10,6 +10,7 @@ import pytest
 
 from simsplat_core.data import CorruptLogError
 from simsplat_core.data.av2_map import (
+    archive_lane_attributes,
     crosswalk_polygon,
     lane_centerline,
     load_av2_map,
@@ -105,3 +106,36 @@ def test_load_av2_map_on_a_tiny_file(tmp_path: Path) -> None:
     path.write_text("[]")
     with pytest.raises(CorruptLogError, match="expected a JSON object"):
         load_av2_map(path, shift)
+
+
+def _lane(lane_type: str, x0: float, x1: float, y: float, **links: object) -> dict[str, object]:
+    """A straight AV2 lane segment from ``x0`` to ``x1`` at ``y`` (3.5 m wide) with the given link fields."""
+    def boundary(dy: float) -> list[dict[str, float]]:
+        return [{"x": x0, "y": y + dy, "z": 0.0}, {"x": x1, "y": y + dy, "z": 0.0}]
+
+    return {"lane_type": lane_type, "left_lane_boundary": boundary(1.75 if x1 > x0 else -1.75),
+            "right_lane_boundary": boundary(-1.75 if x1 > x0 else 1.75), **links}
+
+
+def test_archive_lane_attributes_types_entries_and_same_direction_neighbours() -> None:
+    # 1 and 2 run east side by side; 3 runs west left of 1 (across a centre line); 4 is a bike lane; 5 continues 1.
+    doc = {"lane_segments": {
+        "1": _lane("VEHICLE", 0, 50, 0, left_neighbor_id=3, right_neighbor_id=2, predecessors=[4, 9]),
+        "2": _lane("BUS", 0, 50, -3.5, left_neighbor_id=1, right_neighbor_id=None),
+        "3": _lane("VEHICLE", 50, 0, 3.5, left_neighbor_id=1),
+        "4": _lane("BIKE", -20, 0, 0),
+        "5": _lane("VEHICLE", 50, 90, 0, predecessors=[1]),
+    }}
+    attrs = archive_lane_attributes(doc, "map.json")
+    assert sorted(attrs) == ["lane_1", "lane_2", "lane_3", "lane_5"]  # the bike lane is no map feature
+    assert {a["type"] for a in attrs.values()} == {"TYPE_SURFACE_STREET"}
+    assert attrs["lane_1"] == {"type": "TYPE_SURFACE_STREET", "right_neighbors": ["lane_2"]}  # 3 opposes, 4/9 absent
+    assert attrs["lane_2"]["left_neighbors"] == ["lane_1"] and "right_neighbors" not in attrs["lane_2"]
+    assert "left_neighbors" not in attrs["lane_3"]
+    assert attrs["lane_5"]["entry_lanes"] == ["lane_1"]
+
+
+def test_archive_lane_attributes_bad_predecessors_name_the_field() -> None:
+    doc = {"lane_segments": {"1": _lane("VEHICLE", 0, 50, 0, predecessors=7)}}
+    with pytest.raises(CorruptLogError, match=r"lane_segments\[1\]\.predecessors"):
+        archive_lane_attributes(doc, "map.json")
