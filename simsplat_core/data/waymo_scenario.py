@@ -26,9 +26,10 @@ one ``SceneLog`` whose frames are the scenario's steps (91 at 10 Hz in the motio
   drivable-area polygons and none is derived (off-road tests use the road edges). Stop signs
   (position + controlled lanes), speed-bump and driveway polygons have no ``MAP_KINDS``; they go to
   ``metadata["stop_signs"]`` / ``metadata["speed_bumps"]`` / ``metadata["driveways"]`` (JSON, world frame);
-* what a ``MapFeature`` has no room for goes to ``metadata[MAP_FEATURE_ATTRIBUTES_KEY]``
-  (``"map_feature_attributes"``): a JSON object from the ``MapFeature.feature_id`` (``"lane_123"``,
-  ``"road_line_7"``, ``"road_edge_5"``) to that feature's attributes, only the keys that apply:
+* what a ``MapFeature`` has no room for goes to ``metadata[common.MAP_FEATURE_ATTRIBUTES_KEY]``
+  (``"map_feature_attributes"``, read it with ``common.map_feature_attributes``): a JSON object from
+  the ``MapFeature.feature_id`` (``"lane_123"``, ``"road_line_7"``, ``"road_edge_5"``) to that
+  feature's attributes, only the keys that apply:
   ``"type"`` (Waymo's type name, e.g. ``"TYPE_SURFACE_STREET"``, ``"TYPE_SOLID_SINGLE_WHITE"``,
   ``"TYPE_ROAD_EDGE_BOUNDARY"``; lanes, road lines and road edges), ``"entry_lanes"``,
   ``"left_neighbors"``, ``"right_neighbors"`` (lists of lane feature ids; lanes, possibly empty) and
@@ -53,6 +54,7 @@ import numpy as np
 
 from simsplat_core.data.common import (
     LANE_SUCCESSORS_KEY,
+    MAP_FEATURE_ATTRIBUTES_KEY,
     BoxObservation,
     build_track,
     first_record_has,
@@ -89,8 +91,6 @@ SCENARIO_MAP_KINDS: dict[str, str] = {
     "road_line": "lane_marking",
     "crosswalk": "crosswalk",
 }
-#: ``SceneLog.metadata`` key of the per-feature attributes a ``MapFeature`` has no room for (module docstring).
-MAP_FEATURE_ATTRIBUTES_KEY = "map_feature_attributes"
 #: Decimals kept for world coordinates written to metadata JSON (millimetres).
 _JSON_DECIMALS = 3
 # Columns of ``ScenarioTrack.states``.

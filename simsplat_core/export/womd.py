@@ -53,6 +53,10 @@ from simsplat_core.export.record import (
 )
 from simsplat_core.export.schema_messages import field_named, fixed_width_records
 
+#: Version of what this writer puts into a ``Scenario`` (the dataset manifest's ``schema_versions["womd"]``): the
+#: messages are the public protos'; the number changes when the mapping from ``ExportScenario`` does.
+FORMAT_VERSION = "1"
+
 _INT32_MAX = 2**31 - 1
 _STATES_FIELD = field_named(TRACK, "states")
 #: Map kind -> the repeated ``MapPoint`` field of its message (stop signs have one ``position`` instead).

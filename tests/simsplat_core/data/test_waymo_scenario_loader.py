@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 
 from simsplat_core.data import CorruptLogError, load_waymo_scenario
-from simsplat_core.data.common import lane_successors
+from simsplat_core.data.common import MAP_FEATURE_ATTRIBUTES_KEY, lane_successors
 from simsplat_core.data.tfrecord import encode_tfrecord, iter_tfrecords
-from simsplat_core.data.waymo_scenario import MAP_FEATURE_ATTRIBUTES_KEY, SCENARIO_SOURCE
+from simsplat_core.data.waymo_scenario import SCENARIO_SOURCE
 from simsplat_core.data.waymo_scenario_proto import MAP_TYPE_ENUMS, parse_scenario
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.types import SceneLog

@@ -11,9 +11,8 @@ import pytest
 from google.protobuf import unknown_fields
 
 from simsplat_core.data import load_waymo_scenario
-from simsplat_core.data.common import LANE_SUCCESSORS_KEY
+from simsplat_core.data.common import LANE_SUCCESSORS_KEY, MAP_FEATURE_ATTRIBUTES_KEY
 from simsplat_core.data.tfrecord import iter_tfrecords
-from simsplat_core.data.waymo_scenario import MAP_FEATURE_ATTRIBUTES_KEY
 from simsplat_core.data.waymo_scenario_proto import (
     LANE_TYPE,
     MAP_TYPE_ENUMS,
