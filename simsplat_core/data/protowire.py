@@ -14,6 +14,10 @@ A message is described by a ``MessageSchema`` (a tuple of ``Field`` s) and decod
 
 Every malformed input raises ``ProtoDecodeError`` with the dotted field path (e.g.
 ``Frame.images[2].pose.transform``) and the byte offset inside the decoded buffer.
+
+A schema may also carry what the wire format does not need but a full message definition does (enum types and
+their value names, ``[packed = true]``, ``oneof`` groups), so that one schema can both decode here and define
+protobuf runtime classes for writing (``simsplat_core.export.schema_messages``).
 """
 
 from __future__ import annotations
@@ -54,6 +58,25 @@ class ProtoDecodeError(ValueError):
 
 
 @dataclass(frozen=True)
+class EnumSchema:
+    """An enum type: its name and its value names in value order (a value is its index)."""
+
+    name: str
+    values: tuple[str, ...]
+
+    def number(self, value_name: str) -> int:
+        """The enum value of ``value_name``; ``ValueError`` naming the enum when it is not one of its values."""
+        try:
+            return self.values.index(value_name)
+        except ValueError:
+            raise ValueError(f"{value_name!r} is not a {self.name} value {list(self.values)}") from None
+
+    def name_of(self, number: int) -> str:
+        """The value name of ``number``, or the number as text when the enum has no such value."""
+        return self.values[number] if 0 <= number < len(self.values) else str(number)
+
+
+@dataclass(frozen=True)
 class Field:
     """One field of a message schema.
 
@@ -64,6 +87,9 @@ class Field:
             ``fixed32``, ``fixed64``, ``string``, ``bytes`` or ``message``.
         repeated: whether the field is ``repeated``.
         message: schema of the nested message when ``kind == "message"``.
+        enum: the enum type of an ``enum`` field (optional for decoding, required to build a runtime class).
+        packed: a repeated scalar written packed (``[packed = true]``); decoding accepts both encodings.
+        oneof: the name of the ``oneof`` group the field belongs to, ``""`` for none.
     """
 
     number: int
@@ -71,20 +97,29 @@ class Field:
     kind: str
     repeated: bool = False
     message: MessageSchema | None = None
+    enum: EnumSchema | None = None
+    packed: bool = False
+    oneof: str = ""
 
     def __post_init__(self) -> None:
         if self.kind not in _WIRE_OF_KIND:
             raise ValueError(f"field {self.name!r}: unknown kind {self.kind!r}")
         if (self.kind == "message") != (self.message is not None):
             raise ValueError(f"field {self.name!r}: a schema is required exactly for message fields")
+        if self.enum is not None and self.kind != "enum":
+            raise ValueError(f"field {self.name!r}: an enum type is only for enum fields")
+        if self.packed and not (self.repeated and _WIRE_OF_KIND[self.kind] != WIRE_LEN):
+            raise ValueError(f"field {self.name!r}: only repeated numeric fields can be packed")
 
 
 @dataclass(frozen=True)
 class MessageSchema:
-    """A message type: its name (for error paths) and the subset of its fields to decode."""
+    """A message type: its name (for error paths), the subset of its fields to decode and the enum types it
+    declares (nested in it when a runtime class is built; decoding does not need them)."""
 
     name: str
     fields: tuple[Field, ...]
+    enums: tuple[EnumSchema, ...] = ()
     by_number: dict[int, Field] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:

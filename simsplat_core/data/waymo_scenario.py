@@ -24,8 +24,20 @@ one ``SceneLog`` whose frames are the scenario's steps (91 at 10 Hz in the motio
   crosswalk polygons -> ``"crosswalk"``. Lane connectivity (``exit_lanes``) goes to
   ``metadata[LANE_SUCCESSORS_KEY]`` (read it with ``common.lane_successors``). The scenario has no
   drivable-area polygons and none is derived (off-road tests use the road edges). Stop signs
-  (position + controlled lanes) and speed-bump polygons have no ``MAP_KINDS``; they go to
-  ``metadata["stop_signs"]`` / ``metadata["speed_bumps"]`` (JSON, world frame);
+  (position + controlled lanes), speed-bump and driveway polygons have no ``MAP_KINDS``; they go to
+  ``metadata["stop_signs"]`` / ``metadata["speed_bumps"]`` / ``metadata["driveways"]`` (JSON, world frame);
+* what a ``MapFeature`` has no room for goes to ``metadata[common.MAP_FEATURE_ATTRIBUTES_KEY]``
+  (``"map_feature_attributes"``, read it with ``common.map_feature_attributes``): a JSON object from
+  the ``MapFeature.feature_id`` (``"lane_123"``, ``"road_line_7"``, ``"road_edge_5"``) to that
+  feature's attributes, only the keys that apply:
+  ``"type"`` (Waymo's type name, e.g. ``"TYPE_SURFACE_STREET"``, ``"TYPE_SOLID_SINGLE_WHITE"``,
+  ``"TYPE_ROAD_EDGE_BOUNDARY"``; lanes, road lines and road edges), ``"entry_lanes"``,
+  ``"left_neighbors"``, ``"right_neighbors"`` (lists of lane feature ids; lanes, possibly empty) and
+  ``"speed_limit_mph"`` (a number; lanes whose record has one). Exit lanes are the lane successors
+  above. Features with none of these (crosswalks) have no entry. Example:
+  ``{"lane_100": {"type": "TYPE_SURFACE_STREET", "entry_lanes": ["lane_99"], "left_neighbors":
+  ["lane_101"], "right_neighbors": [], "speed_limit_mph": 25.0}, "road_edge_200": {"type":
+  "TYPE_ROAD_EDGE_BOUNDARY"}}``;
 * traffic-signal states per step go to ``metadata["traffic_signals"]`` (JSON list over steps of
   ``[lane feature id, state name, stop point x, y, z]``, world frame).
 """
@@ -42,6 +54,7 @@ import numpy as np
 
 from simsplat_core.data.common import (
     LANE_SUCCESSORS_KEY,
+    MAP_FEATURE_ATTRIBUTES_KEY,
     BoxObservation,
     build_track,
     first_record_has,
@@ -51,6 +64,7 @@ from simsplat_core.data.common import (
 )
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.data.waymo_scenario_proto import (
+    MAP_TYPE_ENUMS,
     OBJECT_TYPES,
     SCENARIO_SIGNATURE,
     SIGNAL_STATES,
@@ -186,13 +200,36 @@ def _rounded(points: np.ndarray) -> list[list[float]]:
     return [[round(float(v), _JSON_DECIMALS) for v in p] for p in np.asarray(points).reshape(-1, 3)]
 
 
+def _lane_ids(ids: tuple[int, ...]) -> list[str]:
+    return [f"lane_{i}" for i in ids]
+
+
+def _feature_attributes(feat: ScenarioMapFeature) -> dict[str, object]:
+    """The ``MAP_FEATURE_ATTRIBUTES_KEY`` entry of one feature (empty for kinds without attributes)."""
+    enum = MAP_TYPE_ENUMS.get(feat.kind)
+    if enum is None:
+        return {}
+    out: dict[str, object] = {"type": enum.name_of(feat.type_id)}
+    if feat.kind == "lane":
+        out.update(
+            entry_lanes=_lane_ids(feat.entry_lanes),
+            left_neighbors=_lane_ids(feat.left_neighbors),
+            right_neighbors=_lane_ids(feat.right_neighbors),
+        )
+        if feat.speed_limit_mph is not None:
+            out["speed_limit_mph"] = float(feat.speed_limit_mph)
+    return out
+
+
 def _map(
     features: tuple[ScenarioMapFeature, ...], world_from_global: np.ndarray
 ) -> tuple[list[MapFeature], dict[str, str]]:
-    """Map features in the world frame, plus the metadata entries for what has no ``MapFeature`` kind."""
+    """Map features in the world frame, plus the metadata entries for what has no ``MapFeature`` kind or field."""
     out: list[MapFeature] = []
     successors: dict[str, list[str]] = {}
-    stop_signs, speed_bumps = [], []
+    attributes: dict[str, dict[str, object]] = {}
+    polygons: dict[str, list[dict[str, object]]] = {"speed_bump": [], "driveway": []}
+    stop_signs = []
     skipped = collections.Counter[str]()
     for feat in features:
         points = transform_points(world_from_global, feat.points)
@@ -200,21 +237,26 @@ def _map(
             skipped["non-vehicle lane"] += 1
             continue
         if feat.kind == "stop_sign":
-            lanes = [f"lane_{i}" for i in feat.controlled_lanes]
+            lanes = _lane_ids(feat.controlled_lanes)
             stop_signs.append({"id": feat.feature_id, "position": _rounded(points)[0], "lanes": lanes})
             continue
-        if feat.kind == "speed_bump":
-            speed_bumps.append({"id": feat.feature_id, "polygon": _rounded(points)})
+        if feat.kind in polygons:
+            polygons[feat.kind].append({"id": feat.feature_id, "polygon": _rounded(points)})
             continue
         kind = SCENARIO_MAP_KINDS[feat.kind]
         feature_id = f"{feat.kind}_{feat.feature_id}"
         out.append(MapFeature(feature_id, kind, points))
         if feat.kind == "lane":
-            successors[feature_id] = [f"lane_{i}" for i in feat.exit_lanes]
+            successors[feature_id] = _lane_ids(feat.exit_lanes)
+        feature_attributes = _feature_attributes(feat)
+        if feature_attributes:
+            attributes[feature_id] = feature_attributes
     metadata = {
         LANE_SUCCESSORS_KEY: json.dumps(successors, sort_keys=True),
+        MAP_FEATURE_ATTRIBUTES_KEY: json.dumps(attributes, sort_keys=True),
         "stop_signs": json.dumps(stop_signs),
-        "speed_bumps": json.dumps(speed_bumps),
+        "speed_bumps": json.dumps(polygons["speed_bump"]),
+        "driveways": json.dumps(polygons["driveway"]),
         "skipped_map_features": json.dumps(dict(skipped), sort_keys=True),
     }
     return out, metadata

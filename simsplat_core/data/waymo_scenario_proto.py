@@ -1,10 +1,12 @@
-"""The subset of Waymo Open Motion's ``Scenario`` proto (``scenario.proto`` / ``map.proto``) we read.
+"""Waymo Open Motion's ``Scenario`` messages (``scenario.proto`` / ``map.proto``): their schemas and the decoder.
 
-Field numbers follow the public protos (proto2, waymo-open-dataset ``waymo_open_dataset/protos``).
-Decoded with ``protowire``; no TensorFlow and no generated ``*_pb2`` modules. Not read: lane
-neighbours (``LaneCenter.left/right_neighbors``), ``RoadEdge`` / ``RoadLine`` types beyond their enum
-value, and map feature kinds newer than ``SpeedBump`` (e.g. driveways), which are skipped as unknown
-fields.
+The schemas below are the project's one definition of these messages: field numbers, types, enum values, packing
+and ``oneof`` groups follow the public protos (proto2, waymo-open-dataset ``waymo_open_dataset/protos``). They
+decode with ``protowire`` (no TensorFlow, no generated ``*_pb2`` modules) and, through
+``simsplat_core.export.womd_messages``, define the protobuf runtime classes the WOMD exporter writes with.
+Not defined: ``Scenario.compressed_frame_laser_data`` and ``frame_camera_tokens`` (skipped as unknown fields).
+Decoded into ``WaymoScenario``: everything but lane boundaries (``LaneCenter.left/right_boundaries``), the
+adjacency segments of lane neighbours (only their lane ids are kept) and ``LaneCenter.interpolating``.
 
 Units and frames: metres in an arbitrary global frame (the loader moves everything to the SDC's
 first pose); headings are radians counter-clockwise from global +x; time in seconds.
@@ -17,37 +19,47 @@ from typing import Any
 
 import numpy as np
 
-from simsplat_core.data.protowire import Field, MessageSchema, ProtoDecodeError, decode_message
+from simsplat_core.data.protowire import EnumSchema, Field, MessageSchema, ProtoDecodeError, decode_message
+
+OBJECT_TYPE = EnumSchema("ObjectType", ("TYPE_UNSET", "TYPE_VEHICLE", "TYPE_PEDESTRIAN", "TYPE_CYCLIST", "TYPE_OTHER"))
+SIGNAL_STATE = EnumSchema(
+    "State",
+    (
+        "LANE_STATE_UNKNOWN",
+        "LANE_STATE_ARROW_STOP",
+        "LANE_STATE_ARROW_CAUTION",
+        "LANE_STATE_ARROW_GO",
+        "LANE_STATE_STOP",
+        "LANE_STATE_CAUTION",
+        "LANE_STATE_GO",
+        "LANE_STATE_FLASHING_STOP",
+        "LANE_STATE_FLASHING_CAUTION",
+    ),
+)
+LANE_TYPE = EnumSchema("LaneType", ("TYPE_UNDEFINED", "TYPE_FREEWAY", "TYPE_SURFACE_STREET", "TYPE_BIKE_LANE"))
+ROAD_LINE_TYPE = EnumSchema(
+    "RoadLineType",
+    (
+        "TYPE_UNKNOWN",
+        "TYPE_BROKEN_SINGLE_WHITE",
+        "TYPE_SOLID_SINGLE_WHITE",
+        "TYPE_SOLID_DOUBLE_WHITE",
+        "TYPE_BROKEN_SINGLE_YELLOW",
+        "TYPE_BROKEN_DOUBLE_YELLOW",
+        "TYPE_SOLID_SINGLE_YELLOW",
+        "TYPE_SOLID_DOUBLE_YELLOW",
+        "TYPE_PASSING_DOUBLE_YELLOW",
+    ),
+)
+ROAD_EDGE_TYPE = EnumSchema("RoadEdgeType", ("TYPE_UNKNOWN", "TYPE_ROAD_EDGE_BOUNDARY", "TYPE_ROAD_EDGE_MEDIAN"))
+DIFFICULTY_LEVEL = EnumSchema("DifficultyLevel", ("NONE", "LEVEL_1", "LEVEL_2"))
 
 #: ``Track.ObjectType`` enum -> Waymo's type name.
-OBJECT_TYPES: dict[int, str] = {
-    0: "TYPE_UNSET",
-    1: "TYPE_VEHICLE",
-    2: "TYPE_PEDESTRIAN",
-    3: "TYPE_CYCLIST",
-    4: "TYPE_OTHER",
-}
+OBJECT_TYPES: dict[int, str] = dict(enumerate(OBJECT_TYPE.values))
 #: ``TrafficSignalLaneState.State`` enum -> Waymo's state name.
-SIGNAL_STATES: dict[int, str] = {
-    0: "LANE_STATE_UNKNOWN",
-    1: "LANE_STATE_ARROW_STOP",
-    2: "LANE_STATE_ARROW_CAUTION",
-    3: "LANE_STATE_ARROW_GO",
-    4: "LANE_STATE_STOP",
-    5: "LANE_STATE_CAUTION",
-    6: "LANE_STATE_GO",
-    7: "LANE_STATE_FLASHING_STOP",
-    8: "LANE_STATE_FLASHING_CAUTION",
-}
-#: ``MapFeature`` oneof member -> its field number.
-MAP_FEATURE_KINDS: dict[str, int] = {
-    "lane": 3,
-    "road_line": 4,
-    "road_edge": 5,
-    "stop_sign": 7,
-    "crosswalk": 8,
-    "speed_bump": 9,
-}
+SIGNAL_STATES: dict[int, str] = dict(enumerate(SIGNAL_STATE.values))
+#: The ``MapFeature.feature_data`` member whose enum is the feature's type.
+MAP_TYPE_ENUMS: dict[str, EnumSchema] = {"lane": LANE_TYPE, "road_line": ROAD_LINE_TYPE, "road_edge": ROAD_EDGE_TYPE}
 
 OBJECT_STATE = MessageSchema(
     "ObjectState",
@@ -68,55 +80,104 @@ TRACK = MessageSchema(
     "Track",
     (
         Field(1, "id", "int32"),
-        Field(2, "object_type", "enum"),
+        Field(2, "object_type", "enum", enum=OBJECT_TYPE),
         Field(3, "states", "message", repeated=True, message=OBJECT_STATE),
     ),
+    enums=(OBJECT_TYPE,),
 )
 MAP_POINT = MessageSchema("MapPoint", (Field(1, "x", "double"), Field(2, "y", "double"), Field(3, "z", "double")))
 SIGNAL_LANE_STATE = MessageSchema(
     "TrafficSignalLaneState",
     (
         Field(1, "lane", "int64"),
-        Field(2, "state", "enum"),
+        Field(2, "state", "enum", enum=SIGNAL_STATE),
         Field(3, "stop_point", "message", message=MAP_POINT),
     ),
+    enums=(SIGNAL_STATE,),
 )
 DYNAMIC_MAP_STATE = MessageSchema(
     "DynamicMapState", (Field(1, "lane_states", "message", repeated=True, message=SIGNAL_LANE_STATE),)
+)
+BOUNDARY_SEGMENT = MessageSchema(
+    "BoundarySegment",
+    (
+        Field(1, "lane_start_index", "int32"),
+        Field(2, "lane_end_index", "int32"),
+        Field(3, "boundary_feature_id", "int64"),
+        Field(4, "boundary_type", "enum", enum=ROAD_LINE_TYPE),
+    ),
+)
+LANE_NEIGHBOR = MessageSchema(
+    "LaneNeighbor",
+    (
+        Field(1, "feature_id", "int64"),
+        Field(2, "self_start_index", "int32"),
+        Field(3, "self_end_index", "int32"),
+        Field(4, "neighbor_start_index", "int32"),
+        Field(5, "neighbor_end_index", "int32"),
+        Field(6, "boundaries", "message", repeated=True, message=BOUNDARY_SEGMENT),
+    ),
 )
 LANE_CENTER = MessageSchema(
     "LaneCenter",
     (
         Field(1, "speed_limit_mph", "double"),
-        Field(2, "type", "enum"),
+        Field(2, "type", "enum", enum=LANE_TYPE),
         Field(3, "interpolating", "bool"),
         Field(8, "polyline", "message", repeated=True, message=MAP_POINT),
-        Field(9, "entry_lanes", "int64", repeated=True),
-        Field(10, "exit_lanes", "int64", repeated=True),
+        Field(9, "entry_lanes", "int64", repeated=True, packed=True),
+        Field(10, "exit_lanes", "int64", repeated=True, packed=True),
+        Field(11, "left_neighbors", "message", repeated=True, message=LANE_NEIGHBOR),
+        Field(12, "right_neighbors", "message", repeated=True, message=LANE_NEIGHBOR),
+        Field(13, "left_boundaries", "message", repeated=True, message=BOUNDARY_SEGMENT),
+        Field(14, "right_boundaries", "message", repeated=True, message=BOUNDARY_SEGMENT),
     ),
+    enums=(LANE_TYPE,),
 )
-_TYPED_POLYLINE_FIELDS = (Field(1, "type", "enum"), Field(2, "polyline", "message", repeated=True, message=MAP_POINT))
-ROAD_LINE = MessageSchema("RoadLine", _TYPED_POLYLINE_FIELDS)
-ROAD_EDGE = MessageSchema("RoadEdge", _TYPED_POLYLINE_FIELDS)
+ROAD_LINE = MessageSchema(
+    "RoadLine",
+    (
+        Field(1, "type", "enum", enum=ROAD_LINE_TYPE),
+        Field(2, "polyline", "message", repeated=True, message=MAP_POINT),
+    ),
+    enums=(ROAD_LINE_TYPE,),
+)
+ROAD_EDGE = MessageSchema(
+    "RoadEdge",
+    (
+        Field(1, "type", "enum", enum=ROAD_EDGE_TYPE),
+        Field(2, "polyline", "message", repeated=True, message=MAP_POINT),
+    ),
+    enums=(ROAD_EDGE_TYPE,),
+)
 STOP_SIGN = MessageSchema(
     "StopSign", (Field(1, "lane", "int64", repeated=True), Field(2, "position", "message", message=MAP_POINT))
 )
 CROSSWALK = MessageSchema("Crosswalk", (Field(1, "polygon", "message", repeated=True, message=MAP_POINT),))
 SPEED_BUMP = MessageSchema("SpeedBump", (Field(1, "polygon", "message", repeated=True, message=MAP_POINT),))
+DRIVEWAY = MessageSchema("Driveway", (Field(1, "polygon", "message", repeated=True, message=MAP_POINT),))
+_FEATURE_DATA = "feature_data"
 MAP_FEATURE = MessageSchema(
     "MapFeature",
     (
         Field(1, "id", "int64"),
-        Field(MAP_FEATURE_KINDS["lane"], "lane", "message", message=LANE_CENTER),
-        Field(MAP_FEATURE_KINDS["road_line"], "road_line", "message", message=ROAD_LINE),
-        Field(MAP_FEATURE_KINDS["road_edge"], "road_edge", "message", message=ROAD_EDGE),
-        Field(MAP_FEATURE_KINDS["stop_sign"], "stop_sign", "message", message=STOP_SIGN),
-        Field(MAP_FEATURE_KINDS["crosswalk"], "crosswalk", "message", message=CROSSWALK),
-        Field(MAP_FEATURE_KINDS["speed_bump"], "speed_bump", "message", message=SPEED_BUMP),
+        Field(3, "lane", "message", message=LANE_CENTER, oneof=_FEATURE_DATA),
+        Field(4, "road_line", "message", message=ROAD_LINE, oneof=_FEATURE_DATA),
+        Field(5, "road_edge", "message", message=ROAD_EDGE, oneof=_FEATURE_DATA),
+        Field(7, "stop_sign", "message", message=STOP_SIGN, oneof=_FEATURE_DATA),
+        Field(8, "crosswalk", "message", message=CROSSWALK, oneof=_FEATURE_DATA),
+        Field(9, "speed_bump", "message", message=SPEED_BUMP, oneof=_FEATURE_DATA),
+        Field(10, "driveway", "message", message=DRIVEWAY, oneof=_FEATURE_DATA),
     ),
 )
+#: ``MapFeature`` oneof member -> its field number.
+MAP_FEATURE_KINDS: dict[str, int] = {f.name: f.number for f in MAP_FEATURE.fields if f.oneof == _FEATURE_DATA}
+#: Map kinds whose points are a polygon (closed implicitly).
+POLYGON_KINDS: frozenset[str] = frozenset({"crosswalk", "speed_bump", "driveway"})
 REQUIRED_PREDICTION = MessageSchema(
-    "RequiredPrediction", (Field(1, "track_index", "int32"), Field(2, "difficulty", "enum"))
+    "RequiredPrediction",
+    (Field(1, "track_index", "int32"), Field(2, "difficulty", "enum", enum=DIFFICULTY_LEVEL)),
+    enums=(DIFFICULTY_LEVEL,),
 )
 SCENARIO = MessageSchema(
     "Scenario",
@@ -171,10 +232,11 @@ class ScenarioMapFeature:
     Attributes:
         feature_id: ``MapFeature.id``.
         kind: the set ``oneof`` member, a key of ``MAP_FEATURE_KINDS``.
-        points: ``[P, 3]`` float64 polyline (lane, road_line, road_edge), polygon (crosswalk,
-            speed_bump) or the single position of a stop sign.
-        type_id: ``LaneType`` / ``RoadLineType`` / ``RoadEdgeType`` enum, 0 for other kinds.
+        points: ``[P, 3]`` float64 polyline (lane, road_line, road_edge), polygon (``POLYGON_KINDS``) or
+            the single position of a stop sign.
+        type_id: ``LaneType`` / ``RoadLineType`` / ``RoadEdgeType`` enum (``MAP_TYPE_ENUMS``), 0 for other kinds.
         entry_lanes, exit_lanes: lane ids (lanes only).
+        left_neighbors, right_neighbors: lane ids of the ``LaneNeighbor`` s, in file order (lanes only).
         controlled_lanes: lanes a stop sign controls (stop signs only).
         speed_limit_mph: lanes only, ``None`` when absent.
     """
@@ -185,6 +247,8 @@ class ScenarioMapFeature:
     type_id: int = 0
     entry_lanes: tuple[int, ...] = ()
     exit_lanes: tuple[int, ...] = ()
+    left_neighbors: tuple[int, ...] = ()
+    right_neighbors: tuple[int, ...] = ()
     controlled_lanes: tuple[int, ...] = ()
     speed_limit_mph: float | None = None
 
@@ -264,6 +328,10 @@ def _track(msg: dict[str, Any], path: str, num_steps: int) -> ScenarioTrack:
     )
 
 
+def _neighbor_ids(msgs: list[dict[str, Any]], path: str) -> tuple[int, ...]:
+    return tuple(int(_require(m["feature_id"], f"{path}[{i}].feature_id")) for i, m in enumerate(msgs))
+
+
 def _map_feature(msg: dict[str, Any], path: str) -> ScenarioMapFeature | None:
     """The decoded feature, or ``None`` for a feature of a kind not in ``MAP_FEATURE_KINDS``."""
     feature_id = int(_require(msg["id"], f"{path}.id"))
@@ -282,6 +350,8 @@ def _map_feature(msg: dict[str, Any], path: str) -> ScenarioMapFeature | None:
             type_id=int(data["type"] or 0),
             entry_lanes=tuple(int(i) for i in data["entry_lanes"]),
             exit_lanes=tuple(int(i) for i in data["exit_lanes"]),
+            left_neighbors=_neighbor_ids(data["left_neighbors"], f"{where}.left_neighbors"),
+            right_neighbors=_neighbor_ids(data["right_neighbors"], f"{where}.right_neighbors"),
             speed_limit_mph=data["speed_limit_mph"],
         )
     if kind in ("road_line", "road_edge"):

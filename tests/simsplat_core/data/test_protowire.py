@@ -7,7 +7,7 @@ import struct
 import numpy as np
 import pytest
 
-from simsplat_core.data.protowire import Field, MessageSchema, ProtoDecodeError, decode_message
+from simsplat_core.data.protowire import EnumSchema, Field, MessageSchema, ProtoDecodeError, decode_message
 
 INNER = MessageSchema("Inner", (Field(1, "x", "double"), Field(2, "tags", "string", repeated=True)))
 OUTER = MessageSchema(
@@ -141,3 +141,18 @@ def test_agrees_with_protobuf_library() -> None:
     assert out["ids"] == [0, -5, 2**40]
     assert out["inner"] == {"x": -1.5, "tags": ["u", "v"]}
     assert out["items"] == [{"x": 3.0, "tags": []}]
+
+
+def test_enum_schema_and_field_definitions() -> None:
+    colour = EnumSchema("Colour", ("RED", "GREEN"))
+    assert colour.number("GREEN") == 1 and colour.name_of(0) == "RED" and colour.name_of(7) == "7"
+    with pytest.raises(ValueError, match="'BLUE' is not a Colour value"):
+        colour.number("BLUE")
+    with pytest.raises(ValueError, match="'size': an enum type is only for enum fields"):
+        Field(1, "size", "int32", enum=colour)
+    with pytest.raises(ValueError, match="'ids': only repeated numeric fields can be packed"):
+        Field(1, "ids", "int64", packed=True)
+    # Definition-only attributes do not change decoding.
+    fields = (Field(1, "c", "enum", enum=colour), Field(2, "ids", "int64", repeated=True, packed=True))
+    schema = MessageSchema("M", fields)
+    assert decode_message(b"\x08\x01\x12\x02\x03\x04", schema) == {"c": 1, "ids": [3, 4]}

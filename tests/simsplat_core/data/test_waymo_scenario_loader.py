@@ -10,9 +10,10 @@ import numpy as np
 import pytest
 
 from simsplat_core.data import CorruptLogError, load_waymo_scenario
-from simsplat_core.data.common import lane_successors
+from simsplat_core.data.common import MAP_FEATURE_ATTRIBUTES_KEY, lane_successors
 from simsplat_core.data.tfrecord import encode_tfrecord, iter_tfrecords
 from simsplat_core.data.waymo_scenario import SCENARIO_SOURCE
+from simsplat_core.data.waymo_scenario_proto import MAP_TYPE_ENUMS, parse_scenario
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.types import SceneLog
 
@@ -85,6 +86,31 @@ def test_map_features(log: SceneLog) -> None:
     assert len(json.loads(log.metadata["stop_signs"])) == 8
     assert len(json.loads(log.metadata["speed_bumps"])) == 3
     assert json.loads(log.metadata["skipped_map_features"]) == {"non-vehicle lane": 1}
+
+
+def test_map_feature_attributes_keep_types_entries_neighbours_and_speed_limits(
+    log: SceneLog, sample_path: Path
+) -> None:
+    attributes = json.loads(log.metadata[MAP_FEATURE_ATTRIBUTES_KEY])
+    by_kind = {f.feature_id: f.kind for f in log.map_features}
+    # Every lane, road line and road edge has an entry, crosswalks none.
+    assert set(attributes) == {i for i, kind in by_kind.items() if kind != "crosswalk"}
+    scenario = parse_scenario(next(iter_tfrecords(sample_path)).data)
+    decoded = {f"{f.kind}_{f.feature_id}": f for f in scenario.map_features}
+    for feature_id, entry in attributes.items():
+        source = decoded[feature_id]
+        assert entry["type"] == MAP_TYPE_ENUMS[source.kind].values[source.type_id]
+        if by_kind[feature_id] != "lane":
+            assert set(entry) == {"type"}
+            continue
+        assert entry["entry_lanes"] == [f"lane_{i}" for i in source.entry_lanes]
+        assert entry["left_neighbors"] == [f"lane_{i}" for i in source.left_neighbors]
+        assert entry["right_neighbors"] == [f"lane_{i}" for i in source.right_neighbors]
+        assert entry.get("speed_limit_mph") == source.speed_limit_mph
+    lanes = [entry for entry in attributes.values() if "entry_lanes" in entry]
+    assert any(entry["left_neighbors"] for entry in lanes) and any(entry["right_neighbors"] for entry in lanes)
+    assert {entry["type"] for entry in lanes} <= {"TYPE_UNDEFINED", "TYPE_FREEWAY", "TYPE_SURFACE_STREET"}
+    assert json.loads(log.metadata["driveways"]) == []
 
 
 def test_traffic_signals_per_step(log: SceneLog) -> None:
