@@ -264,6 +264,8 @@ def export_dataset(store_root: str, out: str | None = None, config: ExportConfig
     seconds = {"read": 0.0, "validate": 0.0, "write": 0.0}
     by_split, origin, existing, left_out = _collect(store, config, inputs, manifest, progress, seconds)
     increment = len(manifest["increments"]) + 1 if by_split else 0
+    if increment == 1 and not manifest["increments"]:  # claim the folder before the first shard lands in it
+        folder.write_manifest(manifest, datacard_markdown(manifest))
     shards: list[ShardRecord] = []
     t0 = time.perf_counter()
     for split, scenarios in sorted(by_split.items()):

@@ -26,14 +26,14 @@ from tests.simsplat_core.export.log_fixtures import straight_road_log
 SEQS = ("road-a", "road-b", "road-c")
 
 
-def _braking(states: AgentStates, who: str = "car_a", *, crash: bool = False) -> AgentStates:
-    """``states`` with ``who`` braking to a stop from 1 s (or, with ``crash``, driving into the ego)."""
+def _edited(states: AgentStates, who: str = "car_a", *, crash: bool = False) -> AgentStates:
+    """``states`` with ``who`` (the lead car) speeding up from 1 s (or, with ``crash``, driving into the ego)."""
     k = states.index(who)
     xy, speed = states.xy.copy(), states.speed.copy()
     if crash:
         xy[k] = states.xy[states.index("ego")]
     else:
-        v = np.maximum(6.0 - 3.0 * np.clip(states.times - 1.0, 0, None), 0.0)
+        v = 6.0 + 1.5 * np.clip(states.times - 1.0, 0, None)
         xy[k, :, 0] = states.xy[k, 0, 0] + np.concatenate([[0.0], np.cumsum(v[:-1] * 0.1)])
         speed[k] = v
     sources = tuple("edited" if r == k else s for r, s in enumerate(states.sources))
@@ -45,10 +45,10 @@ def _add_edit(store: ArtifactStore, run: str, seq: str, edit_id: str, *, status:
     log = straight_road_log(seq_id=seq)
     mining = {"mining_status": status, "category": category, "plausibility": plausibility, "follows_prompt": True,
               "export": status == "accepted", "source": "seed", "client": "rule", "scenario": 0}
-    record = EditRecord(run_id=run, seq_id=seq, edit_id=edit_id, prompt="the lead car brakes hard",
+    record = EditRecord(run_id=run, seq_id=seq, edit_id=edit_id, prompt="the lead car speeds up",
                         command_json="{}", status="succeeded", mining=mining)
     with staged_edit(store, record, key=f"key-{edit_id}", append=False) as writer:
-        writer.trajectories(edit_id, _braking(log_agent_states(log), crash=crash))
+        writer.trajectories(edit_id, _edited(log_agent_states(log), crash=crash))
         writer.validation({"ok": not crash})
     append_edit_records(store, [record])
 
@@ -122,13 +122,22 @@ def test_a_killed_export_leaves_the_dataset_as_it_was(store: ArtifactStore, tmp_
         return real(folder, fmt, *args, **kwargs)
 
     monkeypatch.setattr(export_task, "write_format", dies_on_parquet)
-    with pytest.raises(KeyboardInterrupt):
+    with pytest.raises(KeyboardInterrupt):  # killed during the first export: the folder is claimed, holds nothing
         export_dataset(store.root, str(out), config)
-    assert not (out / "ds" / "manifest.json").exists()
+    manifest = json.loads((out / "ds" / "manifest.json").read_text())
+    assert manifest["increments"] == [] and manifest["scenarios"] == {}
     assert all(not p.name.startswith(".") for p in (out / "ds").rglob("*") if p.is_file())  # no half file
     monkeypatch.setattr(export_task, "write_format", real)
+    assert export_dataset(store.root, str(out), config).written == 2
+    before = (out / "ds" / "manifest.json").read_bytes()
+    _add_edit(store, "mine-1", "road-c", "e0d")
+    monkeypatch.setattr(export_task, "write_format", dies_on_parquet)
+    with pytest.raises(KeyboardInterrupt):  # killed while adding: the dataset is still the first increment
+        export_dataset(store.root, str(out), config)
+    assert (out / "ds" / "manifest.json").read_bytes() == before
+    monkeypatch.setattr(export_task, "write_format", real)
     result = export_dataset(store.root, str(out), config)
-    assert result.increment == 1 and result.written == 2
+    assert result.increment == 2 and result.written == 1 and result.skipped_existing == 2
 
 
 def test_filters_and_splits(store: ArtifactStore, tmp_path: Path) -> None:

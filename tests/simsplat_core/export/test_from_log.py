@@ -83,7 +83,8 @@ def test_an_edit_exports_its_agents_interest_and_predictions() -> None:
     assert set(s.objects_of_interest) == {ids["car_a"], ids["inserted_1"]}
     assert {s.source_object_ids[r] for r in s.tracks_to_predict} == {"car_a", "car_b", "inserted_1"}
     row = s.source_object_ids.index("car_a")
-    assert s.track_sources[row] == "edited" and s.states[row, 39, 7] == pytest.approx(0.0) and s.states[row, 0, 7] == pytest.approx(6.0)
+    assert s.track_sources[row] == "edited"
+    assert s.states[row, 39, 7] == pytest.approx(0.0) and s.states[row, 0, 7] == pytest.approx(6.0)
     truck = s.source_object_ids.index("inserted_1")
     np.testing.assert_allclose(s.states[truck, 5, 3:6], [8.0, 2.5, 3.0])
     assert s.metadata["prompt"] == "the lead car brakes hard" and s.scenario_id == "road-seq-abc-a1-w0"
