@@ -5,7 +5,9 @@ road line, ``crosswalk`` -> crosswalk. What the loaders keep in metadata comes b
 bumps (``metadata["stop_signs"]`` / ``["speed_bumps"]``), lane successors (``metadata["lane_successors"]``, whose
 inverse gives the entry lanes where the source did not list them) and per-feature attributes
 (``metadata["map_feature_attributes"]``: feature id -> ``type``, ``entry_lanes``, ``left_neighbors``,
-``right_neighbors``, ``speed_limit_mph``). A log without road edges gets its drivable-area outlines as road-edge
+``right_neighbors``, ``speed_limit_mph``). Road edges follow WOMD's convention, the road on their left
+(``scenario.geometry.ROAD_EDGE_ROAD_SIDE``): where the log has drivable areas, an edge whose left side is not the
+drivable area is reversed (the synthetic world's and Argoverse's edges run either way). A log without road edges gets its drivable-area outlines as road-edge
 boundaries (closed polylines), so off-road checks downstream see the road's border; sidewalks have no WOMD kind
 and are left out. Every such decision is returned as a note for the manifest.
 """
@@ -23,6 +25,7 @@ import numpy as np
 from simsplat_core.data.common import lane_successors, map_feature_attributes
 from simsplat_core.export.ids import feature_ids
 from simsplat_core.export.record import MAP_TYPES, ExportMapFeature, SignalState
+from simsplat_core.scenario.geometry import points_in_polygon
 from simsplat_core.types import SceneLog
 
 #: ``MapFeature.kind`` -> exported kind (kinds absent here are derived or left out, see the module docstring).
@@ -65,12 +68,41 @@ def _counter_clockwise_ring(polygon: np.ndarray) -> np.ndarray:
     return np.concatenate([ring, ring[:1]])
 
 
+#: How far beside a road edge (metres) its two sides are probed for the drivable area.
+_SIDE_PROBE_M = 0.5
+
+
+def _road_on_left(points: np.ndarray, areas: list[np.ndarray]) -> bool | None:
+    """Whether the drivable ``areas`` (polygons ``[P, 3]``) lie to the left of the polyline ``points`` ``[N, 3]``:
+    a vote over its segments' midpoints probed :data:`_SIDE_PROBE_M` to each side; ``None`` when no probe is in
+    an area (the edge's side cannot be told)."""
+    a, b = points[:-1, :2], points[1:, :2]
+    direction = b - a
+    length = np.linalg.norm(direction, axis=1)
+    keep = length > 1e-6
+    if not keep.any():
+        return None
+    left = np.stack([-direction[keep, 1], direction[keep, 0]], 1) / length[keep, None]
+    mid = 0.5 * (a[keep] + b[keep])
+    inside_left = np.zeros(len(mid), bool)
+    inside_right = np.zeros(len(mid), bool)
+    for area in areas:
+        inside_left |= points_in_polygon(mid + _SIDE_PROBE_M * left, area[:, :2])
+        inside_right |= points_in_polygon(mid - _SIDE_PROBE_M * left, area[:, :2])
+    votes_left, votes_right = int((inside_left & ~inside_right).sum()), int((inside_right & ~inside_left).sum())
+    if votes_left == votes_right == 0:
+        return None
+    return votes_left >= votes_right
+
+
 def _collect(log: SceneLog) -> tuple[list[tuple[str, str, np.ndarray]], dict[str, list[str]], list[str]]:
     """(source id, kind, points) of every exported feature, stop sign controlled lanes, notes."""
     out: list[tuple[str, str, np.ndarray]] = []
     notes: list[str] = []
     has_edges = any(f.kind == "road_edge" for f in log.map_features)
+    areas = [np.asarray(f.points, np.float64) for f in log.map_features if f.kind == "drivable_area"]
     dropped = Counter[str]()
+    reversed_edges = 0
     for feat in log.map_features:
         kind = KIND_OF_LOG_KIND.get(feat.kind)
         points = np.asarray(feat.points, np.float64)
@@ -79,10 +111,15 @@ def _collect(log: SceneLog) -> tuple[list[tuple[str, str, np.ndarray]], dict[str
         if kind is None:
             dropped[feat.kind] += 1
             continue
+        if kind == "road_edge" and feat.kind == "road_edge" and areas and _road_on_left(points, areas) is False:
+            points = points[::-1]
+            reversed_edges += 1
         out.append((feat.feature_id, kind, points))
     derived = sum(1 for f in log.map_features if f.kind == "drivable_area") if not has_edges else 0
     if derived:
         notes.append(f"drivable_area: {derived} outlines exported as road edges (the log has no road edges)")
+    if reversed_edges:
+        notes.append(f"road_edge: {reversed_edges} reversed so that the road lies on their left (WOMD's convention)")
     notes += [f"{kind}: {n} left out (no WOMD map kind)" for kind, n in sorted(dropped.items())]
     controlled: dict[str, list[str]] = {}
     for sign in _json(log, "stop_signs", []):

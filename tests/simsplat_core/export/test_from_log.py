@@ -137,3 +137,23 @@ def test_the_waymo_motion_sample_matches_its_source_record(shared_data: Path) ->
     assert kinds["stop_sign"] == len(json.loads(log.metadata["stop_signs"])) > 0
     assert kinds["speed_bump"] == len(json.loads(log.metadata["speed_bumps"])) > 0
     assert sum(len(step) for step in s.signals) > 0 and revalidate(s).ok
+
+
+def test_road_edges_are_turned_so_that_the_road_lies_on_their_left() -> None:
+    import dataclasses
+
+    from simsplat_core.types import MapFeature
+
+    log = straight_road_log()
+    xs = np.linspace(-50, 250, 31)
+    wrong = MapFeature("road_edge_7", "road_edge", np.stack([xs, np.full_like(xs, -1.75), np.zeros_like(xs)], 1)[::-1])
+    area = MapFeature("drivable_area_9", "drivable_area",
+                      np.array([[-50, -1.75, 0], [250, -1.75, 0], [250, 5.25, 0], [-50, 5.25, 0.0]]))
+    features = tuple(f for f in log.map_features if f.feature_id != "road_edge_7") + (wrong, area)
+    exported = export_map(dataclasses.replace(log, map_features=features))
+    by_source = {f.source_id: f for f in exported.features}
+    assert by_source["road_edge_7"].points[0, 0] < by_source["road_edge_7"].points[-1, 0]  # now runs along +x
+    assert by_source["road_edge_8"].points[0, 0] > by_source["road_edge_8"].points[-1, 0]  # was right: kept
+    assert any("1 reversed" in n for n in exported.notes)
+    (s,) = export_unedited([dataclasses.replace(log, map_features=features)])
+    assert revalidate(s).ok
