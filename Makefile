@@ -26,7 +26,7 @@ $(STAMP): pyproject.toml
 install: $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/simsplat run --store $(STORE) --sequences 2 --mine $(MINE) $(if $(ITERATIONS),--iterations $(ITERATIONS))
+	$(VENV)/bin/simsplat run --store $(STORE) --sequences 2 --mine $(MINE) $(if $(ITERATIONS),--iterations $(ITERATIONS)) $(if $(filter-out 0,$(MINE)),--export $(STORE)/datasets)
 	$(VENV)/bin/simsplat assets build --store $(STORE)
 	$(VENV)/bin/simsplat inspect $(STORE)/logs/synth-000000 --sheet $(STORE)/contact_sheet.png --frame 20
 	$(VENV)/bin/simsplat render --store $(STORE) --seq synth-000000 --frame 20 --out $(STORE)/render_frame20.png
