@@ -4,12 +4,14 @@
 road line, ``crosswalk`` -> crosswalk. What the loaders keep in metadata comes back too: stop signs and speed
 bumps (``metadata["stop_signs"]`` / ``["speed_bumps"]``), lane successors (``metadata["lane_successors"]``, whose
 inverse gives the entry lanes where the source did not list them) and per-feature attributes
-(``metadata["map_feature_attributes"]``: feature id -> ``type``, ``entry_lanes``, ``left_neighbors``,
-``right_neighbors``, ``speed_limit_mph``). Road edges follow WOMD's convention, the road on their left
-(``scenario.geometry.ROAD_EDGE_ROAD_SIDE``): where the log has drivable areas, an edge whose left side is not the
-drivable area is reversed (the synthetic world's and Argoverse's edges run either way). A log without road edges gets its drivable-area outlines as road-edge
-boundaries (closed polylines), so off-road checks downstream see the road's border; sidewalks have no WOMD kind
-and are left out. Every such decision is returned as a note for the manifest.
+(``data.common.map_feature_attributes``: ``type``, ``entry_lanes``, ``left_neighbors``, ``right_neighbors``,
+``speed_limit_mph``).
+
+Road edges follow WOMD's convention, the road on their left (``scenario.geometry.ROAD_EDGE_ROAD_SIDE``): where the
+log has drivable areas, an edge whose left side is not the drivable area is reversed (the synthetic world's and
+Argoverse's edges run either way). A log without road edges gets its drivable-area outlines as road-edge
+boundaries (closed, counter-clockwise), so off-road checks downstream see the road's border; drivable areas and
+sidewalks have no WOMD kind and are left out. Every such decision is returned as a note for the manifest.
 """
 
 from __future__ import annotations
