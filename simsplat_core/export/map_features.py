@@ -1,11 +1,11 @@
 """A stored log's map as exported map features: kinds, integer ids, lane connectivity, types, traffic signals.
 
 ``SceneLog.map_features`` kinds map to WOMD's: ``lane`` -> lane, ``road_edge`` -> road edge, ``lane_marking`` ->
-road line, ``crosswalk`` -> crosswalk. What the loaders keep in metadata comes back too: stop signs and speed
-bumps (``metadata["stop_signs"]`` / ``["speed_bumps"]``), lane successors (``metadata["lane_successors"]``, whose
-inverse gives the entry lanes where the source did not list them) and per-feature attributes
-(``data.common.map_feature_attributes``: ``type``, ``entry_lanes``, ``left_neighbors``, ``right_neighbors``,
-``speed_limit_mph``).
+road line, ``crosswalk`` -> crosswalk. What the loaders keep in metadata comes back too: stop signs, speed bumps
+and driveways (``metadata["stop_signs"]`` / ``["speed_bumps"]`` / ``["driveways"]``), lane successors
+(``metadata["lane_successors"]``, whose inverse gives the entry lanes where the source did not list them) and
+per-feature attributes (``data.common.map_feature_attributes``: ``type``, ``entry_lanes``, ``left_neighbors``,
+``right_neighbors``, ``speed_limit_mph``).
 
 Road edges follow WOMD's convention, the road on their left (``scenario.geometry.ROAD_EDGE_ROAD_SIDE``): where the
 log has drivable areas, an edge whose left side is not the drivable area is reversed (the synthetic world's and
@@ -128,8 +128,9 @@ def _collect(log: SceneLog) -> tuple[list[tuple[str, str, np.ndarray]], dict[str
         sid = f"stop_sign_{sign['id']}"
         out.append((sid, "stop_sign", np.asarray(sign["position"], np.float64).reshape(1, 3)))
         controlled[sid] = [str(lane) for lane in sign.get("lanes", [])]
-    for bump in _json(log, "speed_bumps", []):
-        out.append((f"speed_bump_{bump['id']}", "speed_bump", np.asarray(bump["polygon"], np.float64).reshape(-1, 3)))
+    for kind, key in (("speed_bump", "speed_bumps"), ("driveway", "driveways")):
+        for polygon in _json(log, key, []):
+            out.append((f"{kind}_{polygon['id']}", kind, np.asarray(polygon["polygon"], np.float64).reshape(-1, 3)))
     return out, controlled, notes
 
 
