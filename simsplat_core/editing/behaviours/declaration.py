@@ -13,12 +13,17 @@ controller's route / speed plan, ``editing.motion``) and its checks (``eval.edit
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from simsplat_core.editing.parse.predicate import PredicateWork
+
 #: The agents a behaviour may be restricted to.
 AgentKind = Literal["vehicle", "pedestrian"]
+#: A parser rule: reads the behaviour's words off a canonical predicate (``PredicateWork.take``, which blanks
+#: the words it used) and sets its ``Behaviour`` fields (``PredicateWork.set``).
+ParseRule = Callable[[PredicateWork], None]
 
 
 @dataclass(frozen=True)
@@ -53,6 +58,8 @@ class BehaviourDecl:
         motion_classes: scenario-vocabulary motion class -> the intent of asking an agent to do it.
         proposal_forms: mining rule client proposal kind -> its sentence forms (``mining.rule_wording``).
         prompt_forms: editing benchmark intent kind -> its sentence forms (``eval.editing.wording``).
+        parse_rule: the parser's rule for its words (``None``: another behaviour's rule reads them, as the
+            street-crossing rule reads "jaywalk"); ``registry.PARSE_ORDER`` runs the rules in a fixed order.
     """
 
     name: str
@@ -63,6 +70,7 @@ class BehaviourDecl:
     motion_classes: Mapping[str, str] = field(default_factory=dict)
     proposal_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     prompt_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
+    parse_rule: ParseRule | None = None
 
     def __post_init__(self) -> None:
         names = {i.name for i in self.intents}

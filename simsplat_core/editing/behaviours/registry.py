@@ -31,6 +31,17 @@ BEHAVIOURS: tuple[BehaviourDecl, ...] = (
 )
 
 
+#: The behaviours whose parser rules read a predicate, in the order they run (``editing.parse.behaviour``): each
+#: rule blanks the words it used, so an earlier rule wins words two could read. The turn rule runs before the
+#: speed rule ("do not turn" is not a negated speed); the street-crossing rule reads jaywalking's words too.
+PARSE_ORDER: tuple[BehaviourDecl, ...] = (
+    TURN, SPEED, TIMING, STOP, FOLLOW, LATERAL_OFFSET, REVERSE, LANE_CHANGE, CROSS_STREET, GAIT, LONGITUDINAL,
+)
+if {b.name for b in PARSE_ORDER} != {b.name for b in BEHAVIOURS if b.parse_rule is not None} \
+        or len({b.name for b in PARSE_ORDER}) != len(PARSE_ORDER):
+    raise ValueError("behaviour registry: PARSE_ORDER must list every behaviour with a parse rule once, and only those")
+
+
 def _unique(pairs: list[tuple[str, Any]], what: str) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in pairs:
@@ -85,4 +96,5 @@ PROMPT_FORMS: dict[str, tuple[str, ...]] = _unique(
     [(k, forms) for b in BEHAVIOURS for k, forms in b.prompt_forms.items()], "prompt kind")
 
 __all__ = ["ASKED_CLASS", "BEHAVIOURS", "CLASS_INTENT", "FIELD_WORDS", "INTENT_FAMILY", "INTENT_FIELDS",
-           "INTENT_PHRASES", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED", "VEHICLE_ONLY"]
+           "INTENT_PHRASES", "PARSE_ORDER", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED",
+           "VEHICLE_ONLY"]
