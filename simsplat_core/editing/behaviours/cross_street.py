@@ -1,6 +1,6 @@
 """Crossing the street (pedestrians)."""
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
 from simsplat_core.editing.behaviours.gait import GAIT_VERBS, set_gait_of
 from simsplat_core.editing.behaviours.jaywalk import take_jaywalking
 from simsplat_core.editing.parse import chunks
@@ -30,6 +30,11 @@ def parse_cross_street(w: PredicateWork) -> None:
         w.set("jaywalk", True)
 
 
+def _labelled_crossing(asked: bool, motion: str) -> bool:
+    """Whether the motion class ``motion`` is one of crossing the street (either way, or undirected)."""
+    return CROSS_STREET.motion_classes.get(motion) == "cross"
+
+
 CROSS_STREET = BehaviourDecl(
     "cross_street",
     fields=("cross_street",),
@@ -55,4 +60,5 @@ CROSS_STREET = BehaviourDecl(
         ),
     },
     parse_rule=parse_cross_street,
+    label_check=LabelCheck("cross_street", _labelled_crossing, lambda asked: "not crossing the street"),
 )

@@ -46,6 +46,25 @@ class Intent:
 
 
 @dataclass(frozen=True)
+class LabelCheck:
+    """How an agent asked the behaviour shows in the trajectory auto-labeller's motion class of its edited
+    trajectory (``language.motion_labels``): what the editing benchmark's check (``eval.editing.checks``) and the
+    mining judge's (``mining.rule_judge``) both require of a manoeuvre.
+
+    Attributes:
+        field: the ``Behaviour`` field whose asked value is checked (``eval.editing.intents.MotionIntent`` names it
+            alike); a false value (``None``, ``False``) asks nothing.
+        shows: ``(asked value, motion class) ->`` whether the class shows the asked value.
+        missing: ``asked value ->`` what a class that does not show it lacks, in words (``"not reversing"``,
+            ``"asked changing_lane_left"``); the checks prefix ``"labelled <class>, "``.
+    """
+
+    field: str
+    shows: Callable[[Any, str], bool]
+    missing: Callable[[Any], str]
+
+
+@dataclass(frozen=True)
 class BehaviourDecl:
     """A motion behaviour of the edit language (module docstring).
 
@@ -60,6 +79,8 @@ class BehaviourDecl:
         prompt_forms: editing benchmark intent kind -> its sentence forms (``eval.editing.wording``).
         parse_rule: the parser's rule for its words (``None``: another behaviour's rule reads them, as the
             street-crossing rule reads "jaywalk"); ``registry.PARSE_ORDER`` runs the rules in a fixed order.
+        label_check: how the auto-labeller's motion class shows it (manoeuvres: reversing, lane changes, turns,
+            crossing); ``None``: the checks measure it otherwise (speeds, stops, timing) or not at all.
     """
 
     name: str
@@ -71,6 +92,7 @@ class BehaviourDecl:
     proposal_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     prompt_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     parse_rule: ParseRule | None = None
+    label_check: LabelCheck | None = None
 
     def __post_init__(self) -> None:
         names = {i.name for i in self.intents}
@@ -79,6 +101,9 @@ class BehaviourDecl:
             raise ValueError(f"behaviour {self.name!r}: motion_classes name unknown intents {unknown}")
         if self.agent is not None and not self.words:
             raise ValueError(f"behaviour {self.name!r}: an agent-restricted behaviour needs its words")
+        if self.label_check is not None and self.label_check.field not in self.fields:
+            raise ValueError(f"behaviour {self.name!r}: its label check reads {self.label_check.field!r}, not one of "
+                             f"its fields {list(self.fields)}")
         for intent in self.intents:
             if intent.fields is not None and not set(intent.fields) & set(self.fields):
                 raise ValueError(f"behaviour {self.name!r}: intent {intent.name!r} sets none of its fields")

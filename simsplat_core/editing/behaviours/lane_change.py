@@ -2,7 +2,7 @@
 
 import re
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
 from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
 
@@ -34,6 +34,11 @@ def parse_lane_change(w: PredicateWork) -> None:
         w.out.refusal = "a lane change needs a side: say 'change lanes to the left' or 'to the right'"
         w.out.refusal_field = "lane_change"
         w.take(_AMBIGUOUS_LANE)
+
+
+def lane_change_class(side: str) -> str:
+    """The motion class of a lane change to ``side`` (``"left"`` -> ``"changing_lane_left"``)."""
+    return next(c for c, intent in LANE_CHANGE.motion_classes.items() if intent == f"lane_{side}")
 
 
 LANE_CHANGE = BehaviourDecl(
@@ -75,4 +80,6 @@ LANE_CHANGE = BehaviourDecl(
         ),
     },
     parse_rule=parse_lane_change,
+    label_check=LabelCheck("lane_change", lambda side, motion: motion == lane_change_class(side),
+                           lambda side: f"asked {lane_change_class(side)}"),
 )

@@ -69,20 +69,9 @@ if {b.name for b in RESTRICTED} != {b.name for b in BEHAVIOURS if b.agent is not
     raise ValueError("behaviour registry: RESTRICTED must list every behaviour with an agent, and only those")
 
 
-def _asked_classes() -> dict[tuple[str, Any], str]:
-    out: dict[tuple[str, Any], str] = {}
-    for b in BEHAVIOURS:
-        for i in b.intents:
-            classes = [c for c, name in b.motion_classes.items() if name == i.name]
-            if i.fields is not None and len(i.fields) == 1 and len(classes) == 1:
-                ((name, value),) = i.fields.items()
-                out[(name, value)] = classes[0]
-    return out
-
-
-#: ``(Behaviour field, value)`` -> the one motion class an agent asked it shows (``("lane_change", "left")`` ->
-#: ``"changing_lane_left"``): what the checks of the benchmark and the mining judge compare labels with.
-ASKED_CLASS: dict[tuple[str, Any], str] = _asked_classes()
+#: The behaviours the checks verify on the auto-labeller's motion class (``BehaviourDecl.label_check``), in the order
+#: the benchmark's and the mining judge's checks report them.
+LABEL_CHECKED: tuple[BehaviourDecl, ...] = tuple(b for b in BEHAVIOURS if b.label_check is not None)
 #: Vehicle-only and pedestrian-only ``Behaviour`` fields.
 VEHICLE_ONLY: tuple[str, ...] = tuple(f for b in RESTRICTED if b.agent == "vehicle" for f in b.fields)
 PEDESTRIAN_ONLY: tuple[str, ...] = tuple(f for b in RESTRICTED if b.agent == "pedestrian" for f in b.fields)
@@ -95,6 +84,6 @@ PROPOSAL_FORMS: dict[str, tuple[str, ...]] = _unique(
 PROMPT_FORMS: dict[str, tuple[str, ...]] = _unique(
     [(k, forms) for b in BEHAVIOURS for k, forms in b.prompt_forms.items()], "prompt kind")
 
-__all__ = ["ASKED_CLASS", "BEHAVIOURS", "CLASS_INTENT", "FIELD_WORDS", "INTENT_FAMILY", "INTENT_FIELDS",
-           "INTENT_PHRASES", "PARSE_ORDER", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED",
+__all__ = ["BEHAVIOURS", "CLASS_INTENT", "FIELD_WORDS", "INTENT_FAMILY", "INTENT_FIELDS", "INTENT_PHRASES",
+           "LABEL_CHECKED", "PARSE_ORDER", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED",
            "VEHICLE_ONLY"]

@@ -2,7 +2,7 @@
 
 import re
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
 from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
 
@@ -19,6 +19,11 @@ def parse_reverse(w: PredicateWork) -> None:
     w.take(r"(?:reverse|reverses|reversing|back(?:s|ing)? (?:up|out|it up)|back up|(?:drive|drives|go|goes|move|moves"
            r"|roll|rolls|head|heads|travel|travels)(?: it)? backwards?|(?:in|into) reverse(?: gear)?)" + _OUT_OF_SPOT,
            reverse)
+
+def _labelled_reversing(asked: bool, motion: str) -> bool:
+    """Whether the motion class ``motion`` means reversing."""
+    return REVERSE.motion_classes.get(motion) == "reverse"
+
 
 REVERSE = BehaviourDecl(
     "reverse",
@@ -44,4 +49,5 @@ REVERSE = BehaviourDecl(
         ),
     },
     parse_rule=parse_reverse,
+    label_check=LabelCheck("reverse", _labelled_reversing, lambda asked: f"not {voc.REVERSING}"),
 )

@@ -1,6 +1,6 @@
 """Turning left or right, or going straight, at the next intersection (vehicles)."""
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
 from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
 
@@ -31,6 +31,22 @@ def parse_turn(w: PredicateWork) -> None:
            lambda m: w.set("turn", m.group(1) or m.group(2)))
     if "turn" in w.out.fields:  # where the turn is made: a "crossing" there is the intersection, not a crosswalk
         w.take(_TURN_PLACE)
+
+
+def turn_class(side: str) -> str:
+    """The motion class of a turn to ``side`` (``"left"`` -> ``"turning_left"``)."""
+    return next(c for c, intent in TURN.motion_classes.items() if intent == f"turn_{side}")
+
+
+def _labelled_turn(turn: str, motion: str) -> bool:
+    """A turn to a side shows as that side's turning class; going straight as any class but turning."""
+    if turn == "straight":
+        return TURN.motion_classes.get(motion) not in ("turn_left", "turn_right")
+    return motion == turn_class(turn)
+
+
+def _turn_missing(turn: str) -> str:
+    return "asked to go straight" if turn == "straight" else f"asked {turn_class(turn)}"
 
 
 TURN = BehaviourDecl(
@@ -69,4 +85,5 @@ TURN = BehaviourDecl(
         ),
     },
     parse_rule=parse_turn,
+    label_check=LabelCheck("turn", _labelled_turn, _turn_missing),
 )

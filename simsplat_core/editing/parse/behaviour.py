@@ -7,7 +7,8 @@ Rules run in a fixed order on the canonical predicate (``editing.parse.text``): 
 each behaviour's own rule (``BehaviourDecl.parse_rule``, in ``editing.behaviours.registry.PARSE_ORDER``), then the
 neutral words ("go on") and negation. Each blanks the words it used, so "stop behind the bus" is a stop, not also a
 placement. What is left over (less filler words) is returned as ``residual``: the parser maps it with E5 or refuses
-it, never drops it. When no rule matched, the grounding lexicon's motion keywords (``grounding.lexicon.MOTION_KEYWORDS``) name a scenario-vocabulary class, which
+it, never drops it. When no rule matched, the grounding lexicon's motion keywords
+(``grounding.lexicon.MOTION_KEYWORDS``) name a scenario-vocabulary class, which
 ``editing.behaviours.registry.CLASS_INTENT`` turns into an intent.
 
 A given speed replaces accelerate / decelerate (not a hard brake).
