@@ -1,14 +1,17 @@
 """``BehaviourDecl``: one motion behaviour of the edit language, declared once.
 
 A behaviour is what ``commands.Behaviour`` lets a command ask of an agent (stop, reverse, change lanes, ...).
-Its declaration holds everything about it that is data: the ``Behaviour`` fields it sets, which agents may do
-it, its *intents* (what an unknown verb may be mapped to, with the fields each sets and its imperative
-phrasings for E5), the scenario-vocabulary motion classes that mean it, and the sentence forms that ask for it
-in the mining rule client's proposals and in the editing benchmark's prompts. The registry
+Its declaration holds everything the edit language knows of it: the ``Behaviour`` fields it sets, which agents may
+do it, its *intents* (what an unknown verb may be mapped to, with the fields each sets and its imperative
+phrasings for E5), the scenario-vocabulary motion classes that mean it, the sentence forms that ask for it in the
+mining rule client's proposals and in the editing benchmark's prompts, the parser rule that reads its words
+(``parse_rule``) and, for a manoeuvre, how the trajectory auto-labeller's motion class shows it (``label_check``,
+which the editing benchmark's and the mining judge's checks both apply). The registry
 (``editing.behaviours.registry``) collects the declarations and derives the tables the parser, the motion
-requests, the benchmark's prompt generator and the rule client read; the behaviour's planner (the motion
-controller's route / speed plan, ``editing.motion``) and its checks (``eval.editing.checks``,
-``mining.rule_judge``) are code, keyed by the field and kind names declared here.
+requests, the checks, the benchmark's prompt generator and the rule client read. The planner (the motion
+controller's route / speed plan, ``editing.motion``) and the layer-specific parts of the checks
+(``eval.editing.checks.MOTION_CHECKS``, ``mining.rule_judge.CHANGE_CHECKS``) are code keyed by the field and
+behaviour names declared here (``docs/extending_behaviours.md``).
 """
 
 from __future__ import annotations
