@@ -6,7 +6,7 @@ Checks, each a failure class (:data:`PENALTIES`):
 
 * ``grounding`` -- every command acted on something: a target of a modify / replace / remove is among the
   trajectories (removed ones absent), an insert added an agent;
-* ``change`` -- what each command asks shows in the trajectories, against the log's (``request.before``) or,
+* ``change`` -- what each command asks shows in the trajectories (:data:`CHANGE_CHECKS`, one check per behaviour), against the log's (``request.before``) or,
   for an inserted agent, against its own start: a speed ask moves the mean speed at least half-way to the asked
   speed, a stop ends below :attr:`JudgeConfig.stop_mps`, braking lowers the end (or least) speed, a lane
   change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked side, a turn changes its
@@ -190,8 +190,8 @@ def _earlier(reason: str) -> ParameterChange:
 @dataclass(frozen=True)
 class _Change:
     """One agent's edit as the change checks see it: ``after`` against ``before`` (``None``: an inserted agent,
-    judged against its own start), their :class:`Motion` (``ref``: ``before``'s when present), and the
-    auto-labeller's motion class ``label`` of ``after`` (``None``: not given)."""
+    judged against its own start), their :class:`Motion` ``a`` and ``b`` (``ref``: ``b`` when ``before`` is
+    present, else ``None``), and the auto-labeller's motion class ``label`` of ``after`` (``None``: not given)."""
 
     behaviour: Behaviour
     after: AgentTrajectory
@@ -566,5 +566,5 @@ def judge_edit(request: JudgeRequest, config: JudgeConfig | None = None) -> Judg
                      suggestions=_unique(c for f in findings for c in f.suggestions))
 
 
-__all__ = ["FOLLOW_CLASSES", "PENALTIES", "Finding", "JudgeConfig", "Motion", "deviation_m", "judge_edit",
-           "motion_of", "render_problem"]
+__all__ = ["CHANGE_CHECKS", "FOLLOW_CLASSES", "LABEL_SUGGESTIONS", "PENALTIES", "UNCHECKED", "Finding", "JudgeConfig",
+           "Motion", "deviation_m", "judge_edit", "motion_of", "render_problem"]

@@ -807,5 +807,6 @@ def check_refusal(intent: EditIntent, obs: EditObservation) -> CheckResult:
                        {"expected_reason": float(expected)})
 
 
-__all__ = ["ALIGN_DEG", "CheckResult", "HARD_BRAKE_MPS2", "IN_LANE_M", "NEXT_TO_M", "RUN_MPS", "STILL_MPS", "Verdict",
+__all__ = ["ALIGN_DEG", "MOTION_CHECKS", "UNCHECKED", "CheckResult", "HARD_BRAKE_MPS2", "IN_LANE_M", "NEXT_TO_M",
+           "RUN_MPS", "STILL_MPS", "Verdict",
            "check_refusal", "check_states", "edited_trajectory", "footprint_gap", "measured_speed", "motion_label"]
