@@ -6,15 +6,16 @@ Checks, each a failure class (:data:`PENALTIES`):
 
 * ``grounding`` -- every command acted on something: a target of a modify / replace / remove is among the
   trajectories (removed ones absent), an insert added an agent;
-* ``change`` -- what each command asks shows in the trajectories (:data:`CHANGE_CHECKS`, one check per behaviour), against the log's (``request.before``) or,
-  for an inserted agent, against its own start: a speed ask moves the mean speed at least half-way to the asked
-  speed, a stop ends below :attr:`JudgeConfig.stop_mps`, braking lowers the end (or least) speed, a lane
-  change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked side, a turn changes its
-  heading by :attr:`JudgeConfig.turn_deg` the asked way, reversing moves it backwards, a later start keeps it
-  still until then, crossing moves a pedestrian off its log path, running raises its speed; anything else moves
-  the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone; when the request
-  carries the auto-labeller's motion classes (``request.motion_labels``, from ``judge_input``), reversing, lane
-  changes, turns, going straight and crossing are checked on them as the editing benchmark does instead;
+* ``change`` -- what each command asks shows in the trajectories (:data:`CHANGE_CHECKS`, one check per behaviour),
+  against the log's (``request.before``) or, for an inserted agent, against its own start: a speed ask moves the
+  mean speed at least half-way to the asked speed, a stop ends below :attr:`JudgeConfig.stop_mps`, braking lowers
+  the end (or least) speed, a lane change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked
+  side, a turn changes its heading by :attr:`JudgeConfig.turn_deg` the asked way, reversing moves it backwards, a
+  later start keeps it still until then, crossing moves a pedestrian off its log path, running raises its speed;
+  anything else moves the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone; when
+  the request carries the auto-labeller's motion classes (``request.motion_labels``, from ``judge_input``),
+  reversing, lane changes, turns, going straight and crossing are checked on them with the behaviours' own label
+  checks (``BehaviourDecl.label_check``), as the editing benchmark does, instead;
 * ``collision``, ``offroad``, ``kinematic`` -- the validation's failures (``request.failures``);
 * ``render`` -- no render is blank (constant) or mostly holes (near-black pixels);
 * ``visibility`` -- each present target covers at least :attr:`JudgeConfig.min_visible_pixels` pixels of the

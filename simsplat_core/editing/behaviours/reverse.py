@@ -20,6 +20,7 @@ def parse_reverse(w: PredicateWork) -> None:
            r"|roll|rolls|head|heads|travel|travels)(?: it)? backwards?|(?:in|into) reverse(?: gear)?)" + _OUT_OF_SPOT,
            reverse)
 
+
 def _labelled_reversing(asked: bool, motion: str) -> bool:
     """Whether the motion class ``motion`` means reversing."""
     return REVERSE.motion_classes.get(motion) == "reverse"
