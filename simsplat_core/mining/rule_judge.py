@@ -6,15 +6,16 @@ Checks, each a failure class (:data:`PENALTIES`):
 
 * ``grounding`` -- every command acted on something: a target of a modify / replace / remove is among the
   trajectories (removed ones absent), an insert added an agent;
-* ``change`` -- what each command asks shows in the trajectories, against the log's (``request.before``) or,
-  for an inserted agent, against its own start: a speed ask moves the mean speed at least half-way to the asked
-  speed, a stop ends below :attr:`JudgeConfig.stop_mps`, braking lowers the end (or least) speed, a lane
-  change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked side, a turn changes its
-  heading by :attr:`JudgeConfig.turn_deg` the asked way, reversing moves it backwards, a later start keeps it
-  still until then, crossing moves a pedestrian off its log path, running raises its speed; anything else moves
-  the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone; when the request
-  carries the auto-labeller's motion classes (``request.motion_labels``, from ``judge_input``), reversing, lane
-  changes, turns, going straight and crossing are checked on them as the editing benchmark does instead;
+* ``change`` -- what each command asks shows in the trajectories (:data:`CHANGE_CHECKS`, one check per behaviour),
+  against the log's (``request.before``) or, for an inserted agent, against its own start: a speed ask moves the
+  mean speed at least half-way to the asked speed, a stop ends below :attr:`JudgeConfig.stop_mps`, braking lowers
+  the end (or least) speed, a lane change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked
+  side, a turn changes its heading by :attr:`JudgeConfig.turn_deg` the asked way, reversing moves it backwards, a
+  later start keeps it still until then, crossing moves a pedestrian off its log path, running raises its speed;
+  anything else moves the target off its log path by :attr:`JudgeConfig.changed_m`; a removed target is gone; when
+  the request carries the auto-labeller's motion classes (``request.motion_labels``, from ``judge_input``),
+  reversing, lane changes, turns, going straight and crossing are checked on them with the behaviours' own label
+  checks (``BehaviourDecl.label_check``), as the editing benchmark does, instead;
 * ``collision``, ``offroad``, ``kinematic`` -- the validation's failures (``request.failures``);
 * ``render`` -- no render is blank (constant) or mostly holes (near-black pixels);
 * ``visibility`` -- each present target covers at least :attr:`JudgeConfig.min_visible_pixels` pixels of the
@@ -31,12 +32,13 @@ from __future__ import annotations
 
 import logging
 import math
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from simsplat_core.editing.behaviours.registry import ASKED_CLASS
+from simsplat_core.editing.behaviours.registry import LABEL_CHECKED
 from simsplat_core.editing.commands import Behaviour, EditCommand
 from simsplat_core.mining.vlm_protocol import (
     PLAUSIBILITY_MAX,
@@ -47,15 +49,12 @@ from simsplat_core.mining.vlm_protocol import (
     ParameterChange,
     ValidationFailure,
 )
-from simsplat_core.scenario import vocabulary as voc
 
 logger = logging.getLogger(__name__)
 
 #: Plausibility lost per failed check class.
 PENALTIES: dict[str, int] = {"grounding": 1, "change": 1, "collision": 2, "offroad": 2, "kinematic": 1,
                              "render": 2, "visibility": 1}
-#: Motion classes of a pedestrian crossing the street.
-CROSSING_LABELS: frozenset[str] = frozenset({voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT})
 #: Check classes whose failure means the prompt is not followed.
 FOLLOW_CLASSES: frozenset[str] = frozenset({"grounding", "change", "render", "visibility"})
 
@@ -189,104 +188,205 @@ def _earlier(reason: str) -> ParameterChange:
     return ParameterChange("start_time", "1 s earlier", reason)
 
 
-def _label_findings(behaviour: Behaviour, label: str) -> list[tuple[str, ParameterChange]]:
-    """The manoeuvres of ``behaviour`` (reversing, a lane change, a turn or going straight, crossing the street)
-    that the auto-labeller's motion class ``label`` of the edited trajectory does not show, as the editing
-    benchmark checks them (``eval.editing.checks``): (what failed, the suggestion)."""
-    out = []
-    if behaviour.reverse and label != voc.REVERSING:
-        out.append((f"labelled {label}, not {voc.REVERSING}",
-                    _speed_suggestion(2.0, "reversing does not show: back up at this speed")))
-    if behaviour.lane_change is not None:
-        want = ASKED_CLASS[("lane_change", behaviour.lane_change)]
-        if label != want:
-            out.append((f"labelled {label}, asked {want}", _earlier("the lane change does not complete in the log")))
-    if behaviour.turn in ("left", "right"):
-        want = ASKED_CLASS[("turn", behaviour.turn)]
-        if label != want:
-            out.append((f"labelled {label}, asked {want}", _earlier("the turn does not complete in the log")))
-    elif behaviour.turn == "straight" and label in (voc.TURNING_LEFT, voc.TURNING_RIGHT):
-        out.append((f"labelled {label}, asked to go straight", _earlier("it turns before the intersection")))
-    if behaviour.cross_street and label not in CROSSING_LABELS:
-        out.append((f"labelled {label}, not crossing the street", _earlier("the crossing does not show in the log")))
-    return out
+@dataclass(frozen=True)
+class _Change:
+    """One agent's edit as the change checks see it: ``after`` against ``before`` (``None``: an inserted agent,
+    judged against its own start), their :class:`Motion` ``a`` and ``b`` (``ref``: ``b`` when ``before`` is
+    present, else ``None``), and the auto-labeller's motion class ``label`` of ``after`` (``None``: not given)."""
+
+    behaviour: Behaviour
+    after: AgentTrajectory
+    before: AgentTrajectory | None
+    a: Motion
+    b: Motion
+    ref: Motion | None
+    dt: float
+    cfg: JudgeConfig
+    label: str | None
 
 
-def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, before: AgentTrajectory | None,  # noqa: C901 -- judge rule table: one rule per behaviour field
-                     dt: float, cfg: JudgeConfig, label: str | None = None) -> list[Finding]:
-    """What ``behaviour`` asks that ``after`` does not show (against ``before``, or its own start). Given the
-    auto-labeller's motion class ``label`` of ``after``, the manoeuvres are checked on it (:func:`_label_findings`)
-    instead of this judge's own thresholds."""
-    a, b = motion_of(after, dt, cfg.tail_s), motion_of(before, dt, cfg.tail_s)
-    ref = b if b.present else None
-    out: list[Finding] = []
+#: A change check: what ``_Change.behaviour`` asks that the trajectory does not show, as (why, suggestions) pairs.
+ChangeCheck = Callable[[_Change], list[tuple[str, tuple[ParameterChange, ...]]]]
 
-    def fail(reason: str, *suggestions: ParameterChange) -> None:
-        out.append(Finding("change", f"{oid}: {reason}", suggestions))
 
-    if behaviour.speed is not None:
-        base = ref.mean_speed if ref is not None else a.start_speed
-        target = behaviour.speed.target_mps(base)
-        asked, got = target - base, a.mean_speed - base
-        if ref is None and behaviour.speed.mode == "absolute":
-            ok = abs(a.mean_speed - target) <= max(1.0, 0.3 * target) or a.max_speed >= 0.9 * target
-        else:
-            ok = abs(asked) < 0.3 or got / asked >= cfg.speed_share
-        if not ok:
-            fail(f"mean speed {a.mean_speed:.1f} m/s, asked {target:.1f} m/s",
-                 _speed_suggestion(target + 0.5 * asked, "the asked speed change does not show: ask for a larger one"))
-    if behaviour.longitudinal == "accelerate":
+def _speed_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """A said speed: the mean speed moves at least :attr:`JudgeConfig.speed_share` of the way to it (an inserted
+    agent at an absolute speed: its mean or top speed near it)."""
+    if c.behaviour.speed is None:
+        return []
+    a, ref = c.a, c.ref
+    base = ref.mean_speed if ref is not None else a.start_speed
+    target = c.behaviour.speed.target_mps(base)
+    asked, got = target - base, a.mean_speed - base
+    if ref is None and c.behaviour.speed.mode == "absolute":
+        ok = abs(a.mean_speed - target) <= max(1.0, 0.3 * target) or a.max_speed >= 0.9 * target
+    else:
+        ok = abs(asked) < 0.3 or got / asked >= c.cfg.speed_share
+    if ok:
+        return []
+    return [(f"mean speed {a.mean_speed:.1f} m/s, asked {target:.1f} m/s",
+             (_speed_suggestion(target + 0.5 * asked, "the asked speed change does not show: ask for a larger one"),))]
+
+
+def _longitudinal_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """Speeding up raises the end (or mean) speed; braking or slowing down (without a stop) lowers the end or least
+    speed by :attr:`JudgeConfig.brake_mps`."""
+    a, ref, cfg, longitudinal = c.a, c.ref, c.cfg, c.behaviour.longitudinal
+    out: list[tuple[str, tuple[ParameterChange, ...]]] = []
+    if longitudinal == "accelerate":
         base_end = ref.end_speed if ref is not None else a.start_speed
         if a.end_speed < base_end + cfg.brake_mps * 0.5 and (ref is None or a.mean_speed < ref.mean_speed + 0.5):
-            fail(f"does not speed up (ends at {a.end_speed:.1f} m/s)",
-                 _speed_suggestion(base_end + 3.0, "speeding up does not show: ask for a higher speed"))
-    if behaviour.longitudinal in ("decelerate", "brake_hard") and behaviour.stop is None:
+            out.append((f"does not speed up (ends at {a.end_speed:.1f} m/s)",
+                        (_speed_suggestion(base_end + 3.0, "speeding up does not show: ask for a higher speed"),)))
+    if longitudinal in ("decelerate", "brake_hard") and c.behaviour.stop is None:
         base_end = ref.end_speed if ref is not None else a.start_speed
         base_min = ref.min_speed if ref is not None else a.start_speed
         if a.end_speed > base_end - cfg.brake_mps and a.min_speed > base_min - cfg.brake_mps:
-            fail(f"does not brake (ends at {a.end_speed:.1f} m/s)",
-                 _speed_suggestion(0.5 * base_end, "braking does not show: ask for a lower speed"))
-    if behaviour.stop is not None and a.end_speed > cfg.stop_mps:
-        fail(f"does not stop (ends at {a.end_speed:.1f} m/s)", _earlier("the stop does not complete in the log"))
-    if label is not None:
-        out += [Finding("change", f"{oid}: {why}", (change,)) for why, change in _label_findings(behaviour, label)]
-    if behaviour.reverse and label is None:
-        along = _along(after, a.start_heading if after.heading is not None else b.start_heading)
-        backwards = along < -cfg.moved_m if math.isfinite(along) else a.net_m >= cfg.moved_m
-        if not backwards:
-            fail(f"does not reverse (moves {along:+.1f} m along its heading)",
-                 _speed_suggestion(2.0, "reversing does not show: back up at this speed"))
-    if behaviour.lane_change is not None and label is None:
-        sign = 1.0 if behaviour.lane_change == "left" else -1.0
-        shift = a.lateral_m - (ref.lateral_m if ref is not None else 0.0)
-        if not math.isfinite(shift) or sign * shift < cfg.lateral_m:
-            fail(f"does not change lanes to the {behaviour.lane_change} (shifted {shift:+.1f} m sideways)",
-                 _earlier("the lane change does not complete in the log"))
-    if behaviour.turn in ("left", "right") and label is None:
-        sign = 1.0 if behaviour.turn == "left" else -1.0
-        if sign * a.heading_change_deg < cfg.turn_deg:
-            fail(f"does not turn {behaviour.turn} (heading changes {a.heading_change_deg:+.0f} deg)",
-                 _earlier("the turn does not complete in the log"))
+            out.append((f"does not brake (ends at {a.end_speed:.1f} m/s)",
+                        (_speed_suggestion(0.5 * base_end, "braking does not show: ask for a lower speed"),)))
+    return out
+
+
+def _stop_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """A stop ends below :attr:`JudgeConfig.stop_mps`."""
+    if c.behaviour.stop is not None and c.a.end_speed > c.cfg.stop_mps:
+        return [(f"does not stop (ends at {c.a.end_speed:.1f} m/s)",
+                 (_earlier("the stop does not complete in the log"),))]
+    return []
+
+
+#: Behaviour name -> the parameter change to suggest when the auto-labeller's class does not show the behaviour's
+#: asked value (``BehaviourDecl.label_check``): one per behaviour of ``registry.LABEL_CHECKED``.
+LABEL_SUGGESTIONS: dict[str, Callable[[Any], ParameterChange]] = {
+    "reverse": lambda asked: _speed_suggestion(2.0, "reversing does not show: back up at this speed"),
+    "lane_change": lambda side: _earlier("the lane change does not complete in the log"),
+    "turn": lambda turn: _earlier("it turns before the intersection" if turn == "straight"
+                                  else "the turn does not complete in the log"),
+    "cross_street": lambda asked: _earlier("the crossing does not show in the log"),
+}
+
+
+def _label_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """The manoeuvres of ``c.behaviour`` (``registry.LABEL_CHECKED``: reversing, a lane change, a turn or going
+    straight, crossing the street) that the auto-labeller's motion class does not show, as the editing benchmark
+    checks them (``eval.editing.checks``). Without a label, the manoeuvres' own checks below decide."""
+    if c.label is None:
+        return []
+    out: list[tuple[str, tuple[ParameterChange, ...]]] = []
+    for decl in LABEL_CHECKED:
+        check = decl.label_check
+        assert check is not None  # LABEL_CHECKED holds the behaviours with one
+        asked = getattr(c.behaviour, check.field)
+        if asked and not check.shows(asked, c.label):
+            out.append((f"labelled {c.label}, {check.missing(asked)}", (LABEL_SUGGESTIONS[decl.name](asked),)))
+    return out
+
+
+def _reverse_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """Without a label: reversing moves the agent backwards along its start heading by :attr:`JudgeConfig.moved_m`."""
+    if not c.behaviour.reverse or c.label is not None:
+        return []
+    along = _along(c.after, c.a.start_heading if c.after.heading is not None else c.b.start_heading)
+    backwards = along < -c.cfg.moved_m if math.isfinite(along) else c.a.net_m >= c.cfg.moved_m
+    if backwards:
+        return []
+    return [(f"does not reverse (moves {along:+.1f} m along its heading)",
+             (_speed_suggestion(2.0, "reversing does not show: back up at this speed"),))]
+
+
+def _lane_change_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """Without a label: a lane change shifts the agent sideways by :attr:`JudgeConfig.lateral_m` to the asked side."""
+    side = c.behaviour.lane_change
+    if side is None or c.label is not None:
+        return []
+    sign = 1.0 if side == "left" else -1.0
+    shift = c.a.lateral_m - (c.ref.lateral_m if c.ref is not None else 0.0)
+    if not (not math.isfinite(shift) or sign * shift < c.cfg.lateral_m):
+        return []
+    return [(f"does not change lanes to the {side} (shifted {shift:+.1f} m sideways)",
+             (_earlier("the lane change does not complete in the log"),))]
+
+
+def _turn_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """Without a label: a turn changes the heading by :attr:`JudgeConfig.turn_deg` the asked way (going straight is
+    not checked)."""
+    turn = c.behaviour.turn
+    if turn not in ("left", "right") or c.label is not None:
+        return []
+    sign = 1.0 if turn == "left" else -1.0
+    if not sign * c.a.heading_change_deg < c.cfg.turn_deg:
+        return []
+    return [(f"does not turn {turn} (heading changes {c.a.heading_change_deg:+.0f} deg)",
+             (_earlier("the turn does not complete in the log"),))]
+
+
+def _timing_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """A start time keeps the agent within :attr:`JudgeConfig.still_m` until then; a delay keeps it still while
+    the log moves."""
+    behaviour, after, before, dt, cfg = c.behaviour, c.after, c.before, c.dt, c.cfg
+    out: list[tuple[str, tuple[ParameterChange, ...]]] = []
     if behaviour.start_time_s is not None and _moved_by(after, behaviour.start_time_s - dt, dt) > cfg.still_m:
-        fail(f"moves before {behaviour.start_time_s:.1f} s",
-             ParameterChange("start_time", f"{behaviour.start_time_s:.1f} s", "hold it still until then"))
+        out.append((f"moves before {behaviour.start_time_s:.1f} s",
+                    (ParameterChange("start_time", f"{behaviour.start_time_s:.1f} s", "hold it still until then"),)))
     if behaviour.delay_s is not None and before is not None:
         window = behaviour.delay_s - dt
         if _moved_by(before, window, dt) > cfg.moved_m and _moved_by(after, window, dt) > cfg.still_m:
-            fail(f"does not start {behaviour.delay_s:.1f} s later",
-                 ParameterChange("start_time", f"{behaviour.delay_s + 1.0:.0f} s later", "the delay does not show"))
-    if behaviour.cross_street and label is None:
-        moved = deviation_m(after, before) if before is not None else a.net_m
-        if moved < cfg.cross_m or a.net_m < cfg.cross_m:
-            fail(f"does not cross the street (moves {a.net_m:.1f} m)",
-                 _earlier("the crossing does not show in the log"))
-    if behaviour.gait == "run":
-        want = max(2.0, 1.3 * ref.mean_speed) if ref is not None else 2.0
-        if a.mean_speed < want:
-            fail(f"does not run (mean speed {a.mean_speed:.1f} m/s)", _speed_suggestion(want + 1.0, "run faster"))
+            out.append((f"does not start {behaviour.delay_s:.1f} s later",
+                        (ParameterChange("start_time", f"{behaviour.delay_s + 1.0:.0f} s later",
+                                         "the delay does not show"),)))
+    return out
+
+
+def _cross_street_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """Without a label: crossing moves the pedestrian :attr:`JudgeConfig.cross_m` off its log path and in all."""
+    if not c.behaviour.cross_street or c.label is not None:
+        return []
+    moved = deviation_m(c.after, c.before) if c.before is not None else c.a.net_m
+    if not (moved < c.cfg.cross_m or c.a.net_m < c.cfg.cross_m):
+        return []
+    return [(f"does not cross the street (moves {c.a.net_m:.1f} m)",
+             (_earlier("the crossing does not show in the log"),))]
+
+
+def _gait_change(c: _Change) -> list[tuple[str, tuple[ParameterChange, ...]]]:
+    """Running raises the mean speed to at least 2 m/s and 1.3 times the log's."""
+    if c.behaviour.gait != "run":
+        return []
+    want = max(2.0, 1.3 * c.ref.mean_speed) if c.ref is not None else 2.0
+    if not c.a.mean_speed < want:
+        return []
+    return [(f"does not run (mean speed {c.a.mean_speed:.1f} m/s)", (_speed_suggestion(want + 1.0, "run faster"),))]
+
+
+#: The change checks, in the order their findings are reported: (behaviour name, its check); ``"labels"`` checks
+#: every behaviour of ``registry.LABEL_CHECKED`` on the auto-labeller's class.
+CHANGE_CHECKS: tuple[tuple[str, ChangeCheck], ...] = (
+    ("speed", _speed_change), ("longitudinal", _longitudinal_change), ("stop", _stop_change),
+    ("labels", _label_change), ("reverse", _reverse_change), ("lane_change", _lane_change_change),
+    ("turn", _turn_change), ("timing", _timing_change), ("cross_street", _cross_street_change),
+    ("gait", _gait_change),
+)
+#: Behaviours the judge does not check on their own, and why.
+UNCHECKED: dict[str, str] = {
+    "follow": "following shows only as the motion of another agent; the trajectory must differ from the log",
+    "jaywalk": "a jaywalk is checked as a street crossing",
+    "lateral_offset": "a sideways shift shows only as a trajectory that differs from the log",
+}
+
+
+def _change_findings(oid: str, behaviour: Behaviour, after: AgentTrajectory, before: AgentTrajectory | None,
+                     dt: float, cfg: JudgeConfig, label: str | None = None) -> list[Finding]:
+    """What ``behaviour`` asks that ``after`` does not show (against ``before``, or its own start): the
+    :data:`CHANGE_CHECKS` in order. Given the auto-labeller's motion class ``label`` of ``after``, the manoeuvres
+    are checked on it instead of this judge's own thresholds; a trajectory that is the log's fails in any case."""
+    a, b = motion_of(after, dt, cfg.tail_s), motion_of(before, dt, cfg.tail_s)
+    change = _Change(behaviour, after, before, a, b, b if b.present else None, dt, cfg, label)
+    out = [Finding("change", f"{oid}: {why}", suggestions)
+           for _, check in CHANGE_CHECKS for why, suggestions in check(change)]
     if before is not None and not out and deviation_m(after, before) < cfg.changed_m:
-        fail("its trajectory is the log's", _speed_suggestion(max(ref.mean_speed if ref else 0.0, 1.0) * 1.5,
-                                                              "the change is too small to show: ask for a larger one"))
+        ref = change.ref
+        out.append(Finding("change", f"{oid}: its trajectory is the log's", (_speed_suggestion(
+            max(ref.mean_speed if ref else 0.0, 1.0) * 1.5, "the change is too small to show: ask for a larger one"),)))
     return out
 
 
@@ -467,5 +567,5 @@ def judge_edit(request: JudgeRequest, config: JudgeConfig | None = None) -> Judg
                      suggestions=_unique(c for f in findings for c in f.suggestions))
 
 
-__all__ = ["FOLLOW_CLASSES", "PENALTIES", "Finding", "JudgeConfig", "Motion", "deviation_m", "judge_edit",
-           "motion_of", "render_problem"]
+__all__ = ["CHANGE_CHECKS", "FOLLOW_CLASSES", "LABEL_SUGGESTIONS", "PENALTIES", "UNCHECKED", "Finding", "JudgeConfig",
+           "Motion", "deviation_m", "judge_edit", "motion_of", "render_problem"]

@@ -1,7 +1,29 @@
 """Braking hard, slowing down or speeding up without a said speed (``Behaviour.longitudinal``)."""
 
 from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
+
+
+def parse_longitudinal(w: PredicateWork) -> None:
+    """"slow down", "ease off" -> decelerate; "speed up", "floor it", "pull away" -> accelerate (the first one
+    read wins); a pedestrian told to "hurry" runs."""
+    if w.kind == "pedestrian":
+        w.take(r"hurry(?: up)?|hurries(?: up)?", lambda m: w.set("gait", "run"))
+    w.take(r"slow(?:s|ing)?(?: (?:it |them )?down| up)?|decelerat\w*|ease(?:s)? (?:off|up)(?: the gas)?|"
+           r"(?:reduce|reduces"
+           r"|lower|lowers|decrease|decreases|cut|cuts|drop|drops)(?: its| the| their)? speed|(?:go|goes|drive|"
+           r"drives|move"
+           r"|moves|walk|walks)(?: a (?:bit|little|lot))? slower|slower|slowly|brake|take it easy|coast|coasts|"
+           r"lift off",
+           lambda m: w.set("longitudinal", "decelerate") if "longitudinal" not in w.out.fields else None)
+    w.take(r"speed(?:s|ing)? (?:it |them )?up|accelerat\w*|(?:go|goes|drive|drives|move|moves|walk|walks)"
+           r"(?: a (?:bit|little|lot))? (?:faster|quicker)|faster|quicker|pick(?:s)? up (?:the )?(?:speed|pace)"
+           r"|hurry(?: up)?|hurries(?: up)?|(?:step|steps) on (?:it|the gas)|floor it|put (?:the|its) foot down|gun it"
+           r"|pull(?:s)? (?:out|away)|move(?:s)? off|(?:drive|drives|head|heads) (?:off|away)(?! (?:the|a|from) )"
+           r"|increase (?:its |the )?speed",
+           lambda m: w.set("longitudinal", "accelerate") if "longitudinal" not in w.out.fields else None)
+
 
 LONGITUDINAL = BehaviourDecl(
     "longitudinal",
@@ -48,4 +70,5 @@ LONGITUDINAL = BehaviourDecl(
             "Have {T} reduce its speed.",
         ),
     },
+    parse_rule=parse_longitudinal,
 )

@@ -31,6 +31,17 @@ BEHAVIOURS: tuple[BehaviourDecl, ...] = (
 )
 
 
+#: The behaviours whose parser rules read a predicate, in the order they run (``editing.parse.behaviour``): each
+#: rule blanks the words it used, so an earlier rule wins words two could read. The turn rule runs before the
+#: speed rule ("do not turn" is not a negated speed); the street-crossing rule reads jaywalking's words too.
+PARSE_ORDER: tuple[BehaviourDecl, ...] = (
+    TURN, SPEED, TIMING, STOP, FOLLOW, LATERAL_OFFSET, REVERSE, LANE_CHANGE, CROSS_STREET, GAIT, LONGITUDINAL,
+)
+if {b.name for b in PARSE_ORDER} != {b.name for b in BEHAVIOURS if b.parse_rule is not None} \
+        or len({b.name for b in PARSE_ORDER}) != len(PARSE_ORDER):
+    raise ValueError("behaviour registry: PARSE_ORDER must list every behaviour with a parse rule once, and only those")
+
+
 def _unique(pairs: list[tuple[str, Any]], what: str) -> dict[str, Any]:
     out: dict[str, Any] = {}
     for key, value in pairs:
@@ -58,20 +69,9 @@ if {b.name for b in RESTRICTED} != {b.name for b in BEHAVIOURS if b.agent is not
     raise ValueError("behaviour registry: RESTRICTED must list every behaviour with an agent, and only those")
 
 
-def _asked_classes() -> dict[tuple[str, Any], str]:
-    out: dict[tuple[str, Any], str] = {}
-    for b in BEHAVIOURS:
-        for i in b.intents:
-            classes = [c for c, name in b.motion_classes.items() if name == i.name]
-            if i.fields is not None and len(i.fields) == 1 and len(classes) == 1:
-                ((name, value),) = i.fields.items()
-                out[(name, value)] = classes[0]
-    return out
-
-
-#: ``(Behaviour field, value)`` -> the one motion class an agent asked it shows (``("lane_change", "left")`` ->
-#: ``"changing_lane_left"``): what the checks of the benchmark and the mining judge compare labels with.
-ASKED_CLASS: dict[tuple[str, Any], str] = _asked_classes()
+#: The behaviours the checks verify on the auto-labeller's motion class (``BehaviourDecl.label_check``), in the order
+#: the benchmark's and the mining judge's checks report them.
+LABEL_CHECKED: tuple[BehaviourDecl, ...] = tuple(b for b in BEHAVIOURS if b.label_check is not None)
 #: Vehicle-only and pedestrian-only ``Behaviour`` fields.
 VEHICLE_ONLY: tuple[str, ...] = tuple(f for b in RESTRICTED if b.agent == "vehicle" for f in b.fields)
 PEDESTRIAN_ONLY: tuple[str, ...] = tuple(f for b in RESTRICTED if b.agent == "pedestrian" for f in b.fields)
@@ -84,5 +84,6 @@ PROPOSAL_FORMS: dict[str, tuple[str, ...]] = _unique(
 PROMPT_FORMS: dict[str, tuple[str, ...]] = _unique(
     [(k, forms) for b in BEHAVIOURS for k, forms in b.prompt_forms.items()], "prompt kind")
 
-__all__ = ["ASKED_CLASS", "BEHAVIOURS", "CLASS_INTENT", "FIELD_WORDS", "INTENT_FAMILY", "INTENT_FIELDS",
-           "INTENT_PHRASES", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED", "VEHICLE_ONLY"]
+__all__ = ["BEHAVIOURS", "CLASS_INTENT", "FIELD_WORDS", "INTENT_FAMILY", "INTENT_FIELDS", "INTENT_PHRASES",
+           "LABEL_CHECKED", "PARSE_ORDER", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED",
+           "VEHICLE_ONLY"]

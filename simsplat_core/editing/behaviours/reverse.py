@@ -1,7 +1,30 @@
 """Driving backwards along the own path (vehicles)."""
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+import re
+
+from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
+from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
+
+#: Where a car reverses out of ("out of its parking space"): words that add nothing to the reversing.
+_OUT_OF_SPOT = (r"(?: out)?(?: of (?:its|the|his|her|their|a) (?:parking )?(?:spot|space|bay|place|slot|driveway|"
+                r"parking))?")
+
+
+def parse_reverse(w: PredicateWork) -> None:
+    """"reverse", "back up", "drive backwards", "in reverse gear" (out of its spot) -> ``reverse=True``."""
+    def reverse(m: re.Match[str]) -> None:
+        w.set("reverse", True)
+
+    w.take(r"(?:reverse|reverses|reversing|back(?:s|ing)? (?:up|out|it up)|back up|(?:drive|drives|go|goes|move|moves"
+           r"|roll|rolls|head|heads|travel|travels)(?: it)? backwards?|(?:in|into) reverse(?: gear)?)" + _OUT_OF_SPOT,
+           reverse)
+
+
+def _labelled_reversing(asked: bool, motion: str) -> bool:
+    """Whether the motion class ``motion`` means reversing."""
+    return REVERSE.motion_classes.get(motion) == "reverse"
+
 
 REVERSE = BehaviourDecl(
     "reverse",
@@ -26,4 +49,6 @@ REVERSE = BehaviourDecl(
             "Let {T} reverse out of its spot.",
         ),
     },
+    parse_rule=parse_reverse,
+    label_check=LabelCheck("reverse", _labelled_reversing, lambda asked: f"not {voc.REVERSING}"),
 )

@@ -1,6 +1,7 @@
 """A said speed: absolute, a factor or a change (``SpeedSpec``)."""
 
 from simsplat_core.editing.behaviours.declaration import BehaviourDecl
+from simsplat_core.editing.parse.speed import speed_rules
 
 SPEED = BehaviourDecl(
     "speed",
@@ -42,4 +43,5 @@ SPEED = BehaviourDecl(
             "Have {T} walk {rel}.",
         ),
     },
+    parse_rule=speed_rules,
 )

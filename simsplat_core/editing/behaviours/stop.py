@@ -1,6 +1,7 @@
 """Stopping: at a time, before a crosswalk, intersection or stop line, or behind an object (``StopSpec``)."""
 
 from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.parse.speed import stop_rules
 from simsplat_core.scenario import vocabulary as voc
 
 STOP = BehaviourDecl(
@@ -44,4 +45,5 @@ STOP = BehaviourDecl(
             "Have {T} stand still.",
         ),
     },
+    parse_rule=stop_rules,
 )

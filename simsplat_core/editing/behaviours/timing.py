@@ -1,6 +1,7 @@
 """Starting later: at a time, or a delay after the log's own start."""
 
 from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.parse.speed import timing_rules
 
 TIMING = BehaviourDecl(
     "timing",
@@ -30,4 +31,5 @@ TIMING = BehaviourDecl(
             "Let {T} wait {t} before walking.",
         ),
     },
+    parse_rule=timing_rules,
 )

@@ -10,7 +10,6 @@ motion behaviours' own words (their intents, phrasings and motion classes) are d
 from __future__ import annotations
 
 from simsplat_core.editing.assets.procedural import STATIC_KINDS as PROCEDURAL_STATIC_KINDS
-from simsplat_core.editing.behaviours import registry as behaviours
 from simsplat_core.language.grounding.parse import LOWER_GARMENTS, NOUNS, UPPER_GARMENTS
 from simsplat_core.scenario import vocabulary as voc
 
@@ -176,18 +175,18 @@ HEAD_NOUN_MAX_WORDS = max(len(n.split()) for n in HEAD_NOUNS)
 #: Intents an unknown verb or predicate may mean. "remove" / "insert" / "replace" are ops; the others set
 #: behaviour fields (``editing.behaviours.registry.INTENT_FIELDS``); "unsupported" marks phrasings to refuse.
 UNSUPPORTED = "unsupported"
-#: Imperative phrasings of each intent (E5 passages, beside the vocabulary's own class prototypes): the ops',
-#: the behaviours' (``editing.behaviours``) and the phrasings to refuse.
-INTENT_PHRASES: dict[str, tuple[str, ...]] = {
+#: Imperative phrasings of the ops' intents (E5 passages; ``editing.parse.semantic`` adds the behaviours').
+OP_PHRASES: dict[str, tuple[str, ...]] = {
     "remove": ("remove it from the scene", "delete it", "take it out of the scene", "get rid of it",
                "make it disappear", "erase it"),
     "insert": ("add one to the scene", "put a new one on the road", "place another one here"),
     "replace": ("replace it with a different one", "swap it for another one"),
-    **behaviours.INTENT_PHRASES,
-    UNSUPPORTED: ("fly", "change its colour", "paint it", "make it rain", "explode", "jump", "honk the horn",
-                  "turn on the lights", "dance", "sing", "make it bigger", "turn into an animal", "teleport",
-                  "make it invisible", "do a u-turn", "drive on the sidewalk", "crash"),
 }
+#: Phrasings of what the editor cannot do (E5 passages of the intent :data:`UNSUPPORTED`).
+UNSUPPORTED_PHRASES: tuple[str, ...] = (
+    "fly", "change its colour", "paint it", "make it rain", "explode", "jump", "honk the horn", "turn on the lights",
+    "dance", "sing", "make it bigger", "turn into an animal", "teleport", "make it invisible", "do a u-turn",
+    "drive on the sidewalk", "crash")
 
 #: The supported edits, for refusal messages.
 SUPPORTED = (

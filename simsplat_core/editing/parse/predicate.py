@@ -2,7 +2,8 @@
 
 ``PredicateWork.take(regex, fn)`` applies ``fn`` to a match and blanks its words, so a later rule cannot
 use them again ("stop behind the bus" is a stop, not also a placement); ``PredicateParse`` is the result.
-The rules themselves are in ``editing.parse.speed`` (speeds, stops, timing) and ``editing.parse.behaviour`` (the rest).
+The rules themselves are each behaviour's ``parse_rule`` (``editing.behaviours``; the speed, stop and timing ones
+in ``editing.parse.speed``), run by ``editing.parse.behaviour``.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 An unknown verb ("yank the van out of the scene") or predicate ("have the sedan hit the brakes", "make the
 bus pull over") is embedded as an E5 *query* and compared with *passages*: each intent's imperative
-phrasings (``editing.parse.lexicon.INTENT_PHRASES``) and the scenario vocabulary's motion-class prototypes
+phrasings (:data:`INTENT_PHRASES`) and the scenario vocabulary's motion-class prototypes
 mapped through ``editing.behaviours.registry.CLASS_INTENT`` ("a car coming to a stop" -> stop). Phrasings of
 things the editor cannot do ("fly", "paint it", "make it rain") are passages too, of the intent ``unsupported``.
 
@@ -22,11 +22,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.editing.behaviours import registry as behaviours
 from simsplat_core.editing.behaviours.registry import CLASS_INTENT, INTENT_FAMILY
-from simsplat_core.editing.parse.lexicon import INTENT_PHRASES, UNSUPPORTED
+from simsplat_core.editing.parse.lexicon import OP_PHRASES, UNSUPPORTED, UNSUPPORTED_PHRASES
 from simsplat_core.language.text import TextEncoder
 from simsplat_core.scenario.vocabulary import MOTION_VOCABULARIES
 
+#: Imperative phrasings of each intent (E5 passages, beside the vocabulary's own class prototypes), in embedding
+#: order: the ops' (``lexicon.OP_PHRASES``), the behaviours' (``editing.behaviours.registry.INTENT_PHRASES``) and
+#: the phrasings to refuse (``lexicon.UNSUPPORTED_PHRASES``).
+INTENT_PHRASES: dict[str, tuple[str, ...]] = {**OP_PHRASES, **behaviours.INTENT_PHRASES,
+                                              UNSUPPORTED: UNSUPPORTED_PHRASES}
 #: Least cosine of a query to its intent's nearest passage.
 MIN_SIMILARITY = 0.87
 #: Least lead of the best intent over the best intent of another family.

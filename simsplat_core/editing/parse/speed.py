@@ -1,4 +1,5 @@
-"""Speed, stop and timing rules of the predicate reader (``editing.parse.behaviour``).
+"""Speed, stop and timing rules of the predicate reader: the ``parse_rule`` of the speed, stop and timing behaviours
+(``editing.behaviours``), here as they share the reading of numbers, units and times.
 
 Speeds: absolute ("40 km/h", "at 15 m/s"; a bare number after a speed verb is km/h), factor ("twice as
 fast", "half the speed", "three times faster", "50 % faster" -> 1.5) or delta ("10 km/h slower" -> -10,

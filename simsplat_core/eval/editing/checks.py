@@ -31,19 +31,20 @@ failed condition in its reason.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from simsplat_core.editing.assets.procedural import STATIC_KINDS
-from simsplat_core.editing.behaviours.registry import ASKED_CLASS
+from simsplat_core.editing.behaviours.declaration import LabelCheck
+from simsplat_core.editing.behaviours.registry import LABEL_CHECKED
 from simsplat_core.eval.editing.intents import EGO, EditIntent, MotionIntent, PlacementIntent
 from simsplat_core.eval.editing.observation import EditObservation, StateChanges, state_changes, trajectory_changed
 from simsplat_core.eval.editing.truth import SceneTruth
 from simsplat_core.geometry import wrap_angle
 from simsplat_core.language.motion_labels import MotionLabel, label_trajectory
-from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.geometry import box_footprints, footprints_overlap, segment_distances
 from simsplat_core.scenario.trajectory import ObjectTrajectory, agent_trajectory, smoothed_velocity
@@ -75,7 +76,6 @@ PASSING_NEAR_M = 4.0
 END_DIRECTION_M = 1.0
 #: An inserted static object's box is within this share of its kind's catalogue box, per dimension.
 KIND_SIZE_TOL = 0.2
-_CROSSING = (voc.CROSSING, voc.CROSSING_LEFT_TO_RIGHT, voc.CROSSING_RIGHT_TO_LEFT)
 
 
 @dataclass(frozen=True)
@@ -495,57 +495,87 @@ def _check_crossing_spot(truth: SceneTruth, p: PlacementIntent, row: int, after:
 
 
 # ---------------------------------------------------------------------------------------------- how
-def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after: AgentStates, object_id: str,
-                  v: Verdict) -> None:
-    row = after.index(object_id)
-    valid = after.valid[row]
-    if not v.require(valid.sum() >= 5, f"{object_id} exists at {int(valid.sum())} steps only"):
+@dataclass(frozen=True)
+class _Sample:
+    """One edited agent as the motion checks see it: its valid steps' times ``t [K]`` (s), positions ``xy [K, 2]``
+    and measured ``speed [K]`` (m/s), the mean speed over its first 0.3 s / last 0.5 s, whether it is a pedestrian,
+    and the auto-labeller's verdict (``None``: no manoeuvre asked)."""
+
+    truth: SceneTruth
+    before: AgentStates
+    after: AgentStates
+    object_id: str
+    row: int
+    t: np.ndarray
+    xy: np.ndarray
+    speed: np.ndarray
+    pedestrian: bool
+    v_start: float
+    v_end: float
+    label: MotionLabel | None
+
+
+#: A motion check: the conditions one behaviour of ``MotionIntent`` puts on the edited agent.
+MotionCheck = Callable[[MotionIntent, _Sample, Verdict], None]
+#: Behaviour name -> its label check (``registry.LABEL_CHECKED``).
+_LABEL_CHECKS: dict[str, LabelCheck] = {d.name: d.label_check for d in LABEL_CHECKED if d.label_check is not None}
+
+
+def _manoeuvre_asked(m: MotionIntent) -> bool:
+    """``m`` asks a manoeuvre the auto-labeller checks (``registry.LABEL_CHECKED``: reverse, lane change, turn,
+    crossing)."""
+    return any(getattr(m, check.field) for check in _LABEL_CHECKS.values())
+
+
+def _moving_speed(s: _Sample) -> float:
+    """Median absolute speed over the steps the agent moves (m/s; 0 when it never does)."""
+    moving = np.abs(s.speed) >= STILL_MPS
+    return float(np.median(np.abs(s.speed[moving]))) if moving.any() else 0.0
+
+
+def _check_speed(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """The asked speed is reached: vehicles' end speed within 10 % (at least 0.75 m/s), pedestrians' median moving
+    speed within 20 % (at least 0.25 m/s)."""
+    if m.speed_mps is None:
         return
-    t, xy = after.times[valid], after.xy[row, valid]
-    speed = measured_speed(after, row)[valid]
-    pedestrian = after.categories[row] == "pedestrian"
-    v_start, v_end = _edge(speed, t, 0.3, False), _edge(speed, t, 0.5, True)
-    v.measured.update(v_start=v_start, v_end=v_end)
-    moving = np.abs(speed) >= STILL_MPS
-    label: MotionLabel | None = None
-    if m.lane_change or m.turn or m.reverse or m.cross_street:
-        label = motion_label(truth, after, row)
-        v.measured["heading_change_deg"] = label.heading_change_deg
-        v.note(f"labelled {label.motion}")
-    if m.speed_mps is not None:
-        if pedestrian:
-            got = float(np.median(np.abs(speed[moving]))) if moving.any() else 0.0
-            tol = max(0.25, 0.2 * m.speed_mps)
-        else:
-            got, tol = v_end, max(0.75, 0.1 * m.speed_mps)
-        v.measured["speed_mps"] = got
-        v.require(abs(got - m.speed_mps) <= tol, f"speed {got:.2f} m/s, asked {m.speed_mps:.2f} m/s")
+    if s.pedestrian:
+        got = _moving_speed(s)
+        tol = max(0.25, 0.2 * m.speed_mps)
+    else:
+        got, tol = s.v_end, max(0.75, 0.1 * m.speed_mps)
+    v.measured["speed_mps"] = got
+    v.require(abs(got - m.speed_mps) <= tol, f"speed {got:.2f} m/s, asked {m.speed_mps:.2f} m/s")
+
+
+def _check_gait(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """A runner's median moving speed is at least :data:`RUN_MPS`."""
     if m.gait == "run":
-        got = float(np.median(np.abs(speed[moving]))) if moving.any() else 0.0
+        got = _moving_speed(s)
         v.measured["speed_mps"] = got
         v.require(got >= RUN_MPS, f"moves at {got:.2f} m/s: not running")
-    if m.stop:
-        k = _still_from(speed, xy, STILL_MPS if not pedestrian else 0.2)
-        if v.require(k is not None, f"does not come to a standstill (end speed {v_end:.2f} m/s)"):
-            assert k is not None
-            v.measured["stopped_at_s"] = float(t[k])
-            if m.stop_by_s is not None:
-                v.require(t[k] <= m.stop_by_s + 1.0, f"standing only from {t[k]:.1f} s, asked by {m.stop_by_s:g} s")
-            if m.stop_before == "crosswalk":
-                _check_stop_before_crosswalk(truth, xy[-1], float(after.heading[row, valid][-1]),
-                                             float(after.size[row, 0]), v)
-    _check_longitudinal(m, t, speed, v_start, v_end, v)
-    if label is not None:
-        _check_manoeuvre(truth, m, label, xy, v)
-    if m.delay_s is not None:
-        _check_delay(truth, m.delay_s, before, after, object_id, speed, pedestrian, v)
 
 
-def _check_longitudinal(m: MotionIntent, t: np.ndarray, speed: np.ndarray, v_start: float, v_end: float,
-                        v: Verdict) -> None:
-    """``m.longitudinal`` (brake hard / accelerate / decelerate) on the measured ``speed [K]`` at times ``t [K]``."""
+def _check_stop(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """A standstill is reached and held (by the asked time; before the crosswalk with the front bumper short of it)."""
+    if not m.stop:
+        return
+    k = _still_from(s.speed, s.xy, STILL_MPS if not s.pedestrian else 0.2)
+    if v.require(k is not None, f"does not come to a standstill (end speed {s.v_end:.2f} m/s)"):
+        assert k is not None
+        v.measured["stopped_at_s"] = float(s.t[k])
+        if m.stop_by_s is not None:
+            v.require(s.t[k] <= m.stop_by_s + 1.0, f"standing only from {s.t[k]:.1f} s, asked by {m.stop_by_s:g} s")
+        if m.stop_before == "crosswalk":
+            valid = s.after.valid[s.row]
+            _check_stop_before_crosswalk(s.truth, s.xy[-1], float(s.after.heading[s.row, valid][-1]),
+                                         float(s.after.size[s.row, 0]), v)
+
+
+def _check_longitudinal(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """``m.longitudinal`` (brake hard / accelerate / decelerate) on the measured speed."""
+    v_start, v_end = s.v_start, s.v_end
     if m.longitudinal == "brake_hard":
-        decel = -np.gradient(speed, t)
+        decel = -np.gradient(s.speed, s.t)
         v.measured["peak_decel_mps2"] = float(decel.max())
         v.require(decel.max() >= HARD_BRAKE_MPS2, f"peak deceleration {decel.max():.1f} m/s^2, hard braking is "
                   f">= {HARD_BRAKE_MPS2:g}")
@@ -556,29 +586,101 @@ def _check_longitudinal(m: MotionIntent, t: np.ndarray, speed: np.ndarray, v_sta
         v.require(v_end <= v_start - max(1.5, 0.2 * v_start), f"speed {v_start:.1f} -> {v_end:.1f} m/s: not slower")
 
 
-def _check_manoeuvre(truth: SceneTruth, m: MotionIntent, label: MotionLabel, xy: np.ndarray, v: Verdict) -> None:
-    """Reverse, lane change, turn and street crossing of ``m`` against the auto-labeller's ``label`` (``xy [K, 2]``:
-    the agent's valid positions, for the jaywalking share)."""
-    if m.reverse:
-        v.require(label.motion == voc.REVERSING, f"labelled {label.motion}, not reversing")
-    if m.lane_change:
-        want = ASKED_CLASS[("lane_change", m.lane_change)]
-        v.require(label.motion == want, f"labelled {label.motion}, asked {want} (lateral {label.lateral_m:.1f} m)")
-    if m.turn in ("left", "right"):
-        want = ASKED_CLASS[("turn", m.turn)]
-        v.require(label.motion == want, f"labelled {label.motion} (heading change "
-                  f"{label.heading_change_deg:.0f} deg), asked {want}")
-    elif m.turn == "straight":
-        v.require(label.motion not in (voc.TURNING_LEFT, voc.TURNING_RIGHT)
-                  and abs(label.heading_change_deg) < 20.0,
+def _label_verdict(m: MotionIntent, s: _Sample, name: str) -> tuple[Any, MotionLabel, bool, str] | None:
+    """When ``m`` asks behaviour ``name`` (a ``registry.LABEL_CHECKED`` one): the asked value, the agent's label,
+    whether the label shows the value (``BehaviourDecl.label_check``) and what it lacks in words; else ``None``."""
+    check = _LABEL_CHECKS[name]
+    asked = getattr(m, check.field)
+    if not asked:
+        return None
+    assert s.label is not None  # a manoeuvre is asked: the sample is labelled
+    return asked, s.label, check.shows(asked, s.label.motion), check.missing(asked)
+
+
+def _check_reverse(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """Reversing is labelled reversing."""
+    found = _label_verdict(m, s, "reverse")
+    if found is not None:
+        _, label, ok, missing = found
+        v.require(ok, f"labelled {label.motion}, {missing}")
+
+
+def _check_lane_change(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """A lane change is labelled a lane change to the asked side."""
+    found = _label_verdict(m, s, "lane_change")
+    if found is not None:
+        _, label, ok, missing = found
+        v.require(ok, f"labelled {label.motion}, {missing} (lateral {label.lateral_m:.1f} m)")
+
+
+def _check_turn(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """A turn is labelled a turn to the asked side; going straight is labelled anything but a turn, with a heading
+    change under 20 degrees."""
+    found = _label_verdict(m, s, "turn")
+    if found is None:
+        return
+    turn, label, ok, missing = found
+    if turn == "straight":
+        v.require(ok and abs(label.heading_change_deg) < 20.0,
                   f"labelled {label.motion}, heading change {label.heading_change_deg:.0f} deg: not straight")
-    if m.cross_street:
-        v.require(label.motion in _CROSSING, f"labelled {label.motion}, not crossing the street")
-        if m.jaywalk:
-            road = truth.layout.on_road(xy)
-            share = float(truth.layout.in_crosswalk(xy[road]).mean()) if road.any() else 1.0
-            v.measured["crosswalk_share"] = share
-            v.require(share <= 0.2, f"{share:.0%} of the road steps on a crosswalk: not jaywalking")
+    else:
+        v.require(ok, f"labelled {label.motion} (heading change {label.heading_change_deg:.0f} deg), {missing}")
+
+
+def _check_cross_street(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """Crossing is labelled crossing; jaywalking keeps at most a fifth of the road steps on a crosswalk."""
+    found = _label_verdict(m, s, "cross_street")
+    if found is None:
+        return
+    _, label, ok, missing = found
+    v.require(ok, f"labelled {label.motion}, {missing}")
+    if m.jaywalk:
+        road = s.truth.layout.on_road(s.xy)
+        share = float(s.truth.layout.in_crosswalk(s.xy[road]).mean()) if road.any() else 1.0
+        v.measured["crosswalk_share"] = share
+        v.require(share <= 0.2, f"{share:.0%} of the road steps on a crosswalk: not jaywalking")
+
+
+def _check_timing(m: MotionIntent, s: _Sample, v: Verdict) -> None:
+    """A delay: standing until it is over, then moving along the original path."""
+    if m.delay_s is not None:
+        _check_delay(s.truth, m.delay_s, s.before, s.after, s.object_id, s.speed, s.pedestrian, v)
+
+
+#: The motion checks, in the order their failures are reported: (behaviour name, its check).
+MOTION_CHECKS: tuple[tuple[str, MotionCheck], ...] = (
+    ("speed", _check_speed), ("gait", _check_gait), ("stop", _check_stop), ("longitudinal", _check_longitudinal),
+    ("reverse", _check_reverse), ("lane_change", _check_lane_change), ("turn", _check_turn),
+    ("cross_street", _check_cross_street), ("timing", _check_timing),
+)
+#: Behaviours the benchmark asks no motion check of, and why.
+UNCHECKED: dict[str, str] = {
+    "follow": "the benchmark's prompts do not ask for following",
+    "jaywalk": "a jaywalk is checked with the street crossing",
+    "lateral_offset": "the benchmark's prompts do not ask for sideways shifts",
+}
+
+
+def _check_motion(truth: SceneTruth, m: MotionIntent, before: AgentStates, after: AgentStates, object_id: str,
+                  v: Verdict) -> None:
+    """The :data:`MOTION_CHECKS` of ``m`` on one edited agent (at least 5 valid steps)."""
+    row = after.index(object_id)
+    valid = after.valid[row]
+    if not v.require(valid.sum() >= 5, f"{object_id} exists at {int(valid.sum())} steps only"):
+        return
+    t, xy = after.times[valid], after.xy[row, valid]
+    speed = measured_speed(after, row)[valid]
+    v_start, v_end = _edge(speed, t, 0.3, False), _edge(speed, t, 0.5, True)
+    v.measured.update(v_start=v_start, v_end=v_end)
+    label: MotionLabel | None = None
+    if _manoeuvre_asked(m):
+        label = motion_label(truth, after, row)
+        v.measured["heading_change_deg"] = label.heading_change_deg
+        v.note(f"labelled {label.motion}")
+    sample = _Sample(truth, before, after, object_id, row, t, xy, speed, after.categories[row] == "pedestrian",
+                     v_start, v_end, label)
+    for _, check in MOTION_CHECKS:
+        check(m, sample, v)
 
 
 def _check_stop_before_crosswalk(truth: SceneTruth, xy: np.ndarray, heading: float, length: float,
@@ -618,7 +720,7 @@ def _check_delay(truth: SceneTruth, delay: float, before: AgentStates, after: Ag
 
 def _check_path_kept(before: AgentStates, after: AgentStates, object_id: str, m: MotionIntent, v: Verdict) -> None:
     """Speed-only edits keep the agent on its original path."""
-    if m.lane_change or m.turn or m.reverse or m.cross_street or m.delay_s is not None:
+    if _manoeuvre_asked(m) or m.delay_s is not None:
         return
     i, j = before.index(object_id), after.index(object_id)
     path = before.xy[i, before.valid[i]]
@@ -705,5 +807,6 @@ def check_refusal(intent: EditIntent, obs: EditObservation) -> CheckResult:
                        {"expected_reason": float(expected)})
 
 
-__all__ = ["ALIGN_DEG", "CheckResult", "HARD_BRAKE_MPS2", "IN_LANE_M", "NEXT_TO_M", "RUN_MPS", "STILL_MPS", "Verdict",
+__all__ = ["ALIGN_DEG", "MOTION_CHECKS", "UNCHECKED", "CheckResult", "HARD_BRAKE_MPS2", "IN_LANE_M", "NEXT_TO_M",
+           "RUN_MPS", "STILL_MPS", "Verdict",
            "check_refusal", "check_states", "edited_trajectory", "footprint_gap", "measured_speed", "motion_label"]
