@@ -196,7 +196,8 @@ def record_failure(store: ArtifactStore, record: EditRecord, program: EditProgra
 
 # ----------------------------------------------------------------------------- trajectories
 def trajectories_table(edit_id: str, states: AgentStates) -> pa.Table:
-    """DESIGN's ``trajectories`` table of ``states``: one row per (agent, valid step), agents in row order."""
+    """DESIGN's ``trajectories`` table of ``states``: one row per (agent, valid step), agents in row order, with
+    the box centre height ``z`` and the agent's box size (``length``, ``width``, ``height``, metres)."""
     rows, steps = np.nonzero(states.valid)  # row-major: agent by agent, steps increasing
     n = rows.size
     return pa.table({
@@ -209,6 +210,10 @@ def trajectories_table(edit_id: str, states: AgentStates) -> pa.Table:
         "heading": pa.array(states.heading[rows, steps].astype(np.float32), pa.float32()),
         "speed": pa.array(states.speed[rows, steps].astype(np.float32), pa.float32()),
         "source": pa.array([states.sources[r] for r in rows], pa.string()),
+        "z": pa.array(states.z[rows, steps].astype(np.float32), pa.float32()),
+        "length": pa.array(states.size[rows, 0].astype(np.float32), pa.float32()),
+        "width": pa.array(states.size[rows, 1].astype(np.float32), pa.float32()),
+        "height": pa.array(states.size[rows, 2].astype(np.float32), pa.float32()),
     }, schema=TRAJECTORIES_SCHEMA)
 
 
