@@ -10,8 +10,8 @@ Layout (``DESIGN.md``)::
                                                  without images) and asset bank, removed node ids, added nodes
                                                  (asset references), re-tracked nodes
         delta/pose_tracks.parquet                the pose tracks of the added and re-tracked nodes
-        renders/<camera>/<frame:06d>.exr         (logs with images) R, G, B, A (half floats, rounded to 1/256) + id (float32 node
-                                                 id, -1 = nothing); zip compressed, ~100 KB at 240 x 160
+        renders/<camera>/<frame:06d>.exr         (logs with images) R, G, B, A (half floats, rounded to 1/256) +
+                                                 id (float32 node id, -1 = nothing); zip, ~100 KB at 240 x 160
         bev.png, bev.mp4, before_after.png       pictures for people (no before_after.png without images)
         validation.json                          collisions / off-road / kinematics of the edited agents
         _SUCCESS.json                            key, byte counts per part

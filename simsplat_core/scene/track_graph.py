@@ -20,7 +20,15 @@ import torch
 from simsplat_core.scene.gaussians import GaussianSet
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.init import object_poses
-from simsplat_core.scene.nodes import OFFSETS, BackgroundNode, NodeFields, NonRigidNode, PoseFields, RigidNode, SceneNode
+from simsplat_core.scene.nodes import (
+    OFFSETS,
+    BackgroundNode,
+    NodeFields,
+    NonRigidNode,
+    PoseFields,
+    RigidNode,
+    SceneNode,
+)
 from simsplat_core.types import SceneLog
 
 #: ``SceneGraph.metadata`` key saying the graph holds no Gaussians (value ``"none"``).
