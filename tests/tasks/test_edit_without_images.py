@@ -92,3 +92,15 @@ def test_a_prompt_about_looks_is_refused_with_a_clear_message(motion_store) -> N
     run = run_edit(store.root, seq, "make the red car stop", run_id=RUN, loaded=loaded)
     assert run.status == "refused" and run.reason == "not_found"
     assert "no camera images" in run.message and "red" in run.message
+
+
+@pytest.mark.shared_data
+def test_mining_judges_from_the_bev_and_trajectories(motion_store) -> None:
+    from tasks.mine import mine_sequence_task
+
+    store, seq, _ = motion_store
+    mined = mine_sequence_task.fn(store.root, seq, "mine", per_sequence=1, max_attempts=1)
+    assert mined.attempts >= 1 and mined.accepted == 1
+    (scenario,) = mined.scenarios
+    files = set(store.listdir(scenario.edit_dir.removeprefix(store.root).strip("/")))
+    assert {"trajectories.parquet", "bev.png", "validation.json"} <= files and "renders" not in files

@@ -14,7 +14,7 @@
    group of procedural kinds (``editing.assets.procedural.STATIC_GROUPS``: "barrier" fits both barriers).
 3. Size (``size_m``): a cut-out fits when every side is within ``SIZE_TOLERANCE`` (relative, at least
    ``SIZE_TOLERANCE_M``) of the wanted one; a procedural asset fits when it can be rebuilt at that size
-   (``editing.assets.procedural.RESIZE_RANGE``) and is; a box-only asset (``editing.assets.boxes``) fits any size.
+   (``editing.assets.procedural.RESIZE_RANGE``) and is; a box-only asset (``editing.assets.boxes``) is made that size.
 4. Colour: assets of that colour come first (a pedestrian's top, or its trousers when the description
    names the colour for them only; among those, ones whose other garment is the other named colour first);
    when the type exists but not in that colour, the best one is *recoloured* (``editing.assets.colors.recolored``;
@@ -374,7 +374,7 @@ class AssetBank:
         asset = best
         if wanted.color is not None and not exact:
             asset = color_variant(asset, wanted.color)
-        if wanted.size is not None and (asset.procedural or not _size_fits(asset.size, wanted.size)):
+        if wanted.size is not None and (asset.procedural or asset.box_only or not _size_fits(asset.size, wanted.size)):
             if tuple(f32(v) for v in wanted.size) != asset.size:
                 asset = resized_variant(asset, wanted.size)
         logger.info("asset for %s: %s", wanted.describe(spec.description), asset.label)
