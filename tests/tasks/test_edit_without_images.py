@@ -95,12 +95,13 @@ def test_a_prompt_about_looks_is_refused_with_a_clear_message(motion_store) -> N
 
 
 @pytest.mark.shared_data
-def test_mining_judges_from_the_bev_and_trajectories(motion_store) -> None:
-    from tasks.mine import mine_sequence_task
-
+def test_cli_mining_needs_no_asset_bank_and_judges_from_the_bev_and_trajectories(motion_store) -> None:
     store, seq, _ = motion_store
-    mined = mine_sequence_task.fn(store.root, seq, "mine", per_sequence=1, max_attempts=1)
-    assert mined.attempts >= 1 and mined.accepted == 1
-    (scenario,) = mined.scenarios
-    files = set(store.listdir(scenario.edit_dir.removeprefix(store.root).strip("/")))
+    result = CliRunner().invoke(app, ["mine", "--store", store.root, "--seq", seq, "--per-sequence", "1",
+                                      "--max-attempts", "1", "--run-id", "mine", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output.strip().splitlines()[-1])
+    assert data["totals"]["accepted"] == 1
+    (scenario,) = data["scenarios"]
+    files = set(store.listdir(scenario["edit_dir"].removeprefix(store.root).strip("/")))
     assert {"trajectories.parquet", "bev.png", "validation.json"} <= files and "renders" not in files
