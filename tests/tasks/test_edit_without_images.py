@@ -84,6 +84,8 @@ def test_cli_inserts_a_stopped_truck_as_a_box(motion_store) -> None:
     xy = np.array([(r["x"], r["y"]) for r in rows])
     assert np.abs(xy - xy[0]).max() < 0.05 and max(abs(r["speed"]) for r in rows) < 0.05  # it stands
     assert rows[0]["length"] > 6.0  # a truck's box
+    node = next(n for n in rebuild_edit(store, RUN, seq, edit_id).object_nodes if n.object_id == added.object_id)
+    assert len(node.gaussians) == 0 and node.category == "vehicle"
 
 
 @pytest.mark.shared_data
