@@ -6,12 +6,13 @@ Layout (``DESIGN.md``)::
     edits/<run_id>/<seq_id>/<edit_id>/           one staged directory: complete (with _SUCCESS.json) or absent
         command.json                             the EditProgram (with its schema_version)
         trajectories.parquet                     every agent at every valid step after the edit (no removed ones)
-        delta/delta.json                         the edit on the stored scene: base scene and asset bank,
-                                                 removed node ids, added nodes (asset references), re-tracked nodes
+        delta/delta.json                         the edit on the stored scene: base scene (or the log, for a log
+                                                 without images) and asset bank, removed node ids, added nodes
+                                                 (asset references), re-tracked nodes
         delta/pose_tracks.parquet                the pose tracks of the added and re-tracked nodes
-        renders/<camera>/<frame:06d>.exr         R, G, B, A (half floats, rounded to 1/256) + id (float32 node
-                                                 id, -1 = nothing); zip compressed, ~100 KB at 240 x 160
-        bev.png, before_after.png                pictures for people
+        renders/<camera>/<frame:06d>.exr         (logs with images) R, G, B, A (half floats, rounded to 1/256) +
+                                                 id (float32 node id, -1 = nothing); zip, ~100 KB at 240 x 160
+        bev.png, bev.mp4, before_after.png       pictures for people (no before_after.png without images)
         validation.json                          collisions / off-road / kinematics of the edited agents
         _SUCCESS.json                            key, byte counts per part
 
@@ -196,7 +197,8 @@ def record_failure(store: ArtifactStore, record: EditRecord, program: EditProgra
 
 # ----------------------------------------------------------------------------- trajectories
 def trajectories_table(edit_id: str, states: AgentStates) -> pa.Table:
-    """DESIGN's ``trajectories`` table of ``states``: one row per (agent, valid step), agents in row order."""
+    """DESIGN's ``trajectories`` table of ``states``: one row per (agent, valid step), agents in row order, with
+    the box centre height ``z`` and the agent's box size (``length``, ``width``, ``height``, metres)."""
     rows, steps = np.nonzero(states.valid)  # row-major: agent by agent, steps increasing
     n = rows.size
     return pa.table({
@@ -209,6 +211,10 @@ def trajectories_table(edit_id: str, states: AgentStates) -> pa.Table:
         "heading": pa.array(states.heading[rows, steps].astype(np.float32), pa.float32()),
         "speed": pa.array(states.speed[rows, steps].astype(np.float32), pa.float32()),
         "source": pa.array([states.sources[r] for r in rows], pa.string()),
+        "z": pa.array(states.z[rows, steps].astype(np.float32), pa.float32()),
+        "length": pa.array(states.size[rows, 0].astype(np.float32), pa.float32()),
+        "width": pa.array(states.size[rows, 1].astype(np.float32), pa.float32()),
+        "height": pa.array(states.size[rows, 2].astype(np.float32), pa.float32()),
     }, schema=TRAJECTORIES_SCHEMA)
 
 
@@ -285,18 +291,26 @@ def trajectory_states(table: pa.Table, log_states: AgentStates) -> AgentStates:
 # ----------------------------------------------------------------------------- delta
 @dataclass(frozen=True)
 class DeltaBase:
-    """What a delta applies to: the stored scene and the asset bank its added nodes come from.
+    """What a delta applies to: the stored scene (or, for a log without images, the graph of the log's tracks)
+    and the asset bank its added nodes come from.
 
     Attributes:
-        seq_id, scene_hash: ``scenes/<seq_id>/<scene_hash>``.
-        bank_hash: ``assets/<bank_hash>`` (``""`` when the edit added nothing).
+        seq_id, scene_hash: ``scenes/<seq_id>/<scene_hash>`` (``scene_hash`` ``""``: the base is the log).
+        bank_hash: ``assets/<bank_hash>``, or the box-only bank's hash (``""`` when the edit added nothing).
         frame_indices: ``[F]`` the graph's frame axis (checked when rebuilding).
+        log_key: the log's content key when the base is the log (``""`` otherwise).
     """
 
     seq_id: str
     scene_hash: str
     bank_hash: str
     frame_indices: tuple[int, ...]
+    log_key: str = ""
+
+    @property
+    def from_log(self) -> bool:
+        """Whether the delta applies to the log's tracks (no reconstructed scene)."""
+        return not self.scene_hash
 
 
 @dataclass(frozen=True, eq=False)
@@ -336,6 +350,7 @@ def write_edit_delta(store: ArtifactStore, relpath: str, delta: EditDelta, base:
     body = {
         "format": DELTA_FORMAT, "version": DELTA_FORMAT_VERSION,
         "seq_id": base.seq_id, "scene_hash": base.scene_hash, "bank_hash": base.bank_hash,
+        **({"base": "log", "log_key": base.log_key} if base.from_log else {}),
         "frame_indices": [int(f) for f in base.frame_indices],
         "removed_node_ids": [int(n) for n in delta.removed_node_ids],
         "added": [{"node_id": a.node_id, "object_id": a.object_id, "asset_id": a.asset_id, "category": a.category,
@@ -388,7 +403,7 @@ def read_edit_delta(store: ArtifactStore, run_id: str, seq_id: str, edit_id: str
     delta = EditDelta(removed_node_ids=tuple(int(n) for n in body.get("removed_node_ids", [])), added=tuple(added),
                       retracked=retracked)
     base = DeltaBase(str(body["seq_id"]), str(body["scene_hash"]), str(body.get("bank_hash", "")),
-                     tuple(int(f) for f in body.get("frame_indices", [])))
+                     tuple(int(f) for f in body.get("frame_indices", [])), str(body.get("log_key", "")))
     return StoredDelta(delta, base)
 
 

@@ -157,16 +157,17 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     ``threads``: torch/numba threads for this task (0 = leave the process setting).
 
     Raises:
-        FileNotFoundError: the store lacks the sequence's log, language scene, or an asset bank (naming the store
-            and what to run).
+        FileNotFoundError: the store lacks the sequence's log, language scene, or (for a log with images) an asset
+            bank (naming the store and what to run).
         VLMError: ``vlm="openai"`` without an endpoint configured.
     """
     started = time.perf_counter()
     if threads:
         set_compute_threads(threads)
     store = ArtifactStore(store_root)
-    require_asset_bank(store, f"to mine {seq_id!r} with")
     loaded = load_edit_context(store, seq_id)
+    if loaded.renders:  # a log without images inserts boxes (tasks.stored_edits)
+        require_asset_bank(store, f"to mine {seq_id!r} with")
     config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed,
                           category_offset=category_offset)
     client = client if client is not None else make_client(vlm, loaded, config)

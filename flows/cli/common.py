@@ -3,6 +3,7 @@ user's settings into configs, and checking the store before any work starts (a b
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Annotated, Any
 
 import typer
@@ -88,13 +89,18 @@ def stored_sequences(store: str, seq: list[str] | None = None, needs: str = "log
         raise typer.BadParameter(str(exc), param_hint=param_hint) from exc
 
 
-def stored_asset_bank(store: str) -> str:
-    """The hash of ``store``'s newest asset bank; a bad parameter naming ``simsplat assets build`` when it has none."""
-    from storage import ArtifactStore
+def stored_asset_bank(store: str, seq_ids: Sequence[str] | None = None) -> str:
+    """The hash of ``store``'s newest asset bank; a bad parameter naming ``simsplat assets build`` when it has none.
+    With ``seq_ids`` whose logs all lack cameras (edited with box-only inserts, ``tasks.stored_edits``) no bank is
+    needed: ``""`` when the store has none."""
+    from storage import ArtifactStore, read_log_manifest
     from storage.errors import MissingInputError
     from storage.inventory import require_asset_bank
 
+    opened = ArtifactStore(store)
     try:
-        return require_asset_bank(ArtifactStore(store))
+        return require_asset_bank(opened)
     except MissingInputError as exc:
+        if seq_ids is not None and not any((read_log_manifest(opened, s) or {}).get("cameras") for s in seq_ids):
+            return ""
         raise typer.BadParameter(str(exc), param_hint="--store") from exc

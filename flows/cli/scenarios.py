@@ -124,7 +124,7 @@ def mine(
 
     check_vlm(vlm)
     seq_ids = stored_sequences(store, seq, "language")
-    stored_asset_bank(store)
+    stored_asset_bank(store, seq_ids)  # logs without images need none (box-only inserts)
     seeds: dict[str, list] = {}
     if from_search is not None:
         from tasks.search import search_seeds

@@ -130,7 +130,8 @@ def _run_commands(ctx: EditContext, program: EditProgram, options: EditorOptions
     """Every command on a fresh draft (assets in ``excluded`` are not retrieved when another fits; inserted rows
     moved by ``room_shift``, ``Draft.room_shift``); seconds into ``clock`` (``ground`` / ``apply`` / ``refine``)."""
     with maybe_stage(clock, "apply"):
-        grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding, clock=clock)
+        grounder = Grounder(ctx.language, ctx.engine, ctx.graph, options.grounding, clock=clock, states=ctx.states,
+                            lanes=ctx.lanes)
         draft = Draft.start(ctx, grounder, options, excluded, room_shift)
         outcomes = []
         for index, command in enumerate(program.commands):

@@ -44,7 +44,7 @@ class EditContext:
 
     Attributes:
         log: the sequence's log (tracks, ego poses, map, cameras; no images needed).
-        graph: the stored scene graph.
+        graph: the stored scene graph (for a log without images: the graph of its tracks, ``scene.track_graph``).
         language: the graph's language scene (what grounding reads), static objects' sectors filled in from the
             log (``language.grounding.static_location``).
         engine: the grounding engine (its text encoder also retrieves assets and parses prompts).

@@ -8,6 +8,8 @@
   switched off (``"attributes"``: category and colour only); mode ``"ids"`` refuses descriptions.
   ``group=True`` asks the engine for every match ("all parked cars").
 * ``node_id`` / ``object_id``: the graph's object node (any mode).
+* "the lead vehicle" / "the leading car" (:data:`LEAD_RX`), given the log's agents and lanes: the nearest moving
+  vehicle ahead of the ego in its lane (``scenario.lead.lead_vehicle``), found by geometry, not by words.
 
 Nothing found is ``EditRefused(reason="not_found")`` whose message is the engine's ("no purple bus in this
 scene") plus what similar objects the scene has. Nodes an earlier command removed are not found again.
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import re
 from collections import Counter
 from collections.abc import Collection
 from dataclasses import dataclass
@@ -34,6 +37,9 @@ from simsplat_core.language.appearance.captioner import AppearanceCaption
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.grounding.parse import ParsedQuery, parse_query
 from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.lane_graph import LaneGraph
+from simsplat_core.scenario.lead import lead_vehicle
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.stage_clock import StageClock, maybe_stage
 
@@ -41,6 +47,8 @@ logger = logging.getLogger(__name__)
 
 #: Similar objects named in a not-found message.
 SIMILAR_SHOWN = 3
+#: A description of the lead vehicle (the whole description names it: "the lead vehicle", "the leading car").
+LEAD_RX = re.compile(r"^(?:the )?(?:lead|leading) (?:vehicle|car)$")
 
 
 def _same_color(asked: str, seen: str) -> bool:
@@ -86,14 +94,18 @@ class Grounder:
         graph: the graph being edited (ids are checked against its object nodes).
         mode: the editor's grounding mode.
         clock: where :meth:`ground` adds its wall seconds (stage ``"ground"``; ``None``: not timed).
+        states, lanes: the log's agents and lane graph (both given: "the lead vehicle" is grounded by geometry).
     """
 
     def __init__(self, language: LanguageScene, engine: QueryEngine, graph: SceneGraph,
-                 mode: GroundingMode = "language", clock: StageClock | None = None) -> None:
+                 mode: GroundingMode = "language", clock: StageClock | None = None, *,
+                 states: AgentStates | None = None, lanes: LaneGraph | None = None) -> None:
         self.language = language
         self.clock = clock
         self.graph = graph
         self.mode = mode
+        self.states = states
+        self.lanes = lanes
         if mode == "attributes":
             engine = engine.with_config(dataclasses.replace(engine.config, use_motion=False, use_location=False))
         self.engine = engine
@@ -128,6 +140,9 @@ class Grounder:
         if ref.node_id is not None or ref.object_id is not None:
             return self._by_id(ref, removed, command_index, role)
         assert ref.description is not None
+        if self.states is not None and self.lanes is not None and self.mode != "ids" \
+                and LEAD_RX.match(" ".join(ref.description.lower().split())):
+            return self._lead(self.states, self.lanes, removed, command_index, role)
         if self.mode == "ids":
             raise EditRefused(f"this editor takes object ids, not descriptions: give the {role} as a node id or "
                               f"object id instead of {ref.description!r}", reason="unsupported",
@@ -156,6 +171,21 @@ class Grounder:
         ids = tuple(m.node_id for m in alive)
         logger.info("%s %r -> %s", role, ref.description, ids)
         return Grounded(ids, tuple(self._objects[i].object_id for i in ids), grounding.message)
+
+    def _lead(self, states: AgentStates, lanes: LaneGraph, removed: Collection[int], command_index: int | None,
+              role: str) -> Grounded:
+        """The lead vehicle's node (module docstring), or ``EditRefused`` (``not_found``) saying there is none."""
+        row = lead_vehicle(states, lanes, self.language.seq_id)
+        node = None if row is None else next(
+            (n for n in self._objects.values() if n.object_id == states.object_ids[row]), None)
+        if node is None:
+            raise EditRefused("no lead vehicle in this scene: no moving vehicle is ahead of the ego in its lane",
+                              reason="not_found", command_index=command_index)
+        if node.node_id in set(removed):
+            raise EditRefused(f"the lead vehicle, {self.describe(node.node_id)}, was already removed by an earlier "
+                              "command", reason="not_found", command_index=command_index)
+        logger.info("%s 'the lead vehicle' -> %s", role, node.node_id)
+        return Grounded((node.node_id,), (node.object_id,), f"{role}: the lead vehicle, {self.describe(node.node_id)}")
 
     def _caption(self, node_id: int) -> AppearanceCaption | None:
         try:

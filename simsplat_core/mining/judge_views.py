@@ -11,6 +11,10 @@ it reacts, as ``editing.renders.frame_views`` does) at most ``max_width`` pixels
 where the targets cover most pixels (the first camera when none shows them). The targets' pixels are counted in
 the shown renders, from the renderer's node ids. The BEV is ``viz.bev.edit_bev``, what ``simsplat edit`` writes
 as ``bev.png``.
+
+A log without cameras (a motion-forecasting scenario: nothing to render) is shown by its bird's-eye view alone: the
+proposal view is the log's BEV, the judge's one "render" is the edit's BEV and the targets' pixels are not measured
+(``visible_pixels`` ``None``): the judge decides from the trajectories.
 """
 
 from __future__ import annotations
@@ -24,6 +28,7 @@ import numpy as np
 from simsplat_core.editing.renders import frame_views, render_frame
 from simsplat_core.editing.result import EditedScene
 from simsplat_core.mining.judge_input import targets_of, visible_pixels_of
+from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene_view import CameraView
 from simsplat_core.types import SceneLog
@@ -42,14 +47,14 @@ class JudgeViews:
         renders: ``R`` images ``[h, w, 3]`` uint8, one per telling frame (in time order).
         frames: the ``R`` log frames shown; cameras: the camera of each.
         bev: ``[S, S, 3]`` uint8 bird's-eye view of the edit.
-        visible_pixels: target object id -> pixels it covers in ``renders``.
+        visible_pixels: target object id -> pixels it covers in ``renders`` (``None``: a log without cameras).
     """
 
     renders: tuple[np.ndarray, ...]
     frames: tuple[int, ...]
     cameras: tuple[str, ...]
     bev: np.ndarray
-    visible_pixels: dict[str, int]
+    visible_pixels: dict[str, int] | None
 
 
 def scaled_views(views: Sequence[CameraView], max_width: int) -> list[CameraView]:
@@ -72,17 +77,20 @@ def image_frames(log: SceneLog) -> list[int]:
     return sorted({img.frame_idx for img in log.images})
 
 
-def proposal_views(graph: SceneGraph, log: SceneLog, *, frame_idx: int | None = None, max_width: int = 320
-                   ) -> list[np.ndarray]:
+def proposal_views(graph: SceneGraph, log: SceneLog, *, frame_idx: int | None = None, max_width: int = 320,
+                   states: AgentStates | None = None) -> list[np.ndarray]:
     """Every camera's render of ``graph`` at ``frame_idx`` (default: the first frame with images), ``[h, w, 3]``
-    uint8 each, at most ``max_width`` wide.
+    uint8 each, at most ``max_width`` wide; for a log without cameras the bird's-eye view of ``states`` (the log's
+    agents), ``max_width`` square.
 
     Raises:
-        ValueError: the log has no camera images.
+        ValueError: the log has no camera images and no ``states`` are given.
     """
     frames = image_frames(log)
     if not frames:
-        raise ValueError(f"{log.seq_id}: the log has no cameras to render views from")
+        if states is None:
+            raise ValueError(f"{log.seq_id}: the log has no cameras to render views from")
+        return [edit_bev(log.map_features, states, states, size=max_width)]
     frame = frames[0] if frame_idx is None else int(frame_idx)
     rendered = render_frame(graph, frame, scaled_views(frame_views(log, frame), max_width), with_node_ids=False)
     return [to_uint8(np.clip(rgb, 0.0, 1.0)) for rgb in rendered.rgb]
@@ -112,14 +120,12 @@ def telling_frames(edited: EditedScene, log: SceneLog, count: int) -> list[int]:
 
 def judge_views(edited: EditedScene, log: SceneLog, *, frames: int = 3, max_width: int = 320, bev_size: int = 320,
                 title: str = "") -> JudgeViews:
-    """The renders, BEV and target pixels of ``edited`` (module docstring); ``title`` is drawn on the BEV.
-
-    Raises:
-        ValueError: the log has no camera images.
-    """
+    """The renders, BEV and target pixels of ``edited`` (module docstring; a log without cameras: the BEV alone);
+    ``title`` is drawn on the BEV."""
     shown = telling_frames(edited, log, frames)
     if not shown:
-        raise ValueError(f"{log.seq_id}: the log has no cameras to render the edit from")
+        bev = edit_bev(log.map_features, edited.original_states, edited.states, title=title, size=bev_size)
+        return JudgeViews((bev,), (), ("bev",), bev, None)
     targets = [o for ids in targets_of(edited) for o in ids if o in edited.states.object_ids]
     nodes = np.asarray([edited.states.node_ids[edited.states.index(o)] for o in targets], np.int64)
     moved = edited.ego_poses(log.ego_poses)

@@ -148,7 +148,8 @@ def failure_classes(edited: EditedScene, shown: JudgeViews, min_visible_pixels: 
     every target present covers fewer than ``min_visible_pixels`` pixels of the judge's renders."""
     found: set[str] = {f.kind for f in validation_failures(edited.validation)}
     present = [o for ids in targets_of(edited) for o in ids if o in edited.states.object_ids]
-    if present and all(shown.visible_pixels.get(o, 0) < min_visible_pixels for o in present):
+    seen = shown.visible_pixels
+    if seen is not None and present and all(seen.get(o, 0) < min_visible_pixels for o in present):
         found.add("not_visible")
     return found
 
@@ -297,8 +298,8 @@ def mine_sequence(ctx: EditContext, client: VLMClient, config: MiningConfig | No
         client: proposes, translates and judges (e.g. ``RuleBasedVLMClient``, ``OpenAIVLMClient``).
         config: the loop's settings (default :class:`MiningConfig`).
         views: ``[H, W, 3]`` images of the scene the client proposes from (default: the stored scene rendered from
-            every camera at the first frame, ``config.judge_width`` wide; rendered only for a client that reads
-            them).
+            every camera at the first frame, ``config.judge_width`` wide, or the log's bird's-eye view when it has no
+            cameras; rendered only for a client that reads them).
         seed_prompts: prompts tried first (search hits; a :class:`Proposal` keeps its category).
         progress: ``progress(accepted, config.scenarios)`` after each attempt.
     """
@@ -309,7 +310,7 @@ def mine_sequence(ctx: EditContext, client: VLMClient, config: MiningConfig | No
     facts_s = time.perf_counter() - started
 
     def rendered_views() -> Sequence[np.ndarray]:
-        return proposal_views(ctx.graph, ctx.log, max_width=config.judge_width)
+        return proposal_views(ctx.graph, ctx.log, max_width=config.judge_width, states=ctx.states)
 
     feed = ProposalFeed(client, scene, views if views is not None else rendered_views, seed_prompts,
                         per_round=config.proposals_per_round, max_rounds=config.max_rounds)

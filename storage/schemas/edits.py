@@ -66,9 +66,12 @@ EDITS_SCHEMA = make_schema(
     nullable=EDITS_MINING_COLUMNS,
 )
 
+#: Box columns of the ``trajectories`` table (version 3; null in version-2 files).
+TRAJECTORY_BOX_COLUMNS: tuple[str, ...] = ("z", "length", "width", "height")
+
 TRAJECTORIES_SCHEMA = make_schema(
     "trajectories",
-    2,  # 2: category column, source "inserted"
+    3,  # 2: category column, source "inserted"; 3: box centre height and size (nullable)
     [
         ("edit_id", pa.string()),
         ("object_id", pa.string()),  # the log's id for existing agents ("ego" for the ego), a new one when inserted
@@ -79,7 +82,12 @@ TRAJECTORIES_SCHEMA = make_schema(
         ("heading", pa.float32()),
         ("speed", pa.float32()),  # signed, m/s (negative when reversing)
         ("source", pa.string()),  # "log" | "edited" | "inserted" | "refined"
+        ("z", pa.float32()),  # box centre height, metres (world frame)
+        ("length", pa.float32()),  # box size, metres
+        ("width", pa.float32()),
+        ("height", pa.float32()),
     ],
+    nullable=TRAJECTORY_BOX_COLUMNS,
 )
 
 EDIT_POSE_TRACKS_SCHEMA = make_schema(

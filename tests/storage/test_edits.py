@@ -78,8 +78,9 @@ def _states(n_steps: int = 5) -> AgentStates:
     xy = np.stack([np.stack([t * 1.0, t * 0.0], -1), np.stack([5 + t, t * 0.5], -1), np.stack([t * 0.0, -t], -1)])
     return AgentStates(object_ids=("ego", "car", "inserted_0"), categories=("vehicle", "vehicle", "pedestrian"),
                        sources=("log", "edited", "inserted"), node_ids=np.array([-1, 1, 10]), frame_idx=t,
-                       times=t / 10.0, xy=xy, z=np.zeros((3, n_steps)), heading=np.zeros((3, n_steps)),
-                       speed=np.ones((3, n_steps)), size=np.ones((3, 3)), valid=valid)
+                       times=t / 10.0, xy=xy, z=np.full((3, n_steps), 0.75) + 0.01 * t, heading=np.zeros((3, n_steps)),
+                       speed=np.ones((3, n_steps)), size=np.array([[4.5, 1.9, 1.5], [4.0, 1.8, 1.4], [0.5, 0.5, 1.7]]),
+                       valid=valid)
 
 
 def test_edits_table_appends_and_numbers_attempts(tmp_path):
@@ -118,10 +119,27 @@ def test_trajectories_table_has_every_valid_step_and_round_trips(tmp_path):
     with staged_edit(store, _record(), key="k1") as writer:
         writer.trajectories("e1", states)
     back = read_trajectories(store, "run1", "unit", "e1")
-    assert back.schema.metadata[b"schema_version"] == b"2"
+    assert back.schema.metadata[b"schema_version"] == b"3"
     rows = [r for r in back.to_pylist() if r["object_id"] == "car"]
     assert [r["step"] for r in rows] == [0, 1, 2, 3, 4]
     assert rows[3]["x"] == pytest.approx(8.0) and rows[3]["category"] == "vehicle"
+    car = states.index("car")
+    assert rows[3]["z"] == pytest.approx(states.z[car, 3])
+    assert (rows[3]["length"], rows[3]["width"], rows[3]["height"]) == pytest.approx(tuple(states.size[car]))
+
+
+def test_version_2_trajectories_read_with_null_box_columns(tmp_path):
+    import pyarrow.parquet as pq
+
+    from storage.schemas.edits import TRAJECTORY_BOX_COLUMNS
+
+    table = trajectories_table("e1", _states()).drop_columns(list(TRAJECTORY_BOX_COLUMNS))
+    old = table.replace_schema_metadata({b"schema_name": b"trajectories", b"schema_version": b"2"})
+    pq.write_table(old, str(tmp_path / "t.parquet"))
+    back = ArtifactStore(str(tmp_path)).read_table("t.parquet", "trajectories")
+    assert back.num_rows == table.num_rows
+    for name in TRAJECTORY_BOX_COLUMNS:
+        assert back.column(name).null_count == back.num_rows
 
 
 def test_delta_round_trip_and_rebuild_equals_applying(tmp_path):

@@ -14,11 +14,12 @@
    group of procedural kinds (``editing.assets.procedural.STATIC_GROUPS``: "barrier" fits both barriers).
 3. Size (``size_m``): a cut-out fits when every side is within ``SIZE_TOLERANCE`` (relative, at least
    ``SIZE_TOLERANCE_M``) of the wanted one; a procedural asset fits when it can be rebuilt at that size
-   (``editing.assets.procedural.RESIZE_RANGE``) and is.
+   (``editing.assets.procedural.RESIZE_RANGE``) and is; a box-only asset (``editing.assets.boxes``) is made that size.
 4. Colour: assets of that colour come first (a pedestrian's top, or its trousers when the description
    names the colour for them only; among those, ones whose other garment is the other named colour first);
    when the type exists but not in that colour, the best one is *recoloured* (``editing.assets.colors.recolored``;
-   procedural assets are rebuilt in the colour), and the variant records ``recoloured_from``.
+   procedural assets are rebuilt in the colour, box-only ones only renamed), and the variant records
+   ``recoloured_from``.
 5. Ranking: cosine of the description (E5 query) with each caption (E5 passage, embeddings cached per
    encoder; when recolouring, the captions as they will read in the new colour), plus ``QUALITY_WEIGHT`` x
    the asset's side coverage (``seen_from`` picks one side: the one the camera will see), for pedestrians
@@ -175,6 +176,8 @@ def _size_fits(have: tuple[float, float, float], wanted: tuple[float, float, flo
 
 
 def _rebuildable(asset: Asset, wanted: tuple[float, float, float]) -> bool:
+    if asset.box_only:
+        return True
     kind = STATIC_KINDS.get(asset.attributes.get("procedural", ""))
     if kind is None:
         return False
@@ -371,7 +374,7 @@ class AssetBank:
         asset = best
         if wanted.color is not None and not exact:
             asset = color_variant(asset, wanted.color)
-        if wanted.size is not None and (asset.procedural or not _size_fits(asset.size, wanted.size)):
+        if wanted.size is not None and (asset.procedural or asset.box_only or not _size_fits(asset.size, wanted.size)):
             if tuple(f32(v) for v in wanted.size) != asset.size:
                 asset = resized_variant(asset, wanted.size)
         logger.info("asset for %s: %s", wanted.describe(spec.description), asset.label)
@@ -433,6 +436,8 @@ def color_variant(asset: Asset, color: str) -> Asset:
     color = COLOR_SYNONYMS.get(color.lower(), color)
     if asset.color == color:
         return asset
+    if asset.box_only:  # nothing to paint: the colour and the caption change
+        return _box_recolored(asset, color)
     kind = asset.attributes.get("procedural")
     if kind in STATIC_KINDS:
         rebuilt = procedural_asset(kind, color, asset.size, asset_id=f"{asset.asset_id}{VARIANT_SEP}{color}")
@@ -467,6 +472,17 @@ def resized_variant(asset: Asset, size: tuple[float, float, float]) -> Asset:
     gs = asset.gaussians.map_rows(_scaled)
     return replace(asset, asset_id=new_id, size=size, gaussians=gs,
                    attributes={**asset.attributes, RESIZED_FROM: asset.asset_id})
+
+
+def _box_recolored(asset: Asset, color: str) -> Asset:
+    if color not in COLOR_NAMES:
+        raise ValueError(f"unknown colour {color!r}; known: {list(COLOR_NAMES)}")
+    if asset.category == "pedestrian":
+        caption = caption_text("pedestrian", asset.subtype, (), color, asset.attributes.get(LOWER_COLOR) or None)
+    else:
+        caption = caption_text(asset.category, asset.subtype, (color,))
+    return replace(asset, asset_id=f"{asset.asset_id}{VARIANT_SEP}{color}", caption=caption, color=color,
+                   attributes={**asset.attributes, RECOLOURED_FROM: asset.asset_id})
 
 
 def _with_attributes(asset: Asset, attributes: dict[str, str]) -> Asset:

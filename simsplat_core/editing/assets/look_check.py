@@ -230,7 +230,7 @@ def match_exposure(log: SceneLog, graph: SceneGraph, delta: EditDelta, wanted: M
     added = {a.node_id: a for a in delta.added}
     checks = {n: c for n, c in wanted.items()
               if n in added and c in COLOR_NAMES and added[n].category in CHECKED_CATEGORIES}
-    if not checks:
+    if not checks or not log.images:  # nothing asked, or no cameras to look through (a log without images)
         return delta, graph, []
     frames = sorted({f for n in checks for f in look_frames(states, added[n].object_id)})
     objects = [added[n].object_id for n in checks]

@@ -35,6 +35,8 @@ RECOLOURED_FROM = "recoloured_from"
 RESIZED_FROM = "resized_from"
 EXPOSED_FROM = "exposed_from"
 PROCEDURAL = "procedural"
+#: A box with no Gaussians (``editing.assets.boxes``: inserts into logs without images).
+BOX_ONLY = "box_only"
 LOWER_COLOR = "lower_color"
 #: Characters allowed in a stored asset id (it names the file ``gaussians/<asset_id>.parquet``).
 ASSET_ID_RX = re.compile(r"^[A-Za-z0-9_][A-Za-z0-9_.\-]*$")
@@ -140,6 +142,11 @@ class Asset:
     @property
     def procedural(self) -> bool:
         return PROCEDURAL in self.attributes
+
+    @property
+    def box_only(self) -> bool:
+        """A box with no Gaussians (``editing.assets.boxes``): its colour is a word, its size any size."""
+        return BOX_ONLY in self.attributes
 
     @property
     def base_id(self) -> str:

@@ -31,11 +31,12 @@ supported. A prompt is never parsed into nothing: no edit found is a refusal too
 from __future__ import annotations
 
 import logging
+import re
 from typing import Any
 
 from pydantic import ValidationError
 
-from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, StopSpec
+from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, SpeedSpec, StopSpec
 from simsplat_core.editing.parse.chunks import split_clauses
 from simsplat_core.editing.parse.clauses import PromptParser
 from simsplat_core.editing.parse.lexicon import SUPPORTED
@@ -74,6 +75,16 @@ def parse_prompt(text: str, *, encoder: TextEncoder | None = None) -> EditProgra
     return EditProgram(prompt=text, commands=commands)
 
 
+#: An inserted object described by one of these words stands still (an absolute speed of 0, which parks an
+#: inserted vehicle) when no behaviour is asked ("insert a stopped truck in the ego lane").
+STANDING_WORDS = re.compile(r"(?<![\w-])(?:stopped|stationary|halted|standing|parked)(?![\w-])")
+
+
+def _inserted_standing(draft: Draft) -> bool:
+    return draft.op == "insert" and not draft.fields and draft.asset is not None \
+        and STANDING_WORDS.search(draft.asset.description.lower()) is not None
+
+
 def _behaviour(fields: dict[str, Any]) -> Behaviour | None:
     if not fields:
         return None
@@ -90,7 +101,7 @@ def _command(draft: Draft, index: int) -> EditCommand:
             target=draft.subject.ref if draft.op != "insert" and draft.subject is not None else None,
             asset=draft.asset,
             placement=draft.placement,
-            behaviour=_behaviour(draft.fields),
+            behaviour=Behaviour(speed=SpeedSpec(value=0.0)) if _inserted_standing(draft) else _behaviour(draft.fields),
             note=draft.note[:500],
         )
     except ValidationError as exc:

@@ -14,12 +14,8 @@ are applied directly to a :class:`~simsplat_core.eval.refinement.real.RealScenar
   nearest moving vehicle ahead when there is no second), from the kerb side (the car's right) so that it is on
   the car's logged position :data:`CROSS_AFTER_S` after ``start_step``; valid from ``start_step``.
 
-"Ahead in the ego's lane": the vehicle's box at least :data:`IN_LANE_M` inside the :data:`LANE_HALF_WIDTH_M`
-corridor around the ego's lane path
-(``LaneGraph.follow``; a straight line along the ego's heading on a map without lanes), 0 to
-:data:`AHEAD_RANGE_M` metres ahead along it, heading within :data:`SAME_DIRECTION_DEG` of the path's. "Moving":
-faster than :data:`MOVING_MPS` at ``start_step``. An edit the scenario has no situation for returns ``None``
-and logs why (:attr:`RealEdit.reason`).
+"Ahead in the ego's lane" and "moving" at ``start_step`` are ``scenario.lead``'s. An edit the scenario has no
+situation for returns ``None`` and logs why (:attr:`RealEdit.reason`).
 
 Edited agents carry source ``"edited"``, inserted ones ``"inserted"``. :func:`evaluate_real_edits` then
 refines each edited scenario in every mode with ``ego_reacts=True``: nothing is rendered from real motion data,
@@ -44,24 +40,14 @@ from simsplat_core.eval.refinement.real import RealScenario
 from simsplat_core.eval.refinement.synthetic import MotionCase, MotionOutcome, measure, synthetic_rows
 from simsplat_core.motion.predictor import MotionPredictor
 from simsplat_core.motion.refine import REFINE_MODES, edit_start_step, refine
+from simsplat_core.scenario import lead
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.geometry import footprints_overlap
+from simsplat_core.scenario.lead import AHEAD_RANGE_M, ego_pose, speed_at
 from simsplat_core.scenario.path import Path
-from simsplat_core.scenario.trajectory import agent_kind
-from simsplat_core.scenario.vocabulary import VEHICLE
 
 logger = logging.getLogger(__name__)
 
-#: A vehicle moves when faster than this at ``start_step``, m/s.
-MOVING_MPS = 2.0
-#: Half width of the ego's lane around its path, metres; a vehicle is in the lane when its box reaches at least
-#: ``IN_LANE_M`` into it (a car straddling the lane line is a lead the ego must follow).
-LANE_HALF_WIDTH_M = 1.75
-IN_LANE_M = 0.5
-#: ... and this far ahead at most, metres.
-AHEAD_RANGE_M = 80.0
-#: ... with a heading within this of the path's, degrees.
-SAME_DIRECTION_DEG = 30.0
 #: The lead vehicle starts braking this many steps after ``start_step``, at this deceleration (m/s^2).
 BRAKE_DELAY_STEPS = 5
 BRAKE_DECEL_MPS2 = 6.0
@@ -101,65 +87,18 @@ class RealEdit:
 
 # ------------------------------------------------------------------------------------------ geometry
 def _ego_pose(scenario: RealScenario) -> tuple[np.ndarray, float] | None:
-    states, t = scenario.states, scenario.start_step
-    ego = states.index(EGO_ID)
-    if not states.valid[ego, t]:
-        return None
-    return states.xy[ego, t].copy(), float(states.heading[ego, t])
+    return ego_pose(scenario.states, scenario.start_step)
 
 
 def ego_lane_path(scenario: RealScenario, length_m: float = AHEAD_RANGE_M + 20.0) -> tuple[Path, float] | None:
-    """``(path, arc length of the ego on it)``: the ego's lane ahead from its pose at ``start_step``
-    (``LaneGraph.follow``, straight on at branches), or a straight line along its heading when the map has no lane
-    near it; ``None`` when the ego is not observed then."""
-    pose = _ego_pose(scenario)
-    if pose is None:
-        return None
-    xy, heading = pose
-    if len(scenario.map.lanes):
-        try:
-            lane = scenario.map.lanes.follow(xy, heading, max_length_m=length_m)
-            return lane.path, lane.start_s
-        except ValueError:
-            logger.info("%s: no lane near the ego; its lane ahead is a straight line", scenario.seq_id)
-    direction = np.array([math.cos(heading), math.sin(heading)])
-    return Path.from_points(np.stack([xy, xy + length_m * direction])), 0.0
-
-
-def _speed_at(states: AgentStates, row: int, t: int) -> float:
-    """Speed from the box centres' displacement into step ``t`` (the log's speed when ``t - 1`` is not valid)."""
-    if t > 0 and states.valid[row, t - 1] and states.valid[row, t]:
-        return float(np.linalg.norm(states.xy[row, t] - states.xy[row, t - 1]) /
-                     max(states.times[t] - states.times[t - 1], 1e-9))
-    return abs(float(states.speed[row, t]))
+    """The ego's lane ahead from its pose at ``start_step`` (``scenario.lead.ego_lane_path``)."""
+    return lead.ego_lane_path(scenario.states, scenario.map.lanes, scenario.start_step, length_m, scenario.seq_id)
 
 
 def vehicles_ahead(scenario: RealScenario, moving: bool = True) -> list[tuple[int, float]]:
     """``[(row, distance along the ego's lane)]`` of the vehicles ahead of the ego in its lane at ``start_step``
-    (module docstring), nearest first; only moving ones unless ``moving=False``."""
-    lane = ego_lane_path(scenario)
-    if lane is None:
-        return []
-    path, ego_s = lane
-    states, t = scenario.states, scenario.start_step
-    out = []
-    for r, (oid, category) in enumerate(zip(states.object_ids, states.categories)):
-        if oid == EGO_ID or agent_kind(category) != VEHICLE or not states.valid[r, t]:
-            continue
-        if moving and _speed_at(states, r, t) <= MOVING_MPS:
-            continue
-        p = states.xy[r, t]
-        s = path.project(p)
-        ahead = s - ego_s
-        if not 0.0 < ahead <= AHEAD_RANGE_M or s >= path.length:
-            continue
-        if np.linalg.norm(path.position(s) - p) - states.size[r, 1] / 2.0 > LANE_HALF_WIDTH_M - IN_LANE_M:
-            continue
-        dh = abs(math.remainder(float(states.heading[r, t]) - float(path.heading(s)), 2 * math.pi))
-        if dh > math.radians(SAME_DIRECTION_DEG):
-            continue
-        out.append((r, float(ahead)))
-    return sorted(out, key=lambda x: x[1])
+    (``scenario.lead.vehicles_ahead``), nearest first; only moving ones unless ``moving=False``."""
+    return lead.vehicles_ahead(scenario.states, scenario.map.lanes, scenario.start_step, moving, scenario.seq_id)
 
 
 def _overlaps_at(states: AgentStates, xy: np.ndarray, heading: float, size: Sequence[float], steps: np.ndarray
@@ -214,7 +153,7 @@ def lead_brakes(scenario: RealScenario) -> RealEdit:
         points = np.stack([states.xy[row, b], states.xy[row, b] + np.array([math.cos(states.heading[row, b]),
                                                                            math.sin(states.heading[row, b])])])
     path = Path.from_points(points)
-    v0 = _speed_at(states, row, b)
+    v0 = speed_at(states, row, b)
     steps = np.arange(b, states.num_steps)
     dist, speed = braking_distances(v0, states.times[steps] - states.times[b])
     xy, heading, spd, valid = states.xy[row].copy(), states.heading[row].copy(), states.speed[row].copy(), \

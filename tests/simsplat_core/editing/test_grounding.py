@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from simsplat_core.editing.commands import EditCommand, Placement, TargetRef
@@ -113,3 +114,21 @@ def test_colours_agree_with_captions_by_name_and_by_clothing():
     assert colors_agree(parse_query("the person in a red top and black trousers"), person)
     assert not colors_agree(parse_query("the person in a green top"), person)
     assert not colors_agree(parse_query("the person in a red top and blue trousers"), person)
+
+
+def test_the_lead_vehicle_is_found_by_geometry_or_refused(edit_language, engine, edit_graph, edit_log):
+    from simsplat_core.motion.motion_map import motion_map_of
+    from simsplat_core.scenario.agents import AgentStates
+    from simsplat_core.scenario.lead import lead_vehicle
+
+    states, lanes = AgentStates.from_log(edit_log), motion_map_of(edit_log).lanes
+    assert lead_vehicle(states, lanes) is None  # this world's ego has no moving vehicle ahead in its lane
+    with_geometry = Grounder(edit_language, engine, edit_graph, states=states, lanes=lanes)
+    with pytest.raises(EditRefused, match="no lead vehicle in this scene") as refused:
+        with_geometry.ground(TargetRef(description="the lead vehicle"), command_index=0)
+    assert refused.value.reason == "not_found"
+    car = states.index("veh_02")
+    ahead = states.with_agent("lead", "vehicle", "log", xy=states.xy[0] + 12.0 * np.stack(
+        [np.cos(states.heading[0]), np.sin(states.heading[0])], axis=1), heading=states.heading[0],
+        speed=states.speed[0], valid=states.valid[0], size=states.size[car])
+    assert lead_vehicle(ahead, lanes) == ahead.index("lead")
