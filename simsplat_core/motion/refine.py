@@ -16,7 +16,10 @@ In ``"full"`` mode only the agents the edit affects change: the predictor also r
 and an agent whose rollout with the edit stays within :data:`AFFECTED_M` of its rollout without it keeps its
 log exactly (the predictor's own error against the log is not passed off as a reaction to the edit), unless its
 log runs into an agent the edit added, changed or made react, or into one that keeps its rollout for this very
-reason (then it keeps its rollout too; repeated until no log runs into a rollout).
+reason (then it keeps its rollout too; repeated until no log runs into a rollout). An agent that appears only
+after the start step has no state to predict from there; when its log runs into an agent the edit changed or
+made react, it is driven from the step after it appears (a second rollout that keeps everyone else as they are),
+so a car that enters the scene behind a braking one slows down too (:func:`_drive_late_arrivals`).
 
 The ego is fixed by default: its cameras render the scene, and a render is only as good as the views the scene
 was reconstructed from. With ``ego_reacts=True`` the ego is driven like any other free agent of the mode (for
@@ -36,6 +39,7 @@ from typing import Literal, get_args
 import numpy as np
 
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor, RolloutRequest
+from simsplat_core.motion.routes import APPEARS_LATER
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scenario.metrics import collision_steps
 from simsplat_core.scenario.trajectory import agent_kind
@@ -162,6 +166,34 @@ def _restored(out: AgentStates, states: AgentStates, rows: list[int]) -> AgentSt
     return dataclasses.replace(out, xy=xy, heading=heading, speed=speed, valid=valid, z=z, sources=tuple(sources))
 
 
+def _drive_late_arrivals(out: AgentStates, replayed: dict[str, str], predictor: MotionPredictor,
+                         motion_map: MotionMap) -> tuple[AgentStates, dict[str, str]]:
+    """``out`` with each agent that appeared after the start step (replayed from its log) and whose log runs into
+    a changed agent driven from the step after it appears, earliest arrival first (module docstring); the
+    agents still replayed, with their reasons."""
+    replayed = dict(replayed)
+    late = [out.index(o) for o, why in replayed.items() if why == APPEARS_LATER]
+    changed = [r for r, src in enumerate(out.sources) if src != "log"]
+    if not late or not changed:
+        return out, replayed
+    for row in sorted(late, key=lambda r: int(np.argmax(out.valid[r]))):
+        first = int(np.argmax(out.valid[row]))
+        if first + 1 >= out.num_steps:
+            continue
+        hits = collision_steps(out, [row]).pairs[0][changed][:, first:]
+        if not hits.any():
+            continue
+        fixed = np.asarray([r for r in range(out.num_agents) if r != row], dtype=np.int64)
+        rolled = predictor.rollout(RolloutRequest(out, first + 1, fixed, motion_map))
+        if out.object_ids[row] in rolled.replayed:
+            replayed[out.object_ids[row]] = rolled.replayed[out.object_ids[row]]
+            continue
+        out = _restored(out, rolled.states, [row])
+        del replayed[out.object_ids[row]]
+        changed.append(row)
+    return out, replayed
+
+
 def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredictor | None, mode: str = "full",
            *, original: AgentStates | None = None, start_step: int | None = None,
            ego_reacts: bool = False) -> Refinement:
@@ -187,16 +219,18 @@ def refine(states: AgentStates, motion_map: MotionMap, predictor: MotionPredicto
         raise ValueError(f"refinement mode {mode!r} needs a motion predictor")
     rollout = predictor.rollout(RolloutRequest(states, start, rows, motion_map))
     out = rollout.states
+    replayed = dict(rollout.replayed)
     if mode == "full" and original is not None:
         out = _only_affected(out, states, original, predictor, motion_map, start, rows)
+        out, replayed = _drive_late_arrivals(out, replayed, predictor, motion_map)
     if mode == "single-agent":  # the edited agents keep their source: the predictor only adjusted them
         sources = tuple(s if s != "refined" or states.sources[r] not in EDIT_SOURCES else states.sources[r]
                         for r, s in enumerate(out.sources))
         out = dataclasses.replace(out, sources=sources)
-    if rollout.replayed:
-        logger.info("refinement (%s): %d agent(s) replay their log: %s", mode, len(rollout.replayed),
-                    "; ".join(f"{k}: {v}" for k, v in sorted(rollout.replayed.items())))
-    refined = Refinement(out, mode, start, dict(rollout.replayed), rollout.predictor)
+    if replayed:
+        logger.info("refinement (%s): %d agent(s) replay their log: %s", mode, len(replayed),
+                    "; ".join(f"{k}: {v}" for k, v in sorted(replayed.items())))
+    refined = Refinement(out, mode, start, replayed, rollout.predictor)
     logger.info("refinement (%s, %s) from step %d: %d agent(s) reacted", mode, rollout.predictor, start,
                 len(refined.refined_ids))
     return refined

@@ -107,3 +107,45 @@ def test_cli_mining_needs_no_asset_bank_and_judges_from_the_bev_and_trajectories
     (scenario,) = data["scenarios"]
     files = set(store.listdir(scenario["edit_dir"].removeprefix(store.root).strip("/")))
     assert {"trajectories.parquet", "bev.png", "validation.json"} <= files and "renders" not in files
+
+
+@pytest.mark.shared_data
+def test_edits_exported_as_womd_reingest_with_the_edit_and_the_reactions(motion_store, tmp_path) -> None:
+    """The two edits above (found again, not re-run) exported as WOMD shards and ingested back: the braking lead
+    stands at the end, the truck stands where it was put, and some other agent's path differs from its log."""
+    from simsplat_core.data.waymo_scenario import load_waymo_scenario
+    from storage import read_scene_log
+    from tasks.export import ExportConfig, export_dataset
+    from tasks.export_inputs import ExportFilters
+
+    store, seq, loaded = motion_store
+    brake = run_edit(store.root, seq, "the lead vehicle brakes hard", run_id=RUN, loaded=loaded)
+    truck = run_edit(store.root, seq, "insert a stopped truck in the ego lane 30 m ahead", run_id=RUN, loaded=loaded)
+    assert brake.edited is not None and brake.edited.validation.ok  # late arrivals react too: nothing hits it
+    config = ExportConfig(name="edited", formats=("womd",), filters=ExportFilters(include="all-edits", runs=(RUN,)),
+                          splits=(("train", 1.0),))
+    result = export_dataset(store.root, str(tmp_path), config)
+    assert result.written == 2 and not result.left_out
+    manifest = json.loads((tmp_path / "edited" / "manifest.json").read_text())
+    original = {t.object_id: t for t in read_scene_log(store, seq, load_images=False).tracks}
+    (shard,) = result.shards  # both scenarios in one shard: one record each
+    backs = {}
+    for record in range(2):
+        back = load_waymo_scenario(tmp_path / "edited" / shard.path, record_index=record)
+        backs[back.metadata["scenario_id"]] = back
+    brake_id = next(s for s in backs if brake.edit_id[:12] in s)
+    (lead,) = brake.edited.outcomes[0].changed_object_ids
+    lead_id = str(manifest["scenarios"][brake_id]["track_ids"][lead])
+    tracks = {t.object_id: t for t in backs[brake_id].tracks}
+    assert tracks[lead_id].speed[-1] < 0.3 < tracks[lead_id].speed.max()
+    moved = [o for o, t in original.items()
+             if o != lead and o in manifest["scenarios"][brake_id]["track_ids"]
+             and len(t) == len(tracks[str(manifest["scenarios"][brake_id]["track_ids"][o])])
+             and np.abs(tracks[str(manifest["scenarios"][brake_id]["track_ids"][o])].center - t.center).max() > 0.5]
+    assert moved  # the traffic reacted: some agent's path left its log
+    assert json.loads(backs[brake_id].metadata["objects_of_interest"]) == [int(lead_id)]
+    truck_id = next(s for s in backs if truck.edit_id[:12] in s)
+    ids = manifest["scenarios"][truck_id]["track_ids"]
+    (added,) = [o for o in ids if o not in original and o != "ego"]
+    stands = {t.object_id: t for t in backs[truck_id].tracks}[str(ids[added])]
+    assert np.abs(stands.center - stands.center[0]).max() < 0.05 and stands.size[0, 0] > 6.0

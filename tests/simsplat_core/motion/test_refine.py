@@ -155,3 +155,36 @@ def test_an_agent_whose_log_runs_into_a_kept_rollout_keeps_its_rollout_too() -> 
     out = refine(edited, _map(), _StopAll(), "full", original=log)
     assert set(out.refined_ids) == {"a2", "a3"}
     assert not collision_steps(out.states, [2, 3]).pairs.any()
+
+
+def test_an_agent_that_appears_later_and_would_run_into_the_edit_is_driven_from_when_it_appears() -> None:
+    """a1 (edited) stops at step 5 on a straight lane; a2 appears 15 m behind it at step 8, driving 10 m/s along
+    the lane, and its log runs into a1. The reactive model cannot drive a2 from step 5 (it is not there yet), so it
+    is driven from the step after it appears: it brakes behind a1 instead of replaying into it."""
+    from simsplat_core.motion.reactive import ReactivePredictor
+    from simsplat_core.types import MapFeature
+
+    steps = 60
+    xs = np.linspace(-20.0, 200.0, 45)
+    lane = MapFeature("lane_1", "lane", np.stack([xs, np.zeros_like(xs), np.zeros_like(xs)], 1))
+    motion_map = MotionMap(LaneGraph.from_features([lane]), MapContext.from_features([lane]))
+    t = np.arange(steps) * 0.1
+    xy = np.zeros((3, steps, 2))
+    xy[0, :, 1] = -50.0  # the ego, out of the way
+    xy[1, :, 0] = 40.0 + 10.0 * t
+    xy[2, :, 0] = 40.0 - 15.0 + 10.0 * (t - 0.8)
+    valid = np.ones((3, steps), bool)
+    valid[2, :8] = False
+    log = AgentStates(object_ids=("ego", "a1", "a2"), categories=("vehicle",) * 3, sources=("log",) * 3,
+                      node_ids=np.array([-1, 0, 1]), frame_idx=np.arange(steps), times=t, xy=xy,
+                      z=np.zeros((3, steps)), heading=np.zeros((3, steps)), speed=np.full((3, steps), 10.0),
+                      size=np.tile([4.5, 2.0, 1.5], (3, 1)), valid=valid)
+    edited = dataclasses.replace(log, sources=("log", "edited", "log"), xy=log.xy.copy(), speed=log.speed.copy())
+    edited.xy[1, 5:, 0] = edited.xy[1, 5, 0]
+    edited.speed[1, 5:] = 0.0
+    assert collision_steps(edited, [1]).pairs.any()  # replaying its log, a2 drives into the stopped car
+    out = refine(edited, motion_map, ReactivePredictor(), "full", original=log)
+    assert "a2" in out.refined_ids and "a2" not in out.replayed
+    np.testing.assert_array_equal(out.states.valid[2], valid[2])  # it still appears when it did
+    np.testing.assert_allclose(out.states.xy[2, :9], edited.xy[2, :9])  # its log until it is driven
+    assert not collision_steps(out.states, [1, 2]).pairs.any()
