@@ -201,3 +201,23 @@ def test_scenarionet_index_lists_every_part(store: ArtifactStore, tmp_path: Path
     summary = pickle.loads((base / "dataset_summary.pkl").read_bytes())
     assert len(mapping) == len(summary) == 3
     assert all((base / part / name).is_file() for name, part in mapping.items())
+
+
+def test_the_cli_exports_and_names_bad_options(store: ArtifactStore, tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from flows.cli import app
+
+    out = str(tmp_path / "cli")
+    result = CliRunner().invoke(app, ["export", "--store", store.root, "--out", out, "--name", "ds",
+                                      "--format", "womd,parquet", "--json"])
+    assert result.exit_code == 0, result.output
+    data = json.loads(result.output.strip().splitlines()[-1])
+    assert sum(len(v) for v in data["new_scenarios"].values()) == 2 and data["increment"] == 1
+    shown = CliRunner().invoke(app, ["export", "--store", store.root, "--out", out, "--name", "ds",
+                                     "--format", "womd,parquet"])
+    assert shown.exit_code == 0 and "up to date" in shown.output and "2 already in the dataset" in shown.output
+    bad = CliRunner().invoke(app, ["export", "--store", store.root, "--category", "flying_cars"])
+    assert bad.exit_code == 2 and "flying_cars" in bad.output
+    wrong = CliRunner().invoke(app, ["export", "--store", store.root, "--format", "csv"])
+    assert wrong.exit_code == 2 and "csv" in wrong.output
