@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from flows.pipeline import MiningPlan, main_flow, reconstruction_config
+from flows.pipeline import ExportPlan, MiningPlan, main_flow, reconstruction_config
 from flows.runtime import RunnerKind, make_task_runner
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
@@ -73,13 +73,21 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
     # mining: the asset bank is built first, then one mining task per aligned sequence; every attempt is a row of
     # the run's edits table, stored logs and scenes are reused
     mined = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
-                 mining=MiningPlan(per_sequence=1, max_attempts=1), run_id="mined", **ALIGN)
+                 mining=MiningPlan(per_sequence=1, max_attempts=1), run_id="mined",
+                 export=ExportPlan(out=str(tmp_path / "exported")), **ALIGN)
     assert all(s.skipped for s in mined.logs + mined.scenes + mined.language)
     assert list_asset_banks(store) and [m.seq_id for m in mined.mining] == ["synth-000001", "synth-000002"]
     rows = read_edit_records(store, "mined")
     assert len(rows) == sum(m.attempts for m in mined.mining) >= 2
     assert {r.seq_id for r in rows} == {"synth-000001", "synth-000002"}
     assert sum(r.export for r in rows) == sum(m.accepted for m in mined.mining)
+    # export: the run's accepted scenarios as a dataset named after the run (none accepted: no export)
+    accepted = sum(m.accepted for m in mined.mining)
+    assert (mined.export is not None) == (accepted > 0)
+    if mined.export is not None:
+        assert mined.export.written + len(mined.export.left_out) == accepted
+        assert (tmp_path / "exported" / "mined" / "manifest.json").is_file()
+        assert store.exists("datasets/mined.json")
 
     changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
     third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20),
