@@ -75,3 +75,34 @@ def test_av2_forecasting_sample_round_trip(shared_data: Path, tmp_path: Path) ->
     kinds, again = _kinds(original), _kinds(back)
     assert again["lane"] == kinds["lane"] and again["crosswalk"] == kinds["crosswalk"]
     assert again["road_edge"] == kinds["road_edge"]
+
+
+def test_av2_forecasting_edit_exports_and_reingests(shared_data: Path, tmp_path: Path) -> None:
+    """A stopped truck put into the AV2 forecasting sample (aligned from its tracks, no images) comes back from its
+    WOMD export standing where it was put; braking "the lead vehicle" is refused, as the sample has none moving."""
+    from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
+    from tasks.align import align_scene, train_motion_aligner
+    from tasks.edit import run_edit
+    from tasks.stored_edits import load_edit_context
+
+    root = str(tmp_path / "store")
+    seq = ingest_real_log.fn(root, "av2-forecasting", str(shared_data / "av2" / "forecasting-0a1e6f0a")).summary.seq_id
+    model = train_motion_aligner.fn(root, [seq], MotionAlignerConfig(epochs=20))
+    align_scene.fn(root, seq, None, model.model_hash)
+    loaded = load_edit_context(root, seq)
+    brake = run_edit(root, seq, "the lead vehicle brakes hard", run_id="av2", loaded=loaded)
+    assert brake.status == "refused" and "no lead vehicle" in brake.message
+    truck = run_edit(root, seq, "insert a stopped truck in the ego lane 30 m ahead", run_id="av2", loaded=loaded)
+    assert truck.status == "succeeded" and truck.edited is not None and truck.edited.validation.ok
+    config = ExportConfig(name="av2", formats=("womd", "scenarionet", "parquet"), splits=(("train", 1.0),),
+                          filters=ExportFilters(include="all-edits"), layout=ExportLayout(steps=110, current_index=49))
+    result = export_dataset(root, str(tmp_path / "out"), config)
+    assert result.written == 1 and not result.left_out
+    (womd_shard,) = [s for s in result.shards if s.format == "womd"]
+    back = load_waymo_scenario(tmp_path / "out" / "av2" / womd_shard.path)
+    (entry,) = json.loads((tmp_path / "out" / "av2" / "manifest.json").read_text())["scenarios"].values()
+    original = read_scene_log(ArtifactStore(root), seq, load_images=False)
+    (added,) = [o for o in entry["track_ids"] if o != "ego" and o not in {t.object_id for t in original.tracks}]
+    stands = {t.object_id: t for t in back.tracks}[str(entry["track_ids"][added])]
+    assert np.abs(stands.center - stands.center[0]).max() < 0.05 and stands.size[0, 0] > 6.0
+    assert json.loads(back.metadata["objects_of_interest"]) == [entry["track_ids"][added]]
