@@ -9,6 +9,9 @@ machine does not count: ``scenarios_per_s_per_core`` is its inverse), and the by
 the export tests' ``make_scenario(agents, steps)`` (cars along +x, a pedestrian, one agent invalid at first, a signal
 per step) with ``--lanes`` extra connected 20-point lanes.
 
+With ``--log PATH`` (repeatable; any log the log-source registry detects, e.g. the real samples in
+``../shared/data``): the same per-format figures on each window of that log exported unedited.
+
 With ``--store`` (a store the main job mined, e.g. a copy of ``make demo``'s ``artifacts/demo``): the whole
 generation of a dataset from that store, ``simsplat export`` of its accepted scenarios into a temporary folder,
 with where the time goes: the recorded wall time of each stage that produced them (reconstruction, alignment,
@@ -95,6 +98,21 @@ def bench_formats(scenario: ExportScenario, repeats: int) -> dict[str, dict[str,
     return out
 
 
+def bench_logs(paths: list[str], repeats: int) -> dict[str, object]:
+    """Per-format figures (:func:`bench_formats`) on the first window of each log at ``paths``, exported unedited."""
+    from simsplat_core.data.registry import AUTO_SOURCE, load_log
+    from simsplat_core.export.from_log import export_unedited
+
+    out: dict[str, object] = {}
+    for path in paths:
+        log = load_log(AUTO_SOURCE, path)
+        scenario = export_unedited([log])[0]
+        out[log.seq_id] = {"source": log.source, "tracks": scenario.num_tracks,
+                           "map_points": int(sum(len(f.points) for f in scenario.map_features)),
+                           "formats": bench_formats(scenario, repeats)}
+    return out
+
+
 def bench_store(store_root: str, cores: int) -> dict[str, object]:
     """Where the time of generating a dataset from ``store_root`` goes (module docstring)."""
     from storage import ArtifactStore
@@ -132,6 +150,7 @@ def main() -> None:
     parser.add_argument("--lanes", type=int, default=30)
     parser.add_argument("--repeats", type=int, default=30)
     parser.add_argument("--store", help="a store the main job mined (its accepted scenarios are exported)")
+    parser.add_argument("--log", action="append", default=[], help="a log to export unedited (repeatable)")
     parser.add_argument("--cores", type=int, default=2, help="cores the store's stages ran on")
     parser.add_argument("--out", default="bench/results")
     parser.add_argument("--name", default="export")
@@ -145,6 +164,8 @@ def main() -> None:
         "machine": {"cpu": platform.machine(), "python": platform.python_version(), "cores": os.cpu_count(),
                     "load_1min": round(os.getloadavg()[0], 2)},
     }
+    if args.log:
+        result["logs"] = bench_logs(args.log, args.repeats)
     if args.store:
         result["store"] = bench_store(args.store, args.cores)
     out = Path(args.out) / f"{args.name}.json"

@@ -26,6 +26,7 @@ from typing import Any
 
 import pyarrow as pa
 
+from storage import parquet_io
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)
@@ -105,8 +106,10 @@ class DatasetFolder:
                           scenarios: int) -> ShardRecord:
         """Write one Parquet shard atomically (validated against ``schema``); returns its record."""
         rel = self.rel(relpath)
-        self.root.write_table(rel, table, schema)
-        data = self.root.read_bytes(rel)
+        sink = pa.BufferOutputStream()
+        parquet_io.write_parquet(sink, parquet_io.conform(table, schema, self.root.uri(rel)))
+        data = sink.getvalue().to_pybytes()
+        self.root.write_bytes(rel, data)
         return ShardRecord(relpath, len(data), hashlib.sha256(data).hexdigest(), "parquet", split, scenarios)
 
     def write_index(self, relpath: str, data: bytes) -> None:

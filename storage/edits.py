@@ -44,7 +44,7 @@ import torch
 
 from simsplat_core.editing.commands import EditProgram, program_from_json, program_to_json
 from simsplat_core.editing.result import AddedNode, EditDelta
-from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.scene.pose_track import Extrapolation, PoseTrack
 from simsplat_core.viz.images import encode_png
 from storage.errors import CorruptArtifactError
@@ -246,15 +246,16 @@ def trajectory_states(table: pa.Table, log_states: AgentStates) -> AgentStates:
     """
     cols = {name: table.column(name).to_pylist() for name in ("object_id", "category", "source")}
     steps = np.asarray(table.column("step").to_numpy(), np.int64)
-    order = list(dict.fromkeys(cols["object_id"]))
-    row_of = {o: k for k, o in enumerate(order)}
-    rows = np.array([row_of[o] for o in cols["object_id"]], np.int64)
+    ids, first, rows = np.unique(np.asarray(cols["object_id"], dtype=object), return_index=True, return_inverse=True)
+    by_appearance = np.argsort(first)  # agents in the order the table lists them
+    rows = np.argsort(by_appearance)[rows]
+    first = first[by_appearance]
+    order = [str(ids[k]) for k in by_appearance]
     a, t = len(order), log_states.num_steps
     if steps.size and (steps.min() < 0 or steps.max() >= t):
         raise ValueError(f"trajectories: step {int(steps.max())} is not a frame of the log ({t} frames)")
-    first = {o: cols["object_id"].index(o) for o in order}
-    categories = tuple(cols["category"][first[o]] for o in order)
-    sources = tuple(cols["source"][first[o]] for o in order)
+    categories = tuple(cols["category"][i] for i in first)
+    sources = tuple(cols["source"][i] for i in first)
     xy, heading, speed = np.zeros((a, t, 2)), np.zeros((a, t)), np.zeros((a, t))
     valid = np.zeros((a, t), bool)
     xy[rows, steps, 0] = table.column("x").to_numpy()
@@ -263,7 +264,8 @@ def trajectory_states(table: pa.Table, log_states: AgentStates) -> AgentStates:
     speed[rows, steps] = table.column("speed").to_numpy()
     valid[rows, steps] = True
     size, z = np.zeros((a, 3)), np.zeros((a, t))
-    ground = log_states.z[log_states.index("ego")] - log_states.size[log_states.index("ego"), 2] / 2.0
+    ego = log_states.index(EGO_ID)
+    ground = log_states.z[ego] - log_states.size[ego, 2] / 2.0
     for k, (o, category) in enumerate(zip(order, categories)):
         if o in log_states.object_ids:
             j = log_states.index(o)
@@ -275,14 +277,16 @@ def trajectory_states(table: pa.Table, log_states: AgentStates) -> AgentStates:
     stored = {name: _optional_column(table, name) for name in ("z", "length", "width", "height")}
     if stored["z"] is not None:
         z[rows, steps] = np.where(np.isnan(stored["z"]), z[rows, steps], stored["z"])
+    grouped = np.argsort(rows, kind="stable")
+    bounds = np.searchsorted(rows[grouped], np.arange(1, a))
     for axis, name in enumerate(("length", "width", "height")):
         values = stored[name]
-        if values is not None:
-            for k in range(a):
-                mine = values[rows == k]
-                mine = mine[~np.isnan(mine)]
-                if mine.size:
-                    size[k, axis] = float(np.median(mine))
+        if values is None:
+            continue
+        for k, mine in enumerate(np.split(values[grouped], bounds)):  # each agent's boxes, median of the known
+            mine = mine[~np.isnan(mine)]
+            if mine.size:
+                size[k, axis] = float(np.median(mine))
     return AgentStates(object_ids=tuple(order), categories=categories, sources=sources,
                        node_ids=np.full(a, -1, np.int64), frame_idx=log_states.frame_idx, times=log_states.times,
                        xy=xy, z=z, heading=heading, speed=speed, size=size, valid=valid)

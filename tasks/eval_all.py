@@ -19,12 +19,9 @@ import dataclasses
 import datetime
 import logging
 import math
-import subprocess
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from importlib import metadata
-from pathlib import Path
 from typing import Any
 
 import pyarrow as pa
@@ -48,6 +45,7 @@ from storage.language_scenes import list_language_scenes
 from storage.runs import new_run_id, read_run_table, run_dir, run_table, write_run_tables
 from storage.scenes import metrics_from_json
 from storage.store import join_relpath
+from tasks.code_version import code_version
 from tasks.progress import publish_table
 
 logger = logging.getLogger(__name__)
@@ -100,22 +98,6 @@ class EvalAllResult:
     summary: str = ""
     out_root: str = ""
     out_relpath: str = ""
-
-
-def code_version(root: Path | None = None) -> str:
-    """``git describe --always --dirty`` of the checkout holding this code, else the installed package's version."""
-    where = root or Path(__file__).resolve().parents[1]
-    try:
-        done = subprocess.run(["git", "describe", "--always", "--dirty"], cwd=where, capture_output=True, text=True,
-                              timeout=10, check=False)
-        if done.returncode == 0 and done.stdout.strip():
-            return done.stdout.strip()
-    except (OSError, subprocess.SubprocessError):
-        logger.debug("git describe failed in %s", where, exc_info=True)
-    try:
-        return metadata.version("simsplat")
-    except metadata.PackageNotFoundError:
-        return "unknown"
 
 
 def store_contents(store: ArtifactStore) -> StoreContents:
@@ -285,5 +267,5 @@ def evaluate_all(store_root: str, out_root: str | None = None, run_id: str | Non
                          out_root_used, rel)
 
 
-__all__ = ["EvalAllConfig", "EvalAllResult", "code_version", "content_keys", "evaluate_all", "reconstruction_rows",
+__all__ = ["EvalAllConfig", "EvalAllResult", "content_keys", "evaluate_all", "reconstruction_rows",
            "stage_timings", "store_contents"]

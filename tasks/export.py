@@ -41,7 +41,8 @@ from storage.datasets import (
     check_dataset_name,
     write_dataset_listing,
 )
-from tasks.eval_all import code_version
+from storage.edits import edit_dir
+from tasks.code_version import code_version
 from tasks.export_inputs import ExportFilters, ExportInput, LogCache, group_by_sequence, scenario_source, select_inputs
 from tasks.progress import StepProgress, publish_rows
 
@@ -188,12 +189,11 @@ def _counts(scenarios: Mapping[str, Mapping[str, Any]]) -> dict[str, Any]:
     return {"scenarios": len(scenarios), **{f"by_{k}": dict(sorted(v.items())) for k, v in sorted(by.items())}}
 
 
-def _render_refs(store: ArtifactStore, s: ExportScenario) -> list[tuple[str, int, str, str]]:
+def _render_refs(store: ArtifactStore, item: ExportInput) -> list[tuple[str, int, str, str]]:
     """(camera, frame, EXR URI, PNG preview URI) of an edit's stored renders ([] for logs and image-less edits)."""
-    edit = s.metadata.get("edit_dir", "")
-    if not edit or not store.root or not edit.startswith(store.uri("")):
+    if item.record is None:
         return []
-    rel = edit[len(store.uri("")):].lstrip("/")
+    rel = edit_dir(item.record.run_id, item.seq_id, item.record.edit_id)
     preview = next((store.uri(f"{rel}/{p}") for p in ("before_after.png", "bev.png") if store.exists(f"{rel}/{p}")), "")
     refs = []
     for path in store.walk(f"{rel}/renders"):
@@ -215,7 +215,9 @@ def _collect(store: ArtifactStore, config: ExportConfig, inputs: Sequence[Export
     for k, item in enumerate(inputs):
         t0 = time.perf_counter()
         source = scenario_source(store, logs, item)
-        exported_map = maps.setdefault(item.seq_id, export_map(source.log))
+        if item.seq_id not in maps:  # one map per log, shared by its edits
+            maps[item.seq_id] = export_map(source.log)
+        exported_map = maps[item.seq_id]
         scenarios = export_log_scenarios(source, config.layout, exported_map)
         seconds["read"] += time.perf_counter() - t0
         t0 = time.perf_counter()
@@ -269,7 +271,7 @@ def export_dataset(store_root: str, out: str | None = None, config: ExportConfig
     shards: list[ShardRecord] = []
     t0 = time.perf_counter()
     for split, scenarios in sorted(by_split.items()):
-        refs = {s.scenario_id: _render_refs(store, s) for s in scenarios}
+        refs = {s.scenario_id: _render_refs(store, origin[s.scenario_id]) for s in scenarios}
         for fmt in config.formats:
             shards += write_format(folder, fmt, split, increment, scenarios, config.shard_scenarios, refs)
         for s in scenarios:

@@ -24,6 +24,12 @@ CaptionerOption = Annotated[str, typer.Option(
          "from SIMSPLAT_VLM_URL / SIMSPLAT_VLM_MODEL; key in SIMSPLAT_VLM_API_KEY).")]
 
 
+def option_names(values: list[str] | None) -> tuple[str, ...]:
+    """Repeatable or comma-separated option values (``--format womd,parquet --format scenarionet``) as one tuple of
+    names."""
+    return tuple(n.strip() for v in values or () for n in v.split(",") if n.strip())
+
+
 def run_flow(flow_fn: Any, runner: RunnerKind, workers: int | None, **params: Any) -> Any:
     """Run ``flow_fn`` with the chosen task runner against one shared Prefect API.
 

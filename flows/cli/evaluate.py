@@ -11,7 +11,7 @@ from typing import Annotated
 
 import typer
 
-from flows.cli.common import AlignedSeqOption, JsonOption, RunDirOption, stored_sequences
+from flows.cli.common import AlignedSeqOption, JsonOption, RunDirOption, option_names, stored_sequences
 from flows.cli.printers import (
     editing_notes,
     evaluation_notes,
@@ -32,11 +32,6 @@ def _show(out_root: str, notes: list[str], out_relpath: str = "") -> None:
 
     print_tables(load_run_tables(out_root, out_relpath))
     print_lines(notes)
-
-
-def _names(values: list[str] | None) -> list[str]:
-    """Repeatable or comma-separated option values as one list of names."""
-    return [n.strip() for v in values or () for n in v.split(",") if n.strip()]
 
 
 @commands.command("all")
@@ -60,8 +55,8 @@ def eval_all(
     from flows.progress import StepBars
     from tasks.eval_all import EvalAllConfig, evaluate_all
 
-    config = EvalAllConfig(groups=tuple(_names(only)) or None, per_category=per_category, infeasible=infeasible,
-                           per_sequence=per_sequence, clients=tuple(_names([clients])), seed=seed)
+    config = EvalAllConfig(groups=option_names(only) or None, per_category=per_category, infeasible=infeasible,
+                           per_sequence=per_sequence, clients=option_names([clients]), seed=seed)
     try:
         with StepBars(headline=""):
             result = evaluate_all(store, out_root=out, config=config)
@@ -111,7 +106,7 @@ def eval_editing(
     from tasks.editing_eval import evaluate_editing_run
 
     seq_ids = stored_sequences(store, seq, "language")
-    names = _names(methods) or None
+    names = option_names(methods) or None
     try:
         with StepBars(headline=""):
             result = evaluate_editing_run.fn(store, seq_ids, out, per_category=per_category, infeasible=infeasible,
@@ -143,7 +138,7 @@ def eval_mining(
     from tasks.search_eval import search_run_table
 
     seq_ids = stored_sequences(store, seq, "language")
-    names = _names([clients])
+    names = option_names([clients])
     try:
         with StepBars(headline=""):
             result = evaluate_mining_run.fn(store, seq_ids, out, clients=names, per_sequence=per_sequence,
@@ -197,7 +192,7 @@ def eval_motion(
     from simsplat_core.motion.registry import available_predictors
     from tasks.motion_eval import evaluate_motion_run
 
-    names = _names(predictor) or [n for n in available_predictors() if n != "log"]
+    names = option_names(predictor) or [n for n in available_predictors() if n != "log"]
     seq_ids = stored_sequences(store, seq, "language") if store is not None else []
     if seq and store is None:
         raise typer.BadParameter("--seq needs --store", param_hint="--seq")

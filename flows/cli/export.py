@@ -7,14 +7,10 @@ from typing import Annotated
 
 import typer
 
-from flows.cli.common import JsonOption
+from flows.cli.common import JsonOption, option_names
 from flows.cli.printers import print_export, report
 
 commands = typer.Typer()
-
-
-def _names(values: list[str] | None) -> tuple[str, ...]:
-    return tuple(v.strip() for value in values or [] for v in value.split(",") if v.strip())
 
 
 @commands.command("export")
@@ -58,9 +54,9 @@ def export(
     from tasks.progress import StepProgress
 
     try:
-        filters = ExportFilters(include=include, runs=_names(run), categories=_names(category),
-                                min_plausibility=min_plausibility, sequences=_names(seq))
-        config = ExportConfig(name=name, formats=_names(fmt) or ExportConfig().formats, filters=filters,
+        filters = ExportFilters(include=include, runs=option_names(run), categories=option_names(category),
+                                min_plausibility=min_plausibility, sequences=option_names(seq))
+        config = ExportConfig(name=name, formats=option_names(fmt) or ExportConfig().formats, filters=filters,
                               splits=parse_splits(split), keep_failing=keep_failing,
                               layout=ExportLayout(steps=steps, current_index=current_index, hz=hz, stride=stride))
         with StepBars(headline=""):

@@ -55,6 +55,7 @@ from simsplat_core.export.record import (
     Y,
     Z,
 )
+from simsplat_core.geometry import wrap_angle
 
 #: Per-step features of ``history`` and ``neighbors`` (agent frame).
 HISTORY_FEATURES: tuple[str, ...] = (
@@ -118,11 +119,6 @@ def to_agent_frame(points: np.ndarray, origin: np.ndarray) -> np.ndarray:
 def _rotate(vectors: np.ndarray, heading: float) -> np.ndarray:
     """World ``[..., 2]`` vectors (velocities) -> the axes of a frame turned by ``heading``."""
     return to_agent_frame(vectors.astype(np.float64), np.array([0.0, 0.0, 0.0, heading]))
-
-
-def _wrap(angle: np.ndarray) -> np.ndarray:
-    """Angles to (-pi, pi]."""
-    return np.pi - np.mod(np.pi - angle, 2 * np.pi)
 
 
 def _step_features(states: np.ndarray, valid: np.ndarray, origin: np.ndarray) -> np.ndarray:
@@ -213,7 +209,8 @@ def agent_sample(scene: ScenarioArrays, row: int, config: SampleConfig) -> dict[
     future_states, future_valid = _window(scene, own, now + 1, config.future_steps)
     ahead, ahead_valid = future_states[0], future_valid[0]
     future = np.concatenate([to_agent_frame(ahead[:, [X, Y]].astype(np.float64), origin),
-                             _wrap(ahead[:, [HEADING]] - origin[3]), _rotate(ahead[:, [VX, VY]], origin[3])], axis=1)
+                             wrap_angle(ahead[:, [HEADING]] - origin[3]), _rotate(ahead[:, [VX, VY]], origin[3])],
+                            axis=1)
     return {
         "history": _step_features(history[0], history_valid[0], origin),
         "history_valid": history_valid[0],

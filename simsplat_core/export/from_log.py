@@ -24,7 +24,7 @@ import numpy as np
 
 from simsplat_core.export.ids import SDC_TRACK_ID_KEY, track_ids
 from simsplat_core.export.map_features import ExportMap, export_map, log_signals
-from simsplat_core.export.record import AGENT_TYPES, STATE_COLUMNS, ExportScenario
+from simsplat_core.export.record import STATE_COLUMNS, ExportScenario
 from simsplat_core.export.windows import ExportLayout, Window, plan_windows, sample_states
 from simsplat_core.scenario.agents import EGO_ID, AgentStates
 from simsplat_core.types import SceneLog
@@ -152,7 +152,6 @@ def export_log_scenarios(src: ScenarioSource, layout: ExportLayout | None = None
     added = [o for o in states.object_ids if o not in set(log_ids) and o != EGO_ID]
     ids = track_ids(log_ids, EGO_ID, added, log.metadata.get(SDC_TRACK_ID_KEY))
     agent_types = [AGENT_TYPE_OF_CATEGORY.get(c, "other") for c in states.categories]
-    assert set(agent_types) <= set(AGENT_TYPES)
     notes = "; ".join(plan.notes + exported_map.notes)
     sizes = box_sizes(log, states)
     out = []

@@ -285,3 +285,21 @@ def test_concurrent_appends_lose_no_row(tmp_path):
     assert len(rows) == 16
     for k in range(2):
         assert sorted(r.attempt for r in rows if r.edit_id == f"e{k}") == list(range(1, 9))
+
+
+def test_trajectory_states_read_back_the_agents_and_fall_back_to_the_log_without_box_columns():
+    from storage.edits import trajectory_states
+
+    states = _states()
+    log = dataclasses.replace(states.take([0, 1]), sources=("log", "log"), size=np.array([[4.5, 1.9, 1.5],
+                                                                                         [3.0, 1.5, 1.2]]))
+    back = trajectory_states(trajectories_table("e1", states), log)
+    assert back.object_ids == states.object_ids and back.sources == states.sources
+    np.testing.assert_array_equal(back.valid, states.valid)
+    np.testing.assert_allclose(back.xy[states.valid], states.xy[states.valid], atol=1e-5)
+    np.testing.assert_allclose(back.size, states.size, atol=1e-5)
+    np.testing.assert_allclose(back.z[states.valid], states.z[states.valid], atol=1e-5)
+    older = trajectories_table("e1", states).drop(["z", "length", "width", "height"])
+    fallback = trajectory_states(older, log)
+    np.testing.assert_allclose(fallback.size[1], [3.0, 1.5, 1.2])  # the log's box of the edited car
+    np.testing.assert_allclose(fallback.size[2], [0.6, 0.6, 1.75])  # a pedestrian's box for the inserted one
