@@ -15,7 +15,7 @@ TORCH_INDEX ?=
 export PREFECT_SERVER_ANALYTICS_ENABLED := false
 export RAY_AUTH_MODE := disabled
 
-.PHONY: install demo test lint bench clean
+.PHONY: install demo test lint browser bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(PY) || $(PYTHON) -m venv $(VENV)
@@ -39,12 +39,20 @@ demo: $(STAMP)
 		"remove the white van and make the red car stop before the crosswalk"
 	$(VENV)/bin/simsplat edit --store $(STORE) --seq synth-000000 "add a yellow taxi in our lane 15 m ahead"
 
-test: $(STAMP) lint
+test: $(STAMP) lint browser
 	$(VENV)/bin/pytest -q
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .
 	$(VENV)/bin/mypy
+
+# The dashboard's browser tests drive Debian's chromium through playwright (its own browser download is not
+# reachable); as root (CI) it is installed when missing, otherwise the browser tests say how and skip.
+browser:
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+	if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
+	else echo "no chromium: the dashboard's browser tests will skip (sudo apt-get install chromium)"; fi
 
 bench: $(STAMP)
 	$(PY) bench/bench_world.py

@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from flows.cli import assets, evaluate, explore, export, ingest, logs, scenarios, scenes
+from flows.cli import assets, dashboard, evaluate, explore, export, ingest, logs, scenarios, scenes
 
 # Our own loggers go to the Prefect UI too when they log inside a flow or task.
 os.environ.setdefault("PREFECT_LOGGING_EXTRA_LOGGERS", "simsplat_core,storage,tasks,flows")
@@ -31,6 +31,7 @@ GROUPS: tuple[tuple[typer.Typer, str | None], ...] = (
     (ingest.commands, None),  # ingest SOURCE PATH
     (logs.commands, None),  # world, inspect
     (export.commands, None),  # export
+    (dashboard.commands, None),  # dashboard
 )
 
 app = typer.Typer(help="SIMSplat scenario-mining pipeline.", no_args_is_help=True, add_completion=False)
