@@ -10,7 +10,7 @@ from dataclasses import asdict
 from typing import TYPE_CHECKING, Any
 
 from simsplat_core.language.grounding.result import NodeMatch
-from simsplat_core.language.scene_language import LanguageScene
+from simsplat_core.language.scene_language import LanguageScene, NodeLanguage
 from simsplat_core.search.logs import StoreSearch
 
 if TYPE_CHECKING:  # the task modules load Prefect and the editing core: only their result types are needed here
@@ -25,17 +25,25 @@ def _finite(value: float) -> float | None:
     return round(float(value), 6) if math.isfinite(value) else None
 
 
-def _match_dict(scene: LanguageScene, match: NodeMatch, chosen: bool) -> dict[str, Any]:
-    node = scene.node(match.node_id)
+def node_labels(node: NodeLanguage) -> dict[str, str | None]:
+    """What a language scene says of one object node: ``caption`` (``None`` without pixels), ``motion`` (the
+    aligner's class), ``motion_label`` and ``location_label`` (the auto-labels; ``None`` for static objects)."""
     motion = node.motion
     return {
-        "node_id": match.node_id,
-        "object_id": match.object_id,
-        "category": node.category,
         "caption": node.caption.text if node.caption is not None else None,
         "motion": motion.motion if motion is not None else None,
         "motion_label": motion.labels.motion if motion is not None else None,
         "location_label": f"{motion.labels.sector} {motion.labels.context}" if motion is not None else None,
+    }
+
+
+def _match_dict(scene: LanguageScene, match: NodeMatch, chosen: bool) -> dict[str, Any]:
+    node = scene.node(match.node_id)
+    return {
+        "node_id": match.node_id,
+        "object_id": match.object_id,
+        "category": node.category,
+        **node_labels(node),
         "scores": {"score": _finite(match.score), "appearance": _finite(match.appearance),
                    "motion": _finite(match.motion), "location": _finite(match.location)},
         "candidate": match.candidate,

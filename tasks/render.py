@@ -2,13 +2,16 @@
 ``simsplat render`` runs).
 
 Not a Prefect task: interactive, one frame. Thin: check the sequence has a complete log, read it (no pixels) and its
-scene, render every chosen camera (``simsplat_core.scene_view``), write the cameras side by side.
+scene, render every chosen camera (``simsplat_core.scene_view``) in memory (:func:`render_frame`, which the
+dashboard uses too), write the cameras side by side.
 """
 
 from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
+
+import numpy as np
 
 from simsplat_core.scene import SceneGraph
 from simsplat_core.scene_view import render_views, shifted_cameras, side_by_side
@@ -27,21 +30,34 @@ class RenderedView:
     scene_hash: str
 
 
+def render_frame(store: ArtifactStore, seq_id: str, frame: int, *, cameras: list[str] | None = None,
+                 shift_left: float = 0.0, shift_forward: float = 0.0, scene_hash: str | None = None
+                 ) -> tuple[list[np.ndarray], str]:
+    """``([H, W, 3] float32 RGB per camera, scene hash)``: ``seq_id``'s scene (the newest, or the one ``scene_hash``
+    names: a unique prefix is enough) rendered at ``frame`` from ``cameras`` (default: all, log order), moved
+    ``shift_left`` / ``shift_forward`` metres in the ego frame; in memory, nothing is written.
+
+    Raises:
+        MissingInputError: no complete log ``seq_id`` (naming the available ones).
+        FileNotFoundError, ValueError: no (such) reconstructed scene (naming what to run), frame or camera.
+    """
+    require_sequences(store, [seq_id])
+    log = read_scene_log(store, seq_id, load_images=False)
+    loaded = read_scene(store, seq_id, scene_hash)
+    views = shifted_cameras(log, frame, cameras, shift_left=shift_left, shift_forward=shift_forward)
+    return render_views(SceneGraph.from_records(loaded.records), frame, views), loaded.scene_hash
+
+
 def render_view(store_root: str, seq_id: str, frame: int, out: str, *, cameras: list[str] | None = None,
                 shift_left: float = 0.0, shift_forward: float = 0.0, scene_hash: str | None = None) -> RenderedView:
-    """Render ``seq_id``'s scene (the newest, or the one ``scene_hash`` names: a unique prefix is enough) at
-    ``frame`` from ``cameras`` (default: all), moved ``shift_left`` / ``shift_forward`` metres in the ego frame,
-    and write the cameras side by side to ``out`` (a ``.png`` path or URI).
+    """Render ``seq_id``'s scene at ``frame`` (:func:`render_frame`) and write the cameras side by side to ``out``
+    (a ``.png`` path or URI).
 
     Raises:
         MissingInputError: no complete log ``seq_id`` (naming the available ones).
         FileNotFoundError, ValueError: no (such) reconstructed scene (naming what to run), frame or camera; ``out``
             is not a ``.png``.
     """
-    store = ArtifactStore(store_root)
-    require_sequences(store, [seq_id])
-    log = read_scene_log(store, seq_id, load_images=False)
-    loaded = read_scene(store, seq_id, scene_hash)
-    views = shifted_cameras(log, frame, cameras, shift_left=shift_left, shift_forward=shift_forward)
-    images = render_views(SceneGraph.from_records(loaded.records), frame, views)
-    return RenderedView(write_png(out, side_by_side(images)), loaded.scene_hash)
+    images, rendered_hash = render_frame(ArtifactStore(store_root), seq_id, frame, cameras=cameras,
+                                         shift_left=shift_left, shift_forward=shift_forward, scene_hash=scene_hash)
+    return RenderedView(write_png(out, side_by_side(images)), rendered_hash)
