@@ -53,7 +53,8 @@ def test_stage_matrix_takes_each_stages_newest_event(tmp_path):
     assert matrix.seq_ids == ("synth-000001", "synth-000002")
     assert matrix.stages == PIPELINE_STAGES and not matrix.problems
     failed = matrix.cell("synth-000002", "reconstruct")
-    assert failed is not None and (failed.status, failed.retries, failed.error) == ("failed", 1, "ValueError: no frames")
+    assert failed is not None
+    assert (failed.status, failed.retries, failed.error) == ("failed", 1, "ValueError: no frames")
     assert matrix.cell("synth-000001", "evaluate").skip_reason == "no ground-truth captions (real log)"
     assert matrix.cell("synth-000001", "align") is None
     assert read_stage_record(store, RUN, "synth-000002", "reconstruct", "running").retries == 1
