@@ -13,12 +13,14 @@ from prefect.artifacts import create_markdown_artifact, create_table_artifact
 from prefect.futures import as_completed
 
 from flows.cpu_shares import reserving_cpus, task_cpu_share
+from flows.dashboard.links import run_link, scenario_link
+from flows.dashboard.settings import dashboard_url
 from flows.progress import FlowProgress
 from simsplat_core.eval.grounding.metrics import CATEGORIES
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
-from simsplat_core.world import WorldConfig
+from simsplat_core.world import WorldConfig, default_seq_id
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
 from tasks.assets import BuiltBank, build_asset_bank
@@ -27,6 +29,7 @@ from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task
 from tasks.reconstruct import StoredScene, reconstruct_scene
+from tasks.run_record import StageRecorder, recorded_run
 from tasks.stages import STAGES, LogStages, decide_stages, plan_alignment, plan_stages, resolve_seq_ids
 
 logger = logging.getLogger(__name__)
@@ -36,15 +39,27 @@ def _log_label(result: StoredLog) -> str:
     return result.summary.seq_id
 
 
-def _gather(futures: list, stage: str, label: Callable = _log_label) -> list:
-    """Wait for ``futures`` as they finish, reporting progress; results in submission order."""
+#: Flows that record no run (their tasks are submitted and gathered as they are).
+UNRECORDED = StageRecorder()
+
+
+def _gather(futures: list, stage: str, label: Callable = _log_label, run: StageRecorder = UNRECORDED) -> list:
+    """Wait for every one of ``futures`` as they finish, reporting progress and recording each outcome with ``run``;
+    results in submission order. The first failure is raised once every future has finished."""
     order = {id(f): i for i, f in enumerate(futures)}
     results: list = [None] * len(futures)
+    failures: list[BaseException] = []
     with FlowProgress(stage, total=len(futures)) as progress:
         for future in as_completed(futures):
-            result = future.result()
+            try:
+                result = run.result(future)
+            except Exception as exc:
+                failures.append(exc)
+                continue
             results[order[id(future)]] = result
             progress.advance(label(result))
+    if failures:
+        raise failures[0]
     return [r for r in results if r is not None]
 
 
@@ -65,10 +80,12 @@ def _publish_logs_table(logs: list[StoredLog]) -> None:
     create_table_artifact(rows, key="logs", description="Driving logs in the store")
 
 
-def generate_logs(store_root: str, seeds: list[int], config: WorldConfig) -> list[StoredLog]:
+def generate_logs(store_root: str, seeds: list[int], config: WorldConfig,
+                  run: StageRecorder = UNRECORDED) -> list[StoredLog]:
     """Fan out one generation task per seed on the flow's task runner; publish the logs table."""
-    futures = [generate_synthetic_log.submit(store_root, seed, config) for seed in seeds]
-    logs = _gather(futures, "generate")
+    futures = [run.submit(generate_synthetic_log, "ingest", [default_seq_id(seed)], store_root, seed, config)
+               for seed in seeds]
+    logs = _gather(futures, "generate", run=run)
     _publish_logs_table(logs)
     return logs
 
@@ -136,14 +153,16 @@ def reconstruction_config(
     return base if iterations is None else dataclasses.replace(base, iterations=iterations)
 
 
-def reconstruct_scenes(store_root: str, seq_ids: list[str], config: ReconstructionConfig) -> list[StoredScene]:
+def reconstruct_scenes(store_root: str, seq_ids: list[str], config: ReconstructionConfig,
+                       run: StageRecorder = UNRECORDED) -> list[StoredScene]:
     """Fan out one reconstruction task per sequence, each with its share of the cores; publish the metrics
     table. ``config.num_threads`` set by the caller wins over the computed share."""
     threads = config.num_threads or task_cpu_share(len(seq_ids))
     config = dataclasses.replace(config, num_threads=threads)
     with reserving_cpus(threads):
-        futures = [reconstruct_scene.submit(store_root, seq_id, config) for seq_id in seq_ids]
-    scenes = _gather(futures, "reconstruct", label=lambda s: s.seq_id)
+        futures = [run.submit(reconstruct_scene, "reconstruct", [seq_id], store_root, seq_id, config)
+                   for seq_id in seq_ids]
+    scenes = _gather(futures, "reconstruct", label=lambda s: s.seq_id, run=run)
     _publish_scenes_table(scenes)
     return scenes
 
@@ -175,17 +194,20 @@ def align_targets(plans: list[LogStages], scenes: list[StoredScene]) -> list[tup
 
 
 def align_scenes(store_root: str, targets: list[tuple[str, str | None]], training_seq_ids: list[str],
-                 config: AlignmentConfig, aligner_config: MotionAlignerConfig | None = None
-                 ) -> tuple[StoredAligner, list[StoredLanguageScene]]:
+                 config: AlignmentConfig, aligner_config: MotionAlignerConfig | None = None,
+                 run: StageRecorder = UNRECORDED) -> tuple[StoredAligner, list[StoredLanguageScene]]:
     """Train the motion/location aligner on ``training_seq_ids`` (one task), then align every
     ``(seq_id, scene_hash)`` target (one task per sequence, each with its share of the cores; a ``None``
-    scene hash aligns an image-less log from its tracks); publish the alignment table."""
-    aligner = train_motion_aligner.submit(store_root, training_seq_ids, aligner_config).result()
+    scene hash aligns an image-less log from its tracks); publish the alignment table. The aligner's training is
+    recorded as the align stage of the targets until their own alignment starts."""
+    aligner = run.result(run.submit(train_motion_aligner, "align", [seq_id for seq_id, _ in targets], store_root,
+                                    training_seq_ids, aligner_config))
     threads = task_cpu_share(len(targets))
     with reserving_cpus(threads):
-        futures = [align_scene.submit(store_root, seq_id, scene_hash, aligner.model_hash, config, threads)
+        futures = [run.submit(align_scene, "align", [seq_id], store_root, seq_id, scene_hash, aligner.model_hash,
+                              config, threads)
                    for seq_id, scene_hash in targets]
-    aligned = _gather(futures, "align", label=lambda s: s.seq_id)
+    aligned = _gather(futures, "align", label=lambda s: s.seq_id, run=run)
     _publish_language_table(aligner, aligned)
     return aligner, aligned
 
@@ -235,28 +257,34 @@ def minable(language: list[StoredLanguageScene]) -> list[str]:
     return [s.seq_id for s in language if s.scene_hash]
 
 
-def _publish_mining_table(summaries: list[MiningSummary]) -> None:
+def _publish_mining_table(summaries: list[MiningSummary], run_id: str) -> None:
+    """The accepted scenarios, each with its dashboard card's address when a dashboard is configured."""
+    base = dashboard_url()
     rows = [{"seq_id": s.seq_id, "prompt": sc.prompt, "category": sc.category, "attempts": sc.attempts,
-             "plausibility": sc.plausibility, "edit_dir": sc.edit_dir} for s in summaries for sc in s.scenarios]
+             "plausibility": sc.plausibility, "edit_dir": sc.edit_dir,
+             **({"dashboard": scenario_link(base, run_id, sc.seq_id, sc.edit_id)} if base else {})}
+            for s in summaries for sc in s.scenarios]
     accepted = sum(s.accepted for s in summaries)
     attempts = sum(s.attempts for s in summaries)
     create_table_artifact(rows, key="mined-scenarios", description=f"Mined scenarios: {accepted} accepted in "
                           f"{attempts} attempts over {len(summaries)} sequence(s)")
 
 
-def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan) -> list[MiningSummary]:
-    """Build the asset bank when the store has none for its scenes (one task; a stored bank is reused), then fan
-    out one mining task per sequence, each with its share of the cores; publish the accepted scenarios' table."""
-    bank: BuiltBank = build_asset_bank.submit(store_root).result()
+def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan,
+                   run: StageRecorder = UNRECORDED) -> list[MiningSummary]:
+    """Build the asset bank when the store has none for its scenes (one task; a stored bank is reused, recorded as
+    the mine stage of ``seq_ids`` until their mining starts), then fan out one mining task per sequence, each with
+    its share of the cores; publish the accepted scenarios' table."""
+    bank: BuiltBank = run.result(run.submit(build_asset_bank, "mine", seq_ids, store_root))
     logger.info("asset bank %s: %d assets%s", bank.bank_hash[:12], bank.assets, " (stored)" if bank.skipped else "")
     threads = task_cpu_share(len(seq_ids))
     with reserving_cpus(threads):
-        futures = [mine_sequence_task.submit(store_root, seq_id, run_id, per_sequence=plan.per_sequence,
-                                             max_attempts=plan.max_attempts, vlm=plan.vlm, seed=plan.seed,
-                                             category_offset=i * plan.per_sequence, threads=threads)
+        futures = [run.submit(mine_sequence_task, "mine", [seq_id], store_root, seq_id, run_id,
+                              per_sequence=plan.per_sequence, max_attempts=plan.max_attempts, vlm=plan.vlm,
+                              seed=plan.seed, category_offset=i * plan.per_sequence, threads=threads)
                    for i, seq_id in enumerate(seq_ids)]  # the sequences take the edit categories in turn
-    summaries = _gather(futures, "mine", label=lambda s: s.seq_id)
-    _publish_mining_table(summaries)
+    summaries = _gather(futures, "mine", label=lambda s: s.seq_id, run=run)
+    _publish_mining_table(summaries, run_id)
     return summaries
 
 
@@ -313,11 +341,17 @@ def _summary_markdown(result: MainResult) -> str:
             f"| {m.get('psnr_test_dynamic', float('nan')):.2f} | {int(m.get('num_gaussians', 0))} "
             f"| {scene.seconds:.1f} |"
         )
+    base = dashboard_url()
     for summary in result.mining:
         lines.append(f"\nMined {summary.seq_id}: {summary.accepted} scenario(s) accepted in {summary.attempts} "
                      f"attempt(s) ({summary.client}; {summary.seconds.get('total', 0.0):.0f} s)")
+        if base:
+            lines.extend(f"- [{sc.prompt}]({scenario_link(base, result.run_id, sc.seq_id, sc.edit_id)})"
+                         for sc in summary.scenarios)
     if result.export is not None:
         lines.append(f"\nExported {result.export.written} scenario(s) to {result.export.dataset_uri}")
+    if base:
+        lines.append(f"\n[Run {result.run_id} on the dashboard]({run_link(base, result.run_id)})")
     return "\n".join(lines)
 
 
@@ -339,7 +373,8 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
     stored ones, ingested real logs included), one reconstructed scene per log with camera images, language
     alignment (aligner trained on every stored log, one language scene per log: image-less logs get motion
     and location language from their tracks and map), the grounding benchmark on the synthetic logs, scenario
-    mining when asked (``mining``), a summary.
+    mining when asked (``mining``), a summary. The run is recorded as it goes under ``runs/<run_id>/``
+    (``tasks.run_record``: the run's status, parameters and counts, each sequence's stages).
 
     Args:
         seeds: synthetic sequences to generate into the store first (may be empty).
@@ -357,31 +392,66 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
     Raises:
         MissingInputError: the store holds no log and ``seeds`` is empty.
     """
-    generated = generate_logs(store_root, seeds, config) if seeds else []
-    logs, plans = store_logs(store_root, generated)
-    seq_ids = [p.seq_id for p in plans]
-    scenes = reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs],
-                                reconstruction or ReconstructionConfig())
-    stored_aligner: StoredAligner | None = None
-    language: list[StoredLanguageScene] = []
-    grounding: GroundingEvaluation | None = None
     run_id = run_id or new_run_id("main")
-    if align:
-        stored_aligner, language = align_scenes(store_root, align_targets(plans, scenes), seq_ids,
-                                                alignment or AlignmentConfig(), aligner)
-        evaluated = [p.seq_id for p in plans if p.evaluates]
-        if evaluate and evaluated:
-            grounding = evaluate_grounding_run.submit(store_root, evaluated, store_root, run_dir(run_id)).result()
-            _publish_grounding_table(grounding)
-    mined: list[MiningSummary] = []
-    if mining is not None and (to_mine := minable(language)):
-        mined = mine_scenarios(store_root, to_mine, run_id, mining)
-    exported: ExportResult | None = None
-    if export is not None and any(s.accepted for s in mined):
-        exported = export_dataset_task.submit(store_root, export.out, export.config(run_id)).result()
-    result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans, mined, exported)
-    create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
+    with recorded_run(store_root, run_id) as run:
+        generated = generate_logs(store_root, seeds, config, run) if seeds else []
+        logs, plans = store_logs(store_root, generated)
+        record_planned_skips(run, plans, generated, align=align, evaluate=evaluate)
+        run.count(logs=len(logs))
+        seq_ids = [p.seq_id for p in plans]
+        scenes = reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs],
+                                    reconstruction or ReconstructionConfig(), run)
+        run.count(scenes=len(scenes))
+        stored_aligner: StoredAligner | None = None
+        language: list[StoredLanguageScene] = []
+        grounding: GroundingEvaluation | None = None
+        if align:
+            stored_aligner, language = align_scenes(store_root, align_targets(plans, scenes), seq_ids,
+                                                    alignment or AlignmentConfig(), aligner, run)
+            run.count(language_scenes=len(language))
+            evaluated = [p.seq_id for p in plans if p.evaluates]
+            if evaluate and evaluated:
+                grounding = run.result(run.submit(evaluate_grounding_run, "evaluate", evaluated, store_root,
+                                                  evaluated, store_root, run_dir(run_id)))
+                _publish_grounding_table(grounding)
+        mined = _mine_and_export(store_root, language, run_id, mining, export, run)
+        result = MainResult(logs, scenes, stored_aligner, language, grounding, run_id, plans, *mined)
+        create_markdown_artifact(_summary_markdown(result), key="main-summary", description="SIMSplat main job")
     return result
+
+
+def record_planned_skips(run: StageRecorder, plans: list[LogStages], generated: list[StoredLog], *, align: bool,
+                         evaluate: bool) -> None:
+    """Record the stages each log skips by plan (``tasks.stages``' reasons; logs stored before this run skip
+    ingest), among those the main job was asked to run."""
+    produced = {s.summary.seq_id for s in generated}
+    run.skip("ingest", [p.seq_id for p in plans if p.seq_id not in produced], "in the store before this run")
+    for plan in plans:
+        for stage, reason in plan.skipped().items():
+            if stage == "reconstruct" or (align and evaluate):
+                run.skip(stage, [plan.seq_id], reason)
+
+
+def _mine_and_export(store_root: str, language: list[StoredLanguageScene], run_id: str, mining: MiningPlan | None,
+                     export: ExportPlan | None, run: StageRecorder
+                     ) -> tuple[list[MiningSummary], ExportResult | None]:
+    """The main job's mining (``mining``: every minable sequence) and export (``export``: this run's accepted
+    scenarios), each recorded per sequence with the reason of a skip."""
+    to_mine = minable(language) if mining is not None else []
+    if mining is not None:
+        run.skip("mine", [s.seq_id for s in language if s.seq_id not in to_mine], "no reconstructed scene to render")
+    mined = mine_scenarios(store_root, to_mine, run_id, mining, run) if mining is not None and to_mine else []
+    run.count(accepted_scenarios=sum(s.accepted for s in mined))
+    if export is None:
+        return mined, None
+    with_accepted = [s.seq_id for s in mined if s.accepted]
+    run.skip("export", [s.seq_id for s in mined if not s.accepted], "no accepted scenario")
+    if not with_accepted:
+        return mined, None
+    exported: ExportResult = run.result(run.submit(export_dataset_task, "export", with_accepted, store_root,
+                                                   export.out, export.config(run_id)))
+    run.count(exported=exported.written)
+    return mined, exported
 
 
 @dataclass(frozen=True)
@@ -399,25 +469,35 @@ def align_flow(store_root: str, seq_ids: list[str] | None = None, alignment: Ali
                aligner: MotionAlignerConfig | None = None) -> AlignResult:
     """Language alignment over stored logs: train (or reuse) the motion/location aligner on every log in
     the store, real ones included (their auto-labels), then align ``seq_ids`` (default: every log): a log
-    with camera images through its newest reconstructed scene, a log without from its tracks and map.
+    with camera images through its newest reconstructed scene, a log without from its tracks and map. Recorded as
+    run ``align-<UTC time>``.
 
     Raises:
         MissingInputError: see ``tasks.stages.plan_alignment``.
     """
     plan = plan_alignment(store_root, seq_ids)
     _report_stages(plan.stages, ("reconstruct",))  # a log without a reconstruction is aligned from its tracks
-    model, language = align_scenes(store_root, plan.targets, plan.training_seq_ids, alignment or AlignmentConfig(),
-                                   aligner)
+    with recorded_run(store_root, new_run_id("align")) as run:
+        model, language = align_scenes(store_root, plan.targets, plan.training_seq_ids,
+                                       alignment or AlignmentConfig(), aligner, run)
+        run.count(language_scenes=len(language))
     return AlignResult(model, language, plan.stages)
 
 
 @flow(name="simsplat-reconstruct")
 def reconstruct_flow(store_root: str, seq_ids: list[str], config: ReconstructionConfig) -> list[StoredScene]:
-    """Reconstruct stored logs (one task per sequence) into scene-graph Gaussian scenes; logs without
-    camera images are skipped (logged and in the stages table: they cannot be reconstructed)."""
+    """Reconstruct stored logs (one task per sequence) into scene-graph Gaussian scenes, recorded as run
+    ``reconstruct-<UTC time>``; logs without camera images are skipped (logged, in the stages table and the run
+    record: they cannot be reconstructed)."""
     plans = plan_stages(store_root, seq_ids)
     _report_stages(plans, ("reconstruct",))
-    return reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs], config)
+    with recorded_run(store_root, new_run_id("reconstruct")) as run:
+        for plan in plans:
+            if plan.skip_reconstruct:
+                run.skip("reconstruct", [plan.seq_id], plan.skip_reconstruct)
+        scenes = reconstruct_scenes(store_root, [p.seq_id for p in plans if p.reconstructs], config, run)
+        run.count(scenes=len(scenes))
+    return scenes
 
 
 @flow(name="simsplat-scheduled-main")

@@ -13,6 +13,7 @@ from storage import ArtifactStore, list_logs, list_scenes, read_scene, read_scen
 from storage.assets import list_asset_banks
 from storage.edits import read_edit_records
 from storage.language_scenes import list_language_scenes, read_language_scene
+from storage.run_records import read_run_record, read_stage_matrix
 from tests.flows.test_cli import _tree_digest
 
 pytestmark = pytest.mark.orchestration
@@ -63,12 +64,16 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
     assert store.exists(f"runs/{first.run_id}/tables/grounding.parquet")
     assert store.exists(f"runs/{first.run_id}/tables/grounding.md")
     assert 0.0 <= first.grounding.scores["ours"]["total"]["acc"] <= 1.0
+    _check_run_record(store, first.run_id, first)
 
-    digest = _tree_digest(tmp_path)
+    digest = _artifact_digest(tmp_path)
     second = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False, **ALIGN)
     assert all(s.skipped for s in second.logs + second.scenes + second.language) and second.aligner.skipped
     assert [s.metrics for s in second.scenes] == [s.metrics for s in first.scenes]
-    assert _tree_digest(tmp_path) == digest
+    assert _artifact_digest(tmp_path) == digest  # only the second run's own record is new
+    reused = read_stage_matrix(store, second.run_id)  # stored work reused, evaluation not asked for
+    assert all("reused" in reused.cell(seq, "align").note and reused.cell(seq, "evaluate") is None
+               for seq in reused.seq_ids)
 
     # mining: the asset bank is built first, then one mining task per aligned sequence; every attempt is a row of
     # the run's edits table, stored logs and scenes are reused
@@ -88,6 +93,7 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
         assert mined.export.written + len(mined.export.left_out) == accepted
         assert (tmp_path / "exported" / "mined" / "manifest.json").is_file()
         assert store.exists("datasets/mined.json")
+    _check_mined_record(store, mined)
 
     changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
     third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20),
@@ -99,3 +105,42 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
     assert list_scenes(store, "synth-000001") == [first.scenes[0].scene_hash, third.scenes[0].scene_hash]
     newest = read_scene(store, "synth-000001")
     assert newest.scene_hash == third.scenes[0].scene_hash and newest.metrics["iterations"] == 20
+
+
+def _artifact_digest(root) -> dict[str, str]:
+    """``_tree_digest`` without the run records (every flow run writes its own)."""
+    return {path: digest for path, digest in _tree_digest(root).items() if not path.startswith("runs/")
+            or "/tables/" in path or path.endswith("manifest.json")}
+
+
+def _check_run_record(store, run_id, result) -> None:
+    """The main flow's run record: completed, its parameters, counts and a completed stage per sequence, each
+    attempt counted by the task run itself (``retries`` 0: read from Prefect's run count, not left unknown)."""
+    record = read_run_record(store, run_id)
+    assert (record.flow, record.status, record.error) == ("simsplat-main", "completed", "")
+    assert record.finished_at is not None and record.code_version
+    assert record.parameters["seeds"] == [1, 2] and record.parameters["config"]["num_frames"] == 6
+    assert record.counts == {"logs": 2, "scenes": 2, "language_scenes": 2, "accepted_scenarios": 0}
+    matrix = read_stage_matrix(store, run_id)
+    assert matrix.seq_ids == tuple(s.summary.seq_id for s in result.logs) and not matrix.problems
+    for seq in matrix.seq_ids:
+        for stage in ("ingest", "reconstruct", "align", "evaluate"):
+            cell = matrix.cell(seq, stage)
+            assert (cell.status, cell.retries, cell.error) == ("completed", 0, ""), (seq, stage, cell)
+            assert cell.seconds is not None and cell.started_at is not None
+        assert matrix.cell(seq, "mine") is None and matrix.cell(seq, "export") is None  # not asked for
+    assert "one task for 2 sequences" in matrix.cell(matrix.seq_ids[0], "evaluate").note
+
+
+def _check_mined_record(store, mined) -> None:
+    """The mining run's record: its accepted and exported counts, each sequence mined, exported when it had an
+    accepted scenario and skipped (with its reason) otherwise."""
+    accepted = sum(m.accepted for m in mined.mining)
+    record = read_run_record(store, "mined")
+    assert record.counts["accepted_scenarios"] == accepted
+    assert record.counts.get("exported", 0) == (mined.export.written if mined.export else 0)
+    matrix = read_stage_matrix(store, "mined")
+    assert [matrix.cell(seq, "mine").status for seq in matrix.seq_ids] == ["completed", "completed"]
+    by_seq = {m.seq_id: m.accepted for m in mined.mining}
+    assert {seq: matrix.cell(seq, "export").status for seq in matrix.seq_ids} == {
+        seq: "completed" if n else "skipped" for seq, n in by_seq.items()}

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from flows.dashboard.pages import overview, search, sequences
+from flows.dashboard.pages import overview, runs, search, sequences
 
 #: Every page group's router.
-ROUTERS: tuple[APIRouter, ...] = (overview.router, sequences.router, search.router)
+ROUTERS: tuple[APIRouter, ...] = (overview.router, runs.router, sequences.router, search.router)

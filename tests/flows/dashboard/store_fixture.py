@@ -1,6 +1,7 @@
 """The store the dashboard tests read: one small synthetic log with camera images (6 frames, 3 cameras, 64 x 48),
 its initial scene graph, a ground-truth language scene, a two-asset bank, a mining run of the rule-based client
-(accepted scenarios stored as edits, every attempt a row) and an exported dataset of that run."""
+(accepted scenarios stored as edits, every attempt a row) and an exported dataset of that run; run records
+(``run_records_fixture``)."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from storage.language_scenes import write_language_scene
 from tasks.export import ExportConfig, export_dataset
 from tasks.export_inputs import ExportFilters
 from tasks.mine import MiningSummary, mine_sequence_task
+from tests.flows.dashboard.run_records_fixture import add_run_records
 from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
 
 SEQ = "synth-000000"
@@ -67,4 +69,5 @@ def build_dashboard_store(root: Path) -> DashboardStore:
     mining = mine_sequence_task.fn(str(root), SEQ, MINING_RUN, per_sequence=2, max_attempts=2, seed=0, client=client)
     export_dataset(str(root), None, dataclasses.replace(
         ExportConfig(), name=DATASET, filters=ExportFilters(include="accepted", runs=(MINING_RUN,))))
+    add_run_records(str(root), mining, SEQ)
     return DashboardStore(str(root), mining)
