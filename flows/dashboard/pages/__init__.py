@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from flows.dashboard.pages import overview
+from flows.dashboard.pages import mining, overview, scenarios
 
 #: Every page group's router.
-ROUTERS: tuple[APIRouter, ...] = (overview.router,)
+ROUTERS: tuple[APIRouter, ...] = (overview.router, mining.router, scenarios.router)
