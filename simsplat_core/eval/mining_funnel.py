@@ -122,13 +122,14 @@ def funnel_rows(rows: Iterable[Mapping[str, Any]]) -> list[FunnelRow]:
     Raises:
         ValueError: a row without the mining columns (naming its ``edit_id``).
     """
-    proposals = list(group_proposals(rows).values())
+    proposals: list[Sequence[Mapping[str, Any]]] = list(group_proposals(rows).values())
     by_category: dict[str, list[Sequence[Mapping[str, Any]]]] = {}
     for attempts in proposals:
         by_category.setdefault(_category(attempts), []).append(attempts)
     order = [c for c in EDIT_CATEGORIES if c in by_category] + sorted(set(by_category) - set(EDIT_CATEGORIES))
+    groups: list[tuple[str, list[Sequence[Mapping[str, Any]]]]] = [(c, by_category[c]) for c in order]
     out = []
-    for category, chosen in [*((c, by_category[c]) for c in order), ("total", proposals)]:
+    for category, chosen in [*groups, ("total", proposals)]:
         stages = [[FUNNEL_STAGES.index(stage_reached(r)) for r in attempts] for attempts in chosen]
         out.append(FunnelRow(category, _passed(max(s) for s in stages), _passed(k for s in stages for k in s)))
     return out

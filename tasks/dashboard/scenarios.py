@@ -155,9 +155,9 @@ def _attempt(row: Mapping[str, Any]) -> AttemptView:
 def _verdict(attempts: list[AttemptView]) -> Verdict | None:
     judged = [a for a in attempts if a.follows_prompt is not None and a.plausibility is not None]
     accepted = [a for a in judged if a.mining_status == "accepted"]
-    shown = (accepted or judged or [None])[-1]
-    if shown is None:
+    if not judged:
         return None
+    shown = (accepted or judged)[-1]
     return Verdict(shown.attempt, bool(shown.follows_prompt), int(shown.plausibility or 0), shown.judge_reasons,
                    shown.mining_status == "accepted")
 
