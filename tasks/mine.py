@@ -8,7 +8,7 @@ one of the seed, or the OpenAI-compatible one from ``SIMSPLAT_VLM_URL`` / ``SIMS
   writes one (``tasks.stored_edits.write_edit``; a scenario already stored under the same key is not re-rendered);
 * one row per attempt in the run's ``edits`` table, all rows of the sequence appended in one atomic rewrite
   (``storage.edits.append_edit_records``), with the mining columns (``mining_status``, ``category``,
-  ``plausibility``, ``export``, stage seconds, ...).
+  ``plausibility``, ``export``, stage seconds, the judge's reasons in ``judge_reasons``, ...).
 
 Inside a Prefect run it publishes a progress artifact (accepted / wanted) while mining and a table artifact of the
 accepted scenarios at the end; called as ``mine_sequence_task.fn(...)`` it is a plain function.

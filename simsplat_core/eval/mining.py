@@ -111,9 +111,9 @@ class ProposalOutcome:
     plausibility: int | None = None
 
 
-def proposal_outcomes(client: str, rows: Iterable[Mapping[str, Any]]) -> list[ProposalOutcome]:
-    """The proposals of one client's run from its edits-table rows (keys ``seq_id``, ``edit_id``, ``scenario``,
-    ``category``, ``mining_status``, ``plausibility``; rows of one proposal in attempt order), in first-seen order.
+def group_proposals(rows: Iterable[Mapping[str, Any]]) -> dict[tuple[str, int], list[Mapping[str, Any]]]:
+    """Edits-table rows of a mining run grouped by proposal: ``(seq_id, scenario) -> its rows`` in the rows'
+    order, proposals in first-seen order.
 
     Raises:
         ValueError: a row without the mining columns (naming the row's ``edit_id``).
@@ -124,8 +124,18 @@ def proposal_outcomes(client: str, rows: Iterable[Mapping[str, Any]]) -> list[Pr
             raise ValueError(f"edits row {row.get('edit_id')!r}: no mining columns (scenario, mining_status); "
                              "not a row of a mining run")
         grouped.setdefault((str(row["seq_id"]), int(row["scenario"])), []).append(row)
+    return grouped
+
+
+def proposal_outcomes(client: str, rows: Iterable[Mapping[str, Any]]) -> list[ProposalOutcome]:
+    """The proposals of one client's run from its edits-table rows (keys ``seq_id``, ``edit_id``, ``scenario``,
+    ``category``, ``mining_status``, ``plausibility``; rows of one proposal in attempt order), in first-seen order.
+
+    Raises:
+        ValueError: a row without the mining columns (naming the row's ``edit_id``).
+    """
     out = []
-    for (seq_id, scenario), attempts in grouped.items():
+    for (seq_id, scenario), attempts in group_proposals(rows).items():
         accepted = [k for k, r in enumerate(attempts) if r["mining_status"] == "accepted"]
         last = attempts[accepted[0]] if accepted else attempts[-1]
         category = next((str(r["category"]) for r in reversed(attempts) if r.get("category")), UNKNOWN_CATEGORY)
@@ -297,5 +307,5 @@ def mining_stages_table(seconds: Mapping[str, Mapping[str, float]], accepted: Ma
 
 
 __all__ = ["MINING_BY_CATEGORY_SPEC", "MINING_SPEC", "MINING_SPECS", "MINING_STAGES", "MINING_STAGES_SPEC",
-           "UNKNOWN_CATEGORY", "ProposalOutcome", "collides_or_offroad", "mining_by_category_table", "mining_table",
-           "mining_stages_table", "proposal_outcomes", "states_from_trajectories", "stored_failure"]
+           "UNKNOWN_CATEGORY", "ProposalOutcome", "collides_or_offroad", "group_proposals", "mining_by_category_table",
+           "mining_table", "mining_stages_table", "proposal_outcomes", "states_from_trajectories", "stored_failure"]

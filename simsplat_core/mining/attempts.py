@@ -19,6 +19,7 @@ runs with the same seed give equal records.
 from __future__ import annotations
 
 import hashlib
+import json
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal, get_args
@@ -38,12 +39,12 @@ TIMED_STAGES: tuple[str, ...] = (*STAGES, *EDIT_STAGES)
 #: ``edits.status`` of each attempt status (the table knows ``succeeded`` / ``refused`` / ``failed``; a rejected
 #: attempt ran but is not kept: ``failed``, its ``failure_reason`` starting with ``rejected:``).
 TABLE_STATUS: dict[str, str] = {"accepted": "succeeded", "rejected": "failed", "refused": "refused", "failed": "failed"}
-#: Columns of the ``edits`` table (``storage.schemas.EDITS_SCHEMA``, version 2), in its order: the edit's, then
+#: Columns of the ``edits`` table (``storage.schemas.EDITS_SCHEMA``, version 3), in its order: the edit's, then
 #: the mining columns (:func:`attempt_row`'s extras).
 EDITS_COLUMNS: tuple[str, ...] = ("run_id", "seq_id", "edit_id", "attempt", "prompt", "command_json", "status",
                                   "failure_reason", "mining_status", "scenario", "source", "category",
                                   "follows_prompt", "plausibility", "adjustment", "export", "client",
-                                  *(f"seconds_{stage}" for stage in STAGES))
+                                  *(f"seconds_{stage}" for stage in STAGES), "judge_reasons")
 
 
 def scenario_key(seq_id: str, seed: int, scenario: int, prompt: str) -> str:
@@ -141,7 +142,8 @@ def attempt_row(record: AttemptRecord, run_id: str, client: str = "") -> dict[st
     """``record`` as one row of the ``edits`` table (:data:`EDITS_COLUMNS`; ``status`` mapped by
     :data:`TABLE_STATUS`, the attempt's own status in ``mining_status``): the edit's columns and the mining ones
     ``mining_status``, ``scenario``, ``source``, ``category``,
-    ``follows_prompt``, ``plausibility``, ``adjustment``, ``export``, ``client`` and ``seconds_<stage>``."""
+    ``follows_prompt``, ``plausibility``, ``adjustment``, ``export``, ``client``, ``seconds_<stage>`` and
+    ``judge_reasons`` (:func:`judge_reasons_json`)."""
     row: dict[str, Any] = {
         "run_id": run_id, "seq_id": record.seq_id, "edit_id": record.edit_id, "attempt": record.attempt,
         "prompt": record.prompt, "command_json": record.program_json, "status": TABLE_STATUS[record.status],
@@ -151,7 +153,31 @@ def attempt_row(record: AttemptRecord, run_id: str, client: str = "") -> dict[st
         "adjustment": record.adjustment, "export": record.export, "client": client,
     }
     row.update({f"seconds_{stage}": float(record.seconds.get(stage, 0.0)) for stage in STAGES})
+    row["judge_reasons"] = judge_reasons_json(record.judgement)
     return row
+
+
+def judge_reasons_json(verdict: Judgement | None) -> str | None:
+    """The ``judge_reasons`` column: the verdict's reasons as a JSON list of strings (``None``: not judged)."""
+    return None if verdict is None else json.dumps(list(verdict.reasons), ensure_ascii=False)
+
+
+def judge_reasons_of(text: str | None) -> tuple[str, ...]:
+    """The reasons of a ``judge_reasons`` value (``()`` for ``None``: not judged, or a table written before the
+    column).
+
+    Raises:
+        ValueError: ``text`` is not a JSON list of strings (quoting it).
+    """
+    if text is None:
+        return ()
+    try:
+        value = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"judge_reasons {text[:80]!r}: not JSON ({exc})") from exc
+    if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
+        raise ValueError(f"judge_reasons {text[:80]!r}: not a JSON list of strings")
+    return tuple(value)
 
 
 def attempt_rows(result: MiningResult, run_id: str) -> list[dict[str, Any]]:
@@ -160,4 +186,5 @@ def attempt_rows(result: MiningResult, run_id: str) -> list[dict[str, Any]]:
 
 
 __all__ = ["ATTEMPT_STATUSES", "EDITS_COLUMNS", "STAGES", "TABLE_STATUS", "TIMED_STAGES", "AttemptRecord",
-           "AttemptStatus", "MiningResult", "attempt_row", "attempt_rows", "scenario_key"]
+           "AttemptStatus", "MiningResult", "attempt_row", "attempt_rows", "judge_reasons_json", "judge_reasons_of",
+           "scenario_key"]

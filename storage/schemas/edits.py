@@ -30,15 +30,17 @@ ASSETS_SCHEMA = make_schema(
 )
 
 # ----------------------------------------------------------------------------- run tables
-#: Mining columns of the ``edits`` table (version 2; null in rows of ``simsplat edit`` and in version-1 files).
+#: Mining columns of the ``edits`` table (version 2, ``judge_reasons`` since version 3; null in rows of
+#: ``simsplat edit`` and in files written before them).
 EDITS_MINING_COLUMNS: tuple[str, ...] = (
     "mining_status", "scenario", "source", "category", "follows_prompt", "plausibility", "adjustment", "export",
     "client", "seconds_propose", "seconds_command", "seconds_edit", "seconds_render", "seconds_judge",
+    "judge_reasons",
 )
 
 EDITS_SCHEMA = make_schema(
     "edits",
-    2,  # 2: mining columns (nullable)
+    3,  # 2: mining columns (nullable); 3: judge_reasons (nullable)
     [
         ("run_id", pa.string()),
         ("seq_id", pa.string()),
@@ -62,6 +64,7 @@ EDITS_SCHEMA = make_schema(
         ("seconds_edit", pa.float64()),
         ("seconds_render", pa.float64()),
         ("seconds_judge", pa.float64()),
+        ("judge_reasons", pa.string()),  # the judge's reasons as a JSON list of strings (null when not judged)
     ],
     nullable=EDITS_MINING_COLUMNS,
 )

@@ -1,8 +1,10 @@
-"""The edits table's mining columns (schema version 2): round trip, batch appends, and version-1 tables (before
-the mining columns) still read, their mining columns null."""
+"""The edits table's mining columns (schema version 3): round trip, batch appends, and older tables still read:
+version 1 (before the mining columns) with every mining column null, version 2 (before ``judge_reasons``) with that
+one null."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import pyarrow as pa
@@ -36,8 +38,8 @@ def _write_edit_columns_only(store: ArtifactStore, run_id: str, rows: list[dict]
     pq.write_table(pa.Table.from_pylist(rows, schema=schema), str(path))
 
 
-def test_edits_schema_is_version_2_with_nullable_mining_columns() -> None:
-    assert schema_version(EDITS_SCHEMA) == 2
+def test_edits_schema_is_version_3_with_nullable_mining_columns() -> None:
+    assert schema_version(EDITS_SCHEMA) == 3
     assert all(EDITS_SCHEMA.field(n).nullable for n in EDITS_MINING_COLUMNS)
     assert not any(EDITS_SCHEMA.field(n).nullable for n in _EDIT_COLUMNS)
 
@@ -82,7 +84,28 @@ def test_version_1_edits_tables_still_read_and_append(store: ArtifactStore) -> N
     assert appended.attempt == 2 and len(read_edit_records(store, "old")) == 2
 
 
-def test_a_version_2_table_without_the_mining_columns_is_an_error(store: ArtifactStore) -> None:
-    _write_edit_columns_only(store, "bad", [], version=2)
+def test_version_2_edits_tables_read_without_judge_reasons(store: ArtifactStore) -> None:
+    fields = [EDITS_SCHEMA.field(n) for n in EDITS_SCHEMA.names if n != "judge_reasons"]
+    schema = pa.schema(fields, metadata={"schema_name": "edits", "schema_version": "2"})
+    row = {"run_id": "v2", "seq_id": "unit", "edit_id": "e1", "attempt": 1, "prompt": "p", "command_json": "{}",
+           "status": "succeeded", "failure_reason": "", "mining_status": "accepted", "scenario": 0, "plausibility": 4,
+           "export": True}
+    path = Path(store.root) / edits_table_relpath("v2")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pq.write_table(pa.Table.from_pylist([row], schema=schema), str(path))
+    (old,) = read_edit_records(store, "v2")
+    assert old.mining["plausibility"] == 4 and "judge_reasons" not in old.mining
+
+
+def test_judge_reasons_round_trip(store: ArtifactStore) -> None:
+    record = _mined("e1", "succeeded", "accepted")
+    record = dataclasses.replace(record, mining={**record.mining, "judge_reasons": '["fits the lane"]'})
+    append_edit_records(store, [record])
+    (back,) = read_edit_records(store, "mine1")
+    assert back.mining["judge_reasons"] == '["fits the lane"]'
+
+
+def test_a_current_table_without_the_mining_columns_is_an_error(store: ArtifactStore) -> None:
+    _write_edit_columns_only(store, "bad", [], version=3)
     with pytest.raises(SchemaError, match="mining_status"):
         read_edit_records(store, "bad")

@@ -33,7 +33,7 @@ from simsplat_core.mining import (
     mine_sequence,
 )
 from simsplat_core.mining.adjust import MIN_LANE_GAP_M, adjust_program
-from simsplat_core.mining.attempts import EDITS_COLUMNS, TIMED_STAGES
+from simsplat_core.mining.attempts import EDITS_COLUMNS, TIMED_STAGES, judge_reasons_of
 from simsplat_core.mining.judge_input import targets_of
 from simsplat_core.mining.rule_judge import JudgeConfig
 from simsplat_core.mining.rule_proposals import Proposal
@@ -251,6 +251,10 @@ def test_attempt_rows_map_onto_the_edits_table(mined: MiningResult, collided: Mi
             assert row["category"] in EDIT_CATEGORIES and row["client"] == result.client
             if row["mining_status"] == "rejected":
                 assert row["status"] == "failed" and row["failure_reason"].startswith("rejected: ")
+        for record, row in zip(result.records, rows):  # the judge's reasons, kept for every judged attempt
+            expected = () if record.judgement is None else record.judgement.reasons
+            assert judge_reasons_of(row["judge_reasons"]) == expected
+            assert (row["judge_reasons"] is None) == (record.judgement is None)
 
 
 # ---------------------------------------------------------------------------------------------- adjustments
