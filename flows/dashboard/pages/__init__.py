@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from flows.dashboard.pages import overview
+from flows.dashboard.pages import datasets, evaluation, overview, recordings
 
 #: Every page group's router.
-ROUTERS: tuple[APIRouter, ...] = (overview.router,)
+ROUTERS: tuple[APIRouter, ...] = (overview.router, evaluation.router, datasets.router, recordings.router)

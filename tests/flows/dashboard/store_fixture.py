@@ -22,6 +22,7 @@ from storage.language_scenes import write_language_scene
 from tasks.export import ExportConfig, export_dataset
 from tasks.export_inputs import ExportFilters
 from tasks.mine import MiningSummary, mine_sequence_task
+from tests.flows.dashboard.evaluation_fixture import add_evaluation_runs
 from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
 
 SEQ = "synth-000000"
@@ -67,4 +68,5 @@ def build_dashboard_store(root: Path) -> DashboardStore:
     mining = mine_sequence_task.fn(str(root), SEQ, MINING_RUN, per_sequence=2, max_attempts=2, seed=0, client=client)
     export_dataset(str(root), None, dataclasses.replace(
         ExportConfig(), name=DATASET, filters=ExportFilters(include="accepted", runs=(MINING_RUN,))))
+    add_evaluation_runs(store)
     return DashboardStore(str(root), mining)
