@@ -99,7 +99,7 @@ def line_chart(runs: Sequence[str], series: Sequence[Series], *, width: int = 52
     for line in series:
         if len(line.values) != len(runs):
             raise ValueError(f"series {line.label!r} has {len(line.values)} values for {len(runs)} runs")
-    left, top, right, bottom = 52.0, 12.0, float(width - 12), float(height - 34)
+    left, top, right, bottom = 52.0, 12.0, float(width - 40), float(height - 34)
     present = [v for line in series for v in line.values if v is not None]
     low, high = _nice_range(present) if present else (0.0, 1.0)
     if unit == "share":
@@ -116,7 +116,8 @@ def line_chart(runs: Sequence[str], series: Sequence[Series], *, width: int = 52
         label, values = line.label, line.values
         points = tuple(ChartPoint(round(x_of(k), 1), round(y_of(v), 1), v, runs[k])
                        for k, v in enumerate(values) if v is not None)
-        segments, current = [], []
+        segments: list[list[str]] = []
+        current: list[str] = []
         for k, v in enumerate(values):
             if v is None:
                 segments.append(current)

@@ -94,7 +94,8 @@ class TableSpec:
         unknown = [c for c in (*self.keys, *self.printed) if c not in names]
         if unknown:
             raise ValueError(f"table {self.name!r}: keys / printed columns {unknown} are not columns {names}")
-        named = [c for item in (*self.headlines, *self.paper) for c in item.columns if c not in names]
+        named = [c for h in self.headlines for c in h.columns if c not in names]
+        named += [c for f in self.paper for c in f.columns if c not in names]
         if named:
             raise ValueError(f"table {self.name!r}: headline / paper columns {named} are not columns {names}")
 

@@ -14,6 +14,7 @@ it is.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import logging
 from collections import Counter
@@ -238,10 +239,10 @@ def count_checks(manifest: Mapping[str, Any], shards: tuple[ShardCheck, ...],
     by_split = Counter(str(s.get("split")) for s in scenarios.values())
     for split, declared in sorted(counts.get("by_split", {}).items()):
         checks.append(CountCheck(f"scenarios of split {split}", int(declared), by_split.get(split, 0)))
-    groups: dict[str, int] = {}
+    groups: Counter[str] = Counter()
     for shard in shards:
-        groups[_shard_group(shard)] = groups.get(_shard_group(shard), 0) + shard.scenarios
-    checks.extend(CountCheck(f"scenarios in the {group} shards", total, found) for group, found in sorted(groups.items()))
+        groups[_shard_group(shard)] += shard.scenarios
+    checks.extend(CountCheck(f"scenarios in the {group} shards", total, n) for group, n in sorted(groups.items()))
     if listing is not None and isinstance(listing.get("counts"), dict):
         checks.append(CountCheck("scenarios in the store's listing", total, int(listing["counts"].get("scenarios", 0))))
     return tuple(checks)
@@ -297,7 +298,7 @@ def _summary(entry: Mapping[str, Any]) -> DatasetSummary:
 
 
 def _summaries(store: ArtifactStore) -> tuple[Section[DatasetSummary], ...]:
-    return tuple(section(f"dataset {entry.get('name', '?')}", lambda entry=entry: _summary(entry))
+    return tuple(section(f"dataset {entry.get('name', '?')}", functools.partial(_summary, entry))
                  for entry in list_datasets(store))
 
 
