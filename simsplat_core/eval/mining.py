@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 import pyarrow as pa
 
+from simsplat_core.eval.table_headlines import Headline
 from simsplat_core.eval.table_spec import Column, TableSpec
 from simsplat_core.mining.rule_proposals import EDIT_CATEGORIES
 from simsplat_core.scenario.agents import AgentStates
@@ -54,7 +55,7 @@ MINING_SPEC = TableSpec("mining", "Mining: completion, attempts, plausibility pe
     Column("accepted_with_failure", pa.int64(), "accepted scenarios that collide or leave the road on re-check",
            "count"),
     Column("note", pa.string(), "why the client was not run (\"\": it ran)"),
-), keys=("client",))
+), keys=("client",), headlines=(Headline("completion"), Headline("plausibility_mean")))
 #: ``tables/mining_by_category``: one row per (client, edit category), categories then ``total``.
 MINING_BY_CATEGORY_SPEC = TableSpec("mining_by_category", "Mining: acceptance by edit category",
                                     "(client, edit category)", (
@@ -74,7 +75,7 @@ MINING_STAGES_SPEC = TableSpec("mining_stages", "Mining: where the time goes", "
     Column("seconds_per_accepted", pa.float64(), "seconds per accepted scenario", "s"),
     Column("accepted_per_hour_per_core", pa.float64(), "accepted scenarios per hour per core (total row only)",
            "1/h/core"),
-), keys=("client", "stage"), digits=2)
+), keys=("client", "stage"), digits=2, headlines=(Headline("accepted_per_hour_per_core", where=(("stage", "total"),)),))
 #: The mining evaluation's tables, in the order they are written.
 MINING_SPECS: tuple[TableSpec, ...] = (MINING_SPEC, MINING_BY_CATEGORY_SPEC, MINING_STAGES_SPEC)
 #: Stages of ``mining_stages``, in the order of the loop: loading the sequence, proposing (scene facts, views,

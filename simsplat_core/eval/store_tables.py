@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import pyarrow as pa
 
+from simsplat_core.eval.table_headlines import Headline
 from simsplat_core.eval.table_spec import Column, TableSpec
 
 #: The scene metrics of the ``reconstruction`` table: ``name -> (meaning, unit)``, in column order.
@@ -39,7 +40,7 @@ RECONSTRUCTION_SPEC = TableSpec("reconstruction", "Reconstruction quality (test 
     Column("seq_id", pa.string(), "the reconstructed sequence"),
     Column("scene", pa.string(), "the scene's content hash (first 12 characters)"),
     *(Column(name, pa.float64(), meaning, unit) for name, (meaning, unit) in RECONSTRUCTION_METRICS.items()),
-), keys=("seq_id", "scene"))
+), keys=("seq_id", "scene"), headlines=(Headline("psnr_test", reduce="mean"), Headline("ssim_test", reduce="mean")))
 
 #: ``tables/throughput``: one row per timed stage.
 THROUGHPUT_SPEC = TableSpec("throughput", "Throughput per stage", "stage", (
@@ -48,7 +49,7 @@ THROUGHPUT_SPEC = TableSpec("throughput", "Throughput per stage", "stage", (
     Column("seconds", pa.float64(), "wall time summed over the items", "s"),
     Column("seconds_per_item", pa.float64(), "seconds / items", "s"),
     Column("items_per_hour", pa.float64(), "items / (seconds / 3600); NaN without time", "1/h"),
-), keys=("stage",), digits=2)
+), keys=("stage",), digits=2, headlines=(Headline("items_per_hour"),))
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,8 @@ from typing import Any
 
 import pyarrow as pa
 
+from simsplat_core.eval.table_headlines import Headline, PaperFigure
+
 #: File-metadata keys of every persisted table (the same keys ``storage.schemas`` validates).
 SCHEMA_NAME_KEY = "schema_name"
 SCHEMA_VERSION_KEY = "schema_version"
@@ -67,6 +69,8 @@ class TableSpec:
         printed: the columns the Markdown and the console show, in order (default: every column).
         row_filter: the rows the Markdown and the console show (default: every row).
         detail: a per-item table (every prompt, every query) rather than a summary; consoles leave it out.
+        headlines: the metrics that summarise the table across runs (trends), ``()``: none.
+        paper: the paper's figures for cells of this table, ``()``: the paper reports none.
     """
 
     name: str
@@ -80,6 +84,8 @@ class TableSpec:
     printed: tuple[str, ...] = ()
     row_filter: RowFilter | None = field(default=None, compare=False)
     detail: bool = False
+    headlines: tuple[Headline, ...] = ()
+    paper: tuple[PaperFigure, ...] = ()
 
     def __post_init__(self) -> None:
         names = [c.name for c in self.columns]
@@ -88,6 +94,10 @@ class TableSpec:
         unknown = [c for c in (*self.keys, *self.printed) if c not in names]
         if unknown:
             raise ValueError(f"table {self.name!r}: keys / printed columns {unknown} are not columns {names}")
+        named = [c for h in self.headlines for c in h.columns if c not in names]
+        named += [c for f in self.paper for c in f.columns if c not in names]
+        if named:
+            raise ValueError(f"table {self.name!r}: headline / paper columns {named} are not columns {names}")
 
     @property
     def column_names(self) -> tuple[str, ...]:
@@ -133,6 +143,7 @@ class TableSpec:
         """The declaration as plain data (for listings: name, title, row, keys, version and every column)."""
         return {"name": self.name, "title": self.title, "row": self.row, "keys": list(self.keys),
                 "version": self.version, "detail": self.detail,
+                "headlines": [h.column for h in self.headlines], "paper_figures": len(self.paper),
                 "columns": [{"name": c.name, "type": str(c.type), "meaning": c.meaning, "unit": c.unit,
                              "nullable": c.nullable} for c in self.columns]}
 
@@ -173,5 +184,5 @@ def markdown(table: pa.Table, digits: int = 3, columns: Sequence[str] | None = N
     return "\n".join([header, align, *body]) + "\n"
 
 
-__all__ = ["Column", "RowFilter", "SCHEMA_NAME_KEY", "SCHEMA_VERSION_KEY", "TableSpec", "cell", "columns_of",
-           "markdown"]
+__all__ = ["Column", "Headline", "PaperFigure", "RowFilter", "SCHEMA_NAME_KEY", "SCHEMA_VERSION_KEY", "TableSpec",
+           "cell", "columns_of", "markdown"]

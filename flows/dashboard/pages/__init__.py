@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from flows.dashboard.pages import mining, overview, runs, scenarios, search, sequences
+from flows.dashboard.pages import datasets, evaluation, mining, overview, recordings, runs, scenarios, search, sequences
 
 #: Every page group's router.
 ROUTERS: tuple[APIRouter, ...] = (overview.router, runs.router, sequences.router, search.router, mining.router,
-                                  scenarios.router)
+                                  recordings.router, scenarios.router, evaluation.router, datasets.router)

@@ -22,6 +22,7 @@ import pyarrow as pa
 
 from simsplat_core.eval.editing.fidelity import FidelityScore
 from simsplat_core.eval.editing.prompts import CATEGORIES, INFEASIBLE, EditPrompt
+from simsplat_core.eval.table_headlines import PAPER, Headline, PaperFigure
 from simsplat_core.eval.table_spec import Column, TableSpec, markdown
 
 #: Methods of the tables, in row order.
@@ -29,6 +30,7 @@ METHOD_NAMES: tuple[str, ...] = ("ours", "chatsim-like", "omnire-like")
 
 _METHOD = Column("method", pa.string(), f"the editing method ({' / '.join(METHOD_NAMES)})")
 _CATEGORY = Column("category", pa.string(), "the prompt category (the six edit categories, or total)")
+_TOTAL = (("category", "total"),)
 
 #: ``tables/editing``: task completion per (method, category) (Table 3).
 EDITING_SPEC = TableSpec("editing", "Editing: task completion", "(method, category)", (
@@ -36,7 +38,9 @@ EDITING_SPEC = TableSpec("editing", "Editing: task completion", "(method, catego
     Column("prompts", pa.int64(), "feasible prompts of the category", "count"),
     Column("completed", pa.int64(), "prompts whose edit passed the ground-truth check", "count"),
     Column("rate", pa.float64(), "completed / prompts (NaN without prompts)", "share"),
-), keys=("method", "category"))
+), keys=("method", "category"), headlines=(Headline("rate", where=_TOTAL),), paper=(
+    PaperFigure("rate", 0.842, (("method", "ours"), ("category", "total")), PAPER,
+                "Waymo scenes with the paper's own prompt set: for orientation, not like-for-like"),))
 #: ``tables/editing_infeasible``: infeasible prompts refused per method.
 INFEASIBLE_SPEC = TableSpec("editing_infeasible", "Editing: infeasible prompts refused", "method", (
     _METHOD,
@@ -44,7 +48,7 @@ INFEASIBLE_SPEC = TableSpec("editing_infeasible", "Editing: infeasible prompts r
     Column("refused", pa.int64(), "infeasible prompts the method refused", "count"),
     Column("rate", pa.float64(), "refused / prompts (NaN without prompts)", "share"),
     Column("expected_reason", pa.int64(), "refusals whose reason names the prompt's problem", "count"),
-), keys=("method",))
+), keys=("method",), headlines=(Headline("rate"),))
 #: ``tables/edit_fidelity``: mean fidelity of the completed, natively re-rendered edits.
 FIDELITY_SPEC = TableSpec("edit_fidelity", "Edit fidelity vs the world's rendering of the edit", "(method, category)", (
     _METHOD, _CATEGORY,
@@ -54,7 +58,7 @@ FIDELITY_SPEC = TableSpec("edit_fidelity", "Edit fidelity vs the world's renderi
     Column("psnr_unedited", pa.float64(), "mean test PSNR of the unedited scenes of these edits", "dB"),
     Column("psnr_region", pa.float64(), "mean PSNR inside the edited region", "dB"),
     Column("psnr_unedited_region", pa.float64(), "mean PSNR of the unedited render inside the same region", "dB"),
-), keys=("method", "category"), digits=2)
+), keys=("method", "category"), digits=2, headlines=(Headline("psnr", where=_TOTAL),))
 
 
 def _failed(table: pa.Table) -> list[int]:

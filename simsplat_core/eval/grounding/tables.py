@@ -20,6 +20,7 @@ from collections.abc import Mapping
 import pyarrow as pa
 
 from simsplat_core.eval.grounding.metrics import CATEGORIES, CategoryScore, GroundingResults
+from simsplat_core.eval.table_headlines import Headline
 from simsplat_core.eval.table_spec import Column, TableSpec
 
 #: The metric columns of a grounding table, in order.
@@ -41,12 +42,13 @@ def _score_columns(first_column: str, first_meaning: str) -> tuple[Column, ...]:
 GROUNDING_SPEC = TableSpec(
     "grounding", "Grounding: accuracy and vIoU per category", "method",
     _score_columns("method", "the grounding method (display name)"), keys=("method",),
-    schema_name="grounding_method", printed=("method", *GROUNDING_COLUMNS))
+    schema_name="grounding_method", printed=("method", *GROUNDING_COLUMNS),
+    headlines=(Headline("total_acc"), Headline("total_viou")))
 #: ``tables/grounding_ablation``: one row per feature set of this method (Table 3).
 ABLATION_SPEC = TableSpec(
     "grounding_ablation", "Grounding: feature ablation", "feature set",
     _score_columns("features", f"the node features used, one of {', '.join(ABLATION_ROWS)}"), keys=("features",),
-    schema_name="grounding_features", printed=("features", *GROUNDING_COLUMNS))
+    schema_name="grounding_features", printed=("features", *GROUNDING_COLUMNS), headlines=(Headline("total_acc"),))
 
 
 def _ours(table: pa.Table) -> list[int]:

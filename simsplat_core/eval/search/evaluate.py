@@ -20,6 +20,7 @@ import pyarrow as pa
 from simsplat_core.eval.search.metrics import log_ba, timestamp_ba
 from simsplat_core.eval.search.queries import ALL_QUERIES, QueryCase
 from simsplat_core.eval.search.truth import WorldAgents, query_truth
+from simsplat_core.eval.table_headlines import Headline
 from simsplat_core.eval.table_spec import Column, TableSpec
 from simsplat_core.search.logs import SearchableLog, search_logs
 from simsplat_core.search.windows import covered
@@ -37,7 +38,7 @@ SEARCH_SPEC = TableSpec("search", "Search: RefAV balanced accuracies", "query", 
     Column("logs_true", pa.int64(), "logs containing the scenario", "count"),
     Column("logs_hit", pa.int64(), "logs with a hit", "count"),
     Column("seconds", pa.float64(), "wall time of the search over all logs", "s"),
-), keys=("query",))
+), keys=("query",), headlines=(Headline("timestamp_ba", reduce="mean"), Headline("log_ba", reduce="mean")))
 
 
 def _nullable(value: float) -> float | None:

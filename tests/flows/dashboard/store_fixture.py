@@ -24,6 +24,7 @@ from tasks.export import ExportConfig, export_dataset
 from tasks.export_inputs import ExportFilters
 from tasks.mine import MiningSummary, mine_sequence_task
 from tests.flows.dashboard.run_records_fixture import add_run_records
+from tests.flows.dashboard.evaluation_fixture import add_evaluation_runs
 from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
 
 SEQ = "synth-000000"
@@ -70,4 +71,5 @@ def build_dashboard_store(root: Path) -> DashboardStore:
     export_dataset(str(root), None, dataclasses.replace(
         ExportConfig(), name=DATASET, filters=ExportFilters(include="accepted", runs=(MINING_RUN,))))
     add_run_records(str(root), mining, SEQ)
+    add_evaluation_runs(store)
     return DashboardStore(str(root), mining)
