@@ -23,8 +23,8 @@ from storage.language_scenes import write_language_scene
 from tasks.export import ExportConfig, export_dataset
 from tasks.export_inputs import ExportFilters
 from tasks.mine import MiningSummary, mine_sequence_task
-from tests.flows.dashboard.run_records_fixture import add_run_records
 from tests.flows.dashboard.evaluation_fixture import add_evaluation_runs
+from tests.flows.dashboard.run_records_fixture import add_run_records
 from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
 
 SEQ = "synth-000000"
