@@ -15,6 +15,7 @@ from typing import Any
 
 from storage.artifact_ids import artifact_id
 from storage.errors import CorruptArtifactError
+from storage.logs import list_logs
 from storage.run_records import (
     RunRecord,
     StageRecord,
@@ -69,10 +70,12 @@ class RunsView:
 
 @dataclass(frozen=True)
 class MatrixRow:
-    """One sequence's stages, in the matrix's column order (``None``: the stage was never reached)."""
+    """One sequence's stages, in the matrix's column order (``None``: the stage was never reached); ``in_store``:
+    the store holds its log (a log that failed to load has none, so nothing to link to)."""
 
     seq_id: str
     cells: tuple[StageRecord | None, ...]
+    in_store: bool = True
 
 
 @dataclass(frozen=True)
@@ -181,7 +184,8 @@ def read_runs(store: ArtifactStore) -> RunsView:
 
 def _matrix(store: ArtifactStore, run_id: str) -> RunMatrix:
     stage_matrix = read_stage_matrix(store, run_id)
-    rows = tuple(MatrixRow(seq, tuple(stage_matrix.cell(seq, stage) for stage in stage_matrix.stages))
+    logs = set(list_logs(store))
+    rows = tuple(MatrixRow(seq, tuple(stage_matrix.cell(seq, stage) for stage in stage_matrix.stages), seq in logs)
                  for seq in stage_matrix.seq_ids)
     statuses: dict[str, int] = {}
     for cell in stage_matrix.cells.values():

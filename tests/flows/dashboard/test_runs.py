@@ -24,7 +24,7 @@ def test_the_runs_list_has_every_run_folder(client: TestClient, dashboard_store:
     body = client.get("/api/runs").json()
     assert body["runs"]["error"] == ""
     runs = {r["run_id"]: r for r in body["runs"]["value"]}
-    assert set(runs) == {dashboard_store.mining_run, LIVE_RUN, GARBLED_RUN}
+    assert {dashboard_store.mining_run, LIVE_RUN, GARBLED_RUN} <= set(runs)
     mined = runs[dashboard_store.mining_run]
     assert mined["status"] == "completed" and mined["code_version"] == "v0.1-test"
     assert mined["counts"]["accepted_scenarios"] == dashboard_store.mining.accepted and mined["seconds"] > 30
