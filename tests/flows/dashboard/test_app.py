@@ -58,3 +58,18 @@ def test_a_non_loopback_address_needs_a_token(tmp_path) -> None:
     with pytest.raises(UnsafeBindError, match="needs a token"):
         DashboardSettings(str(tmp_path), host="0.0.0.0")
     assert "s3cret" not in repr(DashboardSettings(str(tmp_path), host="0.0.0.0", token="s3cret"))
+
+
+@pytest.mark.parametrize("state", ["missing", "empty"])
+@pytest.mark.parametrize("path", ["/", "/runs", "/sequences", "/search?q=a+red+car", "/mining", "/evaluation",
+                                  "/datasets"])
+def test_every_page_group_answers_on_a_missing_or_empty_store(tmp_path, state: str, path: str) -> None:
+    root = tmp_path / "store"
+    if state == "empty":
+        root.mkdir()
+    client = TestClient(create_app(DashboardSettings(str(root))))
+    page = client.get(path)
+    assert page.status_code == 200 and "<h1>" in page.text
+    twin = client.get("/api" + path if path != "/" else "/api")
+    assert twin.status_code == 200 and isinstance(twin.json(), dict)
+    assert root.exists() == (state == "empty") and (state == "missing" or not any(root.iterdir()))
