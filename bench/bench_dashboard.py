@@ -1,9 +1,10 @@
 """Benchmark: how fast the dashboard answers, page by page, on a real store.
 
-    .venv/bin/python bench/bench_dashboard.py --store /tmp/demo-copy [--pages 200] [--repeats 3]
-        [--out bench/results] [--name dashboard]
+    .venv/bin/python bench/bench_dashboard.py --store artifacts/demo [--pages 200] [--repeats 3]
+        [--extra "/sequences/synth-000000?q=the+red+car+turning+right"] [--out bench/results] [--name dashboard]
 
-Crawls the app in process (FastAPI's test client, no network) from ``/``, following every internal link of every
+Crawls the app in process (FastAPI's test client, no network) from ``/`` (and each ``--extra`` URL, e.g. a query
+or a search), following every internal link of every
 page (pages, their ``/api`` JSON twins and the pictures they reference by artifact id), at most ``--pages`` pages.
 Each URL is fetched ``--repeats`` times; the first fetch (cold: listings, EXR decoding, renders made on request)
 and the median of the others (warm) are reported per route pattern (``/scenarios/{...}``), with the largest
@@ -60,10 +61,11 @@ def _store_digest(root: Path) -> str:
     return digest.hexdigest()
 
 
-def crawl(client: TestClient, max_pages: int, repeats: int) -> tuple[dict[str, dict[str, Any]], list[str]]:
-    """Fetch every reachable URL; returns per-pattern timings and the failures."""
+def crawl(client: TestClient, max_pages: int, repeats: int, extra: list[str]
+          ) -> tuple[dict[str, dict[str, Any]], list[str]]:
+    """Fetch every URL reachable from ``/`` and ``extra``; returns per-pattern timings and the failures."""
     seen: set[str] = set()
-    queue = ["/"]
+    queue = ["/", *extra]
     timings: dict[str, list[tuple[float, float, int]]] = defaultdict(list)
     failures: list[str] = []
     pages = 0
@@ -89,7 +91,7 @@ def crawl(client: TestClient, max_pages: int, repeats: int) -> tuple[dict[str, d
             for link in _LINK.findall(response.text):
                 if link not in seen:
                     queue.append(link)
-                    if not link.startswith(("/files/", "/api")) and link != "/":
+                    if not link.startswith(("/files/", "/api", *_SKIP)) and link != "/":
                         queue.append("/api" + link)
     summary = {
         pattern: {"urls": len(rows), "cold_ms_median": round(1e3 * statistics.median(r[0] for r in rows), 1),
@@ -107,13 +109,15 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--out", default="bench/results")
     parser.add_argument("--name", default="dashboard")
+    parser.add_argument("--extra", action="append", default=[],
+                        help="More URLs to start from, e.g. a query: /sequences/SEQ?q=the+red+car (repeatable).")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     root = Path(args.store)
     before = _store_digest(root)
     client = TestClient(create_app(DashboardSettings(str(root))))
     started = time.perf_counter()
-    summary, failures = crawl(client, args.pages, args.repeats)
+    summary, failures = crawl(client, args.pages, args.repeats, args.extra)
     wall = time.perf_counter() - started
     unchanged = _store_digest(root) == before
     width = max((len(p) for p in summary), default=10)
