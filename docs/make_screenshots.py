@@ -3,9 +3,9 @@
     .venv/bin/python docs/make_screenshots.py --store artifacts/demo [--out docs/images] [--query "the red car"]
 
 Serves the dashboard of ``--store`` on a free loopback port, opens the newest run with a run record, the first
-sequence (with ``--query`` answered), the newest mining run, its first accepted scenario card, the evaluation page
-and the first dataset, and saves ``dashboard-<page>.png`` (1280 px wide, the top ``--height`` pixels; more of the scenario card and the
-sequence page) in ``--out``.
+sequence (with ``--query`` answered), a search, the newest mining run, one of its accepted scenario cards
+(``--scenario``) and the evaluation page, and saves ``dashboard-<page>.png`` in ``--out`` (1280 px wide, the top
+``--height`` pixels; more of the scenario card and the sequence page).
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ def main() -> int:
     parser.add_argument("--scenario", type=int, default=0, help="Which accepted scenario's card (its rank).")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    from playwright.sync_api import sync_playwright
+    from playwright.sync_api import sync_playwright  # noqa: PLC0415 -- a test dependency, needed only here
 
     url, server = _serve(args.store)
     out = Path(args.out)

@@ -20,6 +20,7 @@ package (``pip install 'simsplat[rerun]'``); without it :class:`RerunUnavailable
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import logging
 from dataclasses import dataclass
@@ -72,6 +73,11 @@ class RecordingSummary:
     cameras: tuple[str, ...]
     images: int
     entities: tuple[str, ...]
+
+
+def rerun_available() -> bool:
+    """Whether the optional rerun-sdk package is installed (without importing it)."""
+    return importlib.util.find_spec("rerun") is not None
 
 
 def _rerun() -> Any:
@@ -211,5 +217,5 @@ def write_scenario_recording(store_root: str, run_id: str, seq_id: str, edit_id:
                             summary.images, summary.entities)
 
 
-__all__ = ["RecordingSummary", "RerunUnavailableError", "record_scenario", "scenario_recording",
+__all__ = ["RecordingSummary", "RerunUnavailableError", "record_scenario", "rerun_available", "scenario_recording",
            "write_scenario_recording"]

@@ -29,6 +29,7 @@ from tasks.dashboard.files import picture_id
 from tasks.dashboard.mining import edit_rows
 from tasks.dashboard.scenario_motion import ScenarioMotion, read_motion
 from tasks.dashboard.sections import Section, section
+from tasks.rerun_export import rerun_available
 
 
 @dataclass(frozen=True)
@@ -124,7 +125,8 @@ class DatasetEntry:
 
 @dataclass(frozen=True)
 class ScenarioView:
-    """The card (module docstring). ``stored``: the edit directory is complete (its ``_SUCCESS.json``)."""
+    """The card (module docstring). ``stored``: the edit directory is complete (its ``_SUCCESS.json``);
+    ``recording``: a Rerun recording of it can be made (stored, and the optional rerun-sdk installed)."""
 
     run_id: str
     seq_id: str
@@ -140,6 +142,7 @@ class ScenarioView:
     motion: Section[ScenarioMotion]
     validation: Section[dict[str, Any]]
     exports: Section[list[DatasetEntry]]
+    recording: bool = False
 
 
 def _attempt(row: Mapping[str, Any]) -> AttemptView:
@@ -267,7 +270,8 @@ def read_scenario(store: ArtifactStore, run_id: str, seq_id: str, edit_id: str) 
         pictures=section("frames", lambda: _pictures(store, run_id, seq_id, edit_id)),
         motion=section("motion", lambda: read_motion(store, run_id, seq_id, edit_id)),
         validation=section("validation", lambda: _validation(store, run_id, seq_id, edit_id)),
-        exports=section("export status", lambda: _exports(store, run_id, seq_id, edit_id)))
+        exports=section("export status", lambda: _exports(store, run_id, seq_id, edit_id)),
+        recording=manifest is not None and rerun_available())
 
 
 __all__ = ["AttemptView", "CameraFrames", "CommandView", "DatasetEntry", "FramePair", "Pictures", "ProgramView",

@@ -28,7 +28,8 @@ def _store_state(root: str) -> str:
 
 def _internal_links(page: Any) -> list[str]:
     hrefs = page.eval_on_selector_all("a[href]", "els => els.map(e => e.getAttribute('href'))")
-    return [h.split("#", 1)[0] for h in hrefs if h.startswith("/") and not h.startswith(_NOT_PAGES)]
+    return [h.split("#", 1)[0] for h in hrefs
+            if h.startswith("/") and not h.startswith(_NOT_PAGES) and not h.endswith(".rrd")]
 
 
 def test_every_linked_page_loads_cleanly_and_changes_nothing(page: Any, dashboard: ServedDashboard,

@@ -57,6 +57,8 @@ def test_the_dashboard_serves_a_scenarios_recording(dashboard_store: DashboardSt
     assert response.status_code == 200 and "attachment" in response.headers["content-disposition"]
     (tmp_path / "download.rrd").write_bytes(response.content)
     assert "/world/agents" in _entities(tmp_path / "download.rrd")
+    card = client.get(f"/scenarios/{dashboard_store.mining_run}/{dashboard_store.seq_id}/{edit_id}")
+    assert f'href="{recording_url(dashboard_store.mining_run, dashboard_store.seq_id, edit_id)}"' in card.text
 
 
 @pytest.mark.parametrize("edit", ["0" * 16, "..%2F..%2Fetc"])
