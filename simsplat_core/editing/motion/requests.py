@@ -388,6 +388,7 @@ RESOLVERS: tuple[tuple[str, Resolver], ...] = (
     ("follow", _follow_fields), ("stop", _stop_fields), ("timing", _timing_fields), ("lateral_offset", _offset_fields),
 )
 _RESOLVED = {name for name, _ in RESOLVERS}
+_DECLARED: dict[str, BehaviourDecl] = {d.name: d for d in BEHAVIOURS}
 
 
 def copied_fields(kind: AgentKind, request: type[_Common]) -> tuple[str, ...]:
@@ -402,9 +403,8 @@ def _resolved(behaviour: Behaviour, kind: AgentKind, request: type[_Common], g: 
     """The request fields of ``behaviour`` for an agent of ``kind``: the :data:`RESOLVERS` of the behaviours it may
     do, then the :func:`copied_fields`."""
     out: dict[str, Any] = {}
-    by_name = {d.name: d for d in BEHAVIOURS}
     for name, resolve in RESOLVERS:
-        if _may_do(by_name[name], kind):
+        if _may_do(_DECLARED[name], kind):
             out.update(resolve(behaviour, g))
     out.update({f: getattr(behaviour, f) for f in copied_fields(kind, request)})
     return out
