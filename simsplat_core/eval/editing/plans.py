@@ -616,7 +616,6 @@ class _Subject:
 #: A drafter of one intent kind: ``(subject, pools, rng) ->`` its ``(intent, slots)`` drafts about the subject (none
 #: when the subject's state does not suit the kind). Drafters draw from ``rng`` in their table's order.
 Drafter = Callable[[_Subject, AssetPools, np.random.Generator], Drafted]
-_NONE: Drafted = []
 
 
 def _moving(s: _Subject) -> bool:
@@ -632,26 +631,26 @@ def _clear_own(s: _Subject, v1: float) -> bool:
 
 def _vehicle_speed_abs(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if not (_moving(s) and s.label in _CRUISING):
-        return _NONE
+        return []
     v0 = s.v0
     unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))
     delta = float(rng.uniform(2.5, 5.5)) * (1 if rng.random() < 0.5 or v0 < 6.5 else -1)
     words, value, mps = speed_words(v0 + delta, unit, rng)
     if abs(mps - v0) >= 2.0 and mps >= 3.0 and _clear_own(s, mps):
         return s.modify(MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit)), v=words)
-    return _NONE
+    return []
 
 
 def _vehicle_speed_rel(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     steady = float(np.std(s.agent.traj["speed"])) < 0.3
     if not (_moving(s) and steady and s.label in _CRUISING):
-        return _NONE
+        return []
     v0 = s.v0
     rel, mode, value, unit = VEHICLE_RELATIVE_SPEEDS[int(rng.integers(len(VEHICLE_RELATIVE_SPEEDS)))]
     target = v0 * value if mode == "factor" else v0 + value * SPEED_UNITS[unit]
     if 1.5 <= target <= 17.0 and abs(target - v0) <= 7.5 and _clear_own(s, target):
         return s.modify(MotionIntent(speed_mps=target, speed=SpeedWords(mode, value, unit)), rel=rel)
-    return _NONE
+    return []
 
 
 def _may_slow(s: _Subject) -> bool:
@@ -662,47 +661,47 @@ def _may_slow(s: _Subject) -> bool:
 def _vehicle_stop_crosswalk(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if _may_slow(s) and _crosswalk_stop_room(s.truth, s.agent):
         return s.modify(MotionIntent(stop=True, stop_before="crosswalk"))
-    return _NONE
+    return []
 
 
 def _vehicle_stop(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if _may_slow(s) and s.v0 / COMFORT_DECEL <= _span(s.truth) - 1.0:  # a comfortable stop ends within the log
         return s.modify(MotionIntent(stop=True))
-    return _NONE
+    return []
 
 
 def _vehicle_stop_by(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if not _may_slow(s):
-        return _NONE
+        return []
     by = float(pick(rng, ("2", "2.5", "3")))
     if s.v0 / by <= 4.5:
         return s.modify(MotionIntent(stop=True, stop_by_s=by), t=seconds_phrase(by, rng))
-    return _NONE
+    return []
 
 
 def _vehicle_brake_hard(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
-    return s.modify(MotionIntent(longitudinal="brake_hard")) if _may_slow(s) else _NONE
+    return s.modify(MotionIntent(longitudinal="brake_hard")) if _may_slow(s) else []
 
 
 def _vehicle_decelerate(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
-    return s.modify(MotionIntent(longitudinal="decelerate")) if _may_slow(s) else _NONE
+    return s.modify(MotionIntent(longitudinal="decelerate")) if _may_slow(s) else []
 
 
 def _vehicle_accelerate(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if _moving(s) and s.label not in (voc.SPEEDING_UP, *_TURNING) and s.v0 <= 12.0 and _clear_own(s, s.v0 + 3.0):
         return s.modify(MotionIntent(longitudinal="accelerate"))
-    return _NONE
+    return []
 
 
 def _vehicle_reverse(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if s.label in _STATIONARY and _room_behind(s.truth, s.agent):
         return s.modify(MotionIntent(reverse=True))
-    return _NONE
+    return []
 
 
 def _vehicle_lane_change(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if s.label in (voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT, *_TURNING):
-        return _NONE
+        return []
     a, out = s.agent, []
     for side in ("left", "right"):
         width = s.truth.layout.lane_w_h * (1 if side == "left" else -1)
@@ -725,16 +724,16 @@ def _vehicle_straight(s: _Subject, pools: AssetPools, rng: np.random.Generator) 
     if s.label in _TURNING and _turn_reachable(s.truth, s.agent, "straight") and _route_clear(s.truth, s.agent,
                                                                                               "straight"):
         return s.modify(MotionIntent(turn="straight"))
-    return _NONE
+    return []
 
 
 def _vehicle_delay(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if not _moving(s):
-        return _NONE
+        return []
     delay = float(pick(rng, ("1", "1.5", "2")))
     if _delay_clear(s.truth, s.agent, delay):
         return s.modify(MotionIntent(delay_s=delay), t=seconds_phrase(delay, rng))
-    return _NONE
+    return []
 
 
 def _vehicle_replace(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
@@ -784,7 +783,7 @@ def _walking_throughout(s: _Subject) -> bool:
 
 def _pedestrian_speed_abs(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if not _walking_throughout(s):
-        return _NONE
+        return []
     target = float(pick(rng, ("0.6", "0.8", "2", "2.5")))
     unit = "km/h" if rng.random() < 0.3 else "m/s"
     if unit == "km/h":
@@ -794,27 +793,27 @@ def _pedestrian_speed_abs(s: _Subject, pools: AssetPools, rng: np.random.Generat
         words, value, mps = speed_words(target, "m/s", rng)
     if abs(mps - s.v0) >= 0.4:
         return s.modify(MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit)), v=words)
-    return _NONE
+    return []
 
 
 def _pedestrian_speed_rel(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if not _walking_throughout(s):
-        return _NONE
+        return []
     rel, mode, factor, unit = PEDESTRIAN_RELATIVE_SPEEDS[int(rng.integers(len(PEDESTRIAN_RELATIVE_SPEEDS)))]
     return s.modify(MotionIntent(speed_mps=s.v0 * factor, speed=SpeedWords(mode, factor, unit)), rel=rel)
 
 
 def _pedestrian_run(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
-    return s.modify(MotionIntent(gait="run")) if _walking_throughout(s) else _NONE
+    return s.modify(MotionIntent(gait="run")) if _walking_throughout(s) else []
 
 
 def _pedestrian_stop(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
-    return s.modify(MotionIntent(stop=True)) if _walking_throughout(s) else _NONE
+    return s.modify(MotionIntent(stop=True)) if _walking_throughout(s) else []
 
 
 def _pedestrian_delay(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
     if not _walking_throughout(s):
-        return _NONE
+        return []
     delay = float(pick(rng, ("1", "1.5", "2")))
     return s.modify(MotionIntent(delay_s=delay), t=seconds_phrase(delay, rng))
 
@@ -825,11 +824,11 @@ def _kerb_side(s: _Subject) -> tuple[bool, bool]:
 
 
 def _pedestrian_cross(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
-    return s.modify(MotionIntent(cross_street=True)) if _kerb_side(s)[0] else _NONE
+    return s.modify(MotionIntent(cross_street=True)) if _kerb_side(s)[0] else []
 
 
 def _pedestrian_jaywalk(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
-    return s.modify(MotionIntent(cross_street=True, jaywalk=True)) if _kerb_side(s)[1] else _NONE
+    return s.modify(MotionIntent(cross_street=True, jaywalk=True)) if _kerb_side(s)[1] else []
 
 
 #: The modify_pedestrian drafters, by intent kind, in the order they run for each named pedestrian.
@@ -862,7 +861,7 @@ def _turn_without_intersection(s: _Subject, pools: AssetPools, rng: np.random.Ge
     """A turn for a vehicle driving away from the junction (refused: no intersection ahead)."""
     pos = s.truth.road_position(s.agent.traj["xy"][0], float(s.agent.traj["heading"][0]))
     if pos.arm is None or pos.inbound is not False or pos.along <= s.truth.layout.stopline_s(pos.arm):
-        return _NONE
+        return []
     side = pick(rng, ("left", "right"))
     return [(EditIntent("modify", (s.oid,), motion=MotionIntent(turn=side), expected_refusals=("infeasible_motion",)),
              {"T": s.namer(), "side": side})]
