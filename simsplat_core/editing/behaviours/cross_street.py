@@ -1,8 +1,9 @@
 """Crossing the street (pedestrians)."""
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
-from simsplat_core.editing.behaviours.gait import GAIT_VERBS, set_gait_of
+from simsplat_core.editing.behaviours.declaration import AgentKind, BehaviourDecl, Intent, LabelCheck
+from simsplat_core.editing.behaviours.gait import GAIT_VERBS, STANDING_MPS, WALK_MPS, set_gait_of
 from simsplat_core.editing.behaviours.jaywalk import take_jaywalking
+from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.parse import chunks
 from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
@@ -35,6 +36,11 @@ def _labelled_crossing(asked: bool, motion: str) -> bool:
     return CROSS_STREET.motion_classes.get(motion) == "cross"
 
 
+def crossing_speed(behaviour: Behaviour, current: float, kind: AgentKind) -> float | None:
+    """A standing person asked to cross walks (:data:`gait.WALK_MPS`); a moving one keeps its pace."""
+    return WALK_MPS if behaviour.cross_street and current < STANDING_MPS else None
+
+
 CROSS_STREET = BehaviourDecl(
     "cross_street",
     fields=("cross_street",),
@@ -61,4 +67,5 @@ CROSS_STREET = BehaviourDecl(
     },
     parse_rule=parse_cross_street,
     label_check=LabelCheck("cross_street", _labelled_crossing, lambda asked: "not crossing the street"),
+    speed_rule=crossing_speed,
 )

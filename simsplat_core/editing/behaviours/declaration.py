@@ -11,7 +11,8 @@ which the editing benchmark's and the mining judge's checks both apply). The reg
 requests, the checks, the benchmark's prompt generator and the rule client read. The planner (the motion
 controller's route / speed plan, ``editing.motion``) and the layer-specific parts of the checks
 (``eval.editing.checks.MOTION_CHECKS``, ``mining.rule_judge.CHANGE_CHECKS``) are code keyed by the field and
-behaviour names declared here (``docs/extending_behaviours.md``).
+behaviour names declared here (``docs/extending_behaviours.md``). A behaviour that sets a speed declares its rule
+(``speed_rule``); ``registry.SPEED_ORDER`` is their precedence.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
+from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.parse.predicate import PredicateWork
 
 #: The agents a behaviour may be restricted to.
@@ -27,6 +29,10 @@ AgentKind = Literal["vehicle", "pedestrian"]
 #: A parser rule: reads the behaviour's words off a canonical predicate (``PredicateWork.take``, which blanks
 #: the words it used) and sets its ``Behaviour`` fields (``PredicateWork.set``).
 ParseRule = Callable[[PredicateWork], None]
+#: A speed rule: ``(behaviour, the agent's current |speed| m/s, the agent's kind) ->`` the speed the behaviour asks
+#: of it, m/s, or ``None`` when it asks none (its fields are unset, or it leaves the speed to a rule after it in
+#: ``registry.SPEED_ORDER``). Only rules of behaviours the agent's kind may do are asked.
+SpeedRule = Callable[[Behaviour, float, AgentKind], float | None]
 
 
 @dataclass(frozen=True)
@@ -84,6 +90,8 @@ class BehaviourDecl:
             street-crossing rule reads "jaywalk"); ``registry.PARSE_ORDER`` runs the rules in a fixed order.
         label_check: how the auto-labeller's motion class shows it (manoeuvres: reversing, lane changes, turns,
             crossing); ``None``: the checks measure it otherwise (speeds, stops, timing) or not at all.
+        speed_rule: the speed it asks (``editing.motion.requests.target_speed`` asks the rules in
+            ``registry.SPEED_ORDER``; the first speed given wins); ``None``: it keeps the speed (turns, stops).
     """
 
     name: str
@@ -96,6 +104,7 @@ class BehaviourDecl:
     prompt_forms: Mapping[str, tuple[str, ...]] = field(default_factory=dict)
     parse_rule: ParseRule | None = None
     label_check: LabelCheck | None = None
+    speed_rule: SpeedRule | None = None
 
     def __post_init__(self) -> None:
         names = {i.name for i in self.intents}

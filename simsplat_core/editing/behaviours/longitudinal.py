@@ -1,8 +1,15 @@
 """Braking hard, slowing down or speeding up without a said speed (``Behaviour.longitudinal``)."""
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent
+from simsplat_core.editing.behaviours.declaration import AgentKind, BehaviourDecl, Intent
+from simsplat_core.editing.behaviours.gait import RUN_MPS, WALK_MPS, reference_pace
+from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
+
+#: ``accelerate`` without a speed: a vehicle goes this much faster, m/s; ``decelerate``: an agent slows to this
+#: fraction of its pace.
+ACCELERATE_DELTA_MPS = 5.0
+DECELERATE_FACTOR = 0.5
 
 
 def parse_longitudinal(w: PredicateWork) -> None:
@@ -23,6 +30,20 @@ def parse_longitudinal(w: PredicateWork) -> None:
            r"|pull(?:s)? (?:out|away)|move(?:s)? off|(?:drive|drives|head|heads) (?:off|away)(?! (?:the|a|from) )"
            r"|increase (?:its |the )?speed",
            lambda m: w.set("longitudinal", "accelerate") if "longitudinal" not in w.out.fields else None)
+
+
+def speed_change(behaviour: Behaviour, current: float, kind: AgentKind) -> float | None:
+    """``accelerate``: a vehicle :data:`ACCELERATE_DELTA_MPS` faster; a pedestrian half as fast again, at least
+    running when it walks faster than a walk (else one and a half walks). ``decelerate``: :data:`DECELERATE_FACTOR`
+    of the pace (``gait.reference_pace``). Braking hard is a stop (no speed)."""
+    base = reference_pace(current, kind)
+    if behaviour.longitudinal == "accelerate":
+        if kind == "vehicle":
+            return base + ACCELERATE_DELTA_MPS
+        return max(base * 1.5, RUN_MPS if base > WALK_MPS else WALK_MPS * 1.5)
+    if behaviour.longitudinal == "decelerate":
+        return base * DECELERATE_FACTOR
+    return None
 
 
 LONGITUDINAL = BehaviourDecl(
@@ -71,4 +92,5 @@ LONGITUDINAL = BehaviourDecl(
         ),
     },
     parse_rule=parse_longitudinal,
+    speed_rule=speed_change,
 )

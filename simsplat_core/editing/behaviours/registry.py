@@ -1,6 +1,7 @@
 """The registry of behaviours: every ``BehaviourDecl`` and the tables derived from them.
 
-The parser (``editing.parse``), the motion requests (``editing.motion.requests``), the editing benchmark's
+The parser (``editing.parse``), the motion requests (``editing.motion.requests``: who may do what, and the speed
+asked, by the behaviours' speed rules in ``SPEED_ORDER``), the editing benchmark's
 prompt wording (``eval.editing.wording``) and the mining rule client's wording (``mining.rule_wording``) read
 these tables instead of spelling a behaviour's words themselves. ``BEHAVIOURS``' order is the order in which
 the intents' phrasings are embedded (``editing.parse.semantic``); ``RESTRICTED``'s the order in which
@@ -40,6 +41,14 @@ PARSE_ORDER: tuple[BehaviourDecl, ...] = (
 if {b.name for b in PARSE_ORDER} != {b.name for b in BEHAVIOURS if b.parse_rule is not None} \
         or len({b.name for b in PARSE_ORDER}) != len(PARSE_ORDER):
     raise ValueError("behaviour registry: PARSE_ORDER must list every behaviour with a parse rule once, and only those")
+
+#: The behaviours with a speed rule, in precedence order (``editing.motion.requests.target_speed``: the first rule
+#: that gives a speed wins): a said speed, then a gait, then speeding up / slowing down, then reversing, then a
+#: standing person walking to cross.
+SPEED_ORDER: tuple[BehaviourDecl, ...] = (SPEED, GAIT, LONGITUDINAL, REVERSE, CROSS_STREET)
+if {b.name for b in SPEED_ORDER} != {b.name for b in BEHAVIOURS if b.speed_rule is not None} \
+        or len({b.name for b in SPEED_ORDER}) != len(SPEED_ORDER):
+    raise ValueError("behaviour registry: SPEED_ORDER must list every behaviour with a speed rule once, and only those")
 
 
 def _unique(pairs: list[tuple[str, Any]], what: str) -> dict[str, Any]:
@@ -86,4 +95,4 @@ PROMPT_FORMS: dict[str, tuple[str, ...]] = _unique(
 
 __all__ = ["BEHAVIOURS", "CLASS_INTENT", "FIELD_WORDS", "INTENT_FAMILY", "INTENT_FIELDS", "INTENT_PHRASES",
            "LABEL_CHECKED", "PARSE_ORDER", "PEDESTRIAN_ONLY", "PROMPT_FORMS", "PROPOSAL_FORMS", "RESTRICTED",
-           "VEHICLE_ONLY"]
+           "SPEED_ORDER", "VEHICLE_ONLY"]

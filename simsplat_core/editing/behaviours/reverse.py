@@ -2,13 +2,17 @@
 
 import re
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl, Intent, LabelCheck
+from simsplat_core.editing.behaviours.declaration import AgentKind, BehaviourDecl, Intent, LabelCheck
+from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.parse.predicate import PredicateWork
 from simsplat_core.scenario import vocabulary as voc
 
 #: Where a car reverses out of ("out of its parking space"): words that add nothing to the reversing.
 _OUT_OF_SPOT = (r"(?: out)?(?: of (?:its|the|his|her|their|a) (?:parking )?(?:spot|space|bay|place|slot|driveway|"
                 r"parking))?")
+
+#: Reversing speed, m/s.
+REVERSE_MPS = 2.0
 
 
 def parse_reverse(w: PredicateWork) -> None:
@@ -24,6 +28,11 @@ def parse_reverse(w: PredicateWork) -> None:
 def _labelled_reversing(asked: bool, motion: str) -> bool:
     """Whether the motion class ``motion`` means reversing."""
     return REVERSE.motion_classes.get(motion) == "reverse"
+
+
+def reversing_speed(behaviour: Behaviour, current: float, kind: AgentKind) -> float | None:
+    """Reversing: :data:`REVERSE_MPS` (backwards: the planner gives it the sign)."""
+    return REVERSE_MPS if behaviour.reverse else None
 
 
 REVERSE = BehaviourDecl(
@@ -51,4 +60,5 @@ REVERSE = BehaviourDecl(
     },
     parse_rule=parse_reverse,
     label_check=LabelCheck("reverse", _labelled_reversing, lambda asked: f"not {voc.REVERSING}"),
+    speed_rule=reversing_speed,
 )

@@ -1,7 +1,15 @@
 """A said speed: absolute, a factor or a change (``SpeedSpec``)."""
 
-from simsplat_core.editing.behaviours.declaration import BehaviourDecl
+from simsplat_core.editing.behaviours.declaration import AgentKind, BehaviourDecl
+from simsplat_core.editing.behaviours.gait import reference_pace
+from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.parse.speed import speed_rules
+
+
+def said_speed(behaviour: Behaviour, current: float, kind: AgentKind) -> float | None:
+    """The said speed, a factor or change taken against the agent's pace (``gait.reference_pace``)."""
+    return behaviour.speed.target_mps(reference_pace(current, kind)) if behaviour.speed is not None else None
+
 
 SPEED = BehaviourDecl(
     "speed",
@@ -44,4 +52,5 @@ SPEED = BehaviourDecl(
         ),
     },
     parse_rule=speed_rules,
+    speed_rule=said_speed,
 )

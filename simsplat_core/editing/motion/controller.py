@@ -31,13 +31,13 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from simsplat_core.editing.behaviours.gait import WALK_MPS
 from simsplat_core.editing.motion.requests import (
     DEFAULT_CRUISE_MPS,
     PASS_LEAD_M,
     PASS_RAMP_M,
     PASS_TRAIL_M,
     STOP_GAP_M,
-    WALK_MPS,
     LogTrajectory,
     OtherAgent,
     PassingStep,
@@ -138,7 +138,7 @@ def plan_vehicle(request: VehicleMotionRequest, lanes: LaneGraph | None, map_ctx
     s0 = base.project(start.xy)[0]
     route, s0 = _vehicle_route(req, base, s0, lanes)
     moving = abs(start.speed) > 0.3 or (req.log is not None and _log_moves(req.log))
-    drives = req.turn is not None or req.lane_change is not None or req.leader is not None
+    drives = any(change.drives and change.asked(req) for _, change in VEHICLE_ROUTES) or req.leader is not None
     cruise = req.target_speed_mps
     if cruise is None and drives and not moving:
         cruise = DEFAULT_CRUISE_MPS
@@ -195,22 +195,57 @@ def _base_route(req: VehicleMotionRequest, own: Route | None, lanes: LaneGraph |
     return straight_route(start.xy, start.heading)
 
 
-def _vehicle_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> tuple[Route, float]:
-    """Route with the requested turn / lane change / sideways shift, and the start's arc length on it."""
+def _turned(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> Route:
+    """``base`` merged onto the lane route making the turn (shifted sideways at its end, if asked)."""
+    s_join, turned = _turn_route(req, base, s0, lanes)
+    return merge_onto(base, s_join, turned, MERGE_M, final_offset_m=req.lateral_offset_m)
+
+
+def _lane_changed(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> Route:
+    """``base`` merged onto the neighbour lane over ``lane_change_s`` at the cruise speed (at least 1.5
+    :data:`MIN_RAMP_M`), from ``lane_change_after_m`` on (shifted sideways at its end, if asked)."""
     start = req.start
-    route = base
-    ramp = max(MIN_RAMP_M, SHIFT_S * max(abs(start.speed), req.target_speed_mps or 0.0))
-    if req.turn is not None:
-        s_join, turned = _turn_route(req, base, s0, lanes)
-        route = merge_onto(base, s_join, turned, MERGE_M, final_offset_m=req.lateral_offset_m)
-    elif req.lane_change is not None:
-        target = _neighbour_route(req, lanes)
-        length = max(MIN_RAMP_M * 1.5, req.lane_change_s * max(abs(start.speed), req.target_speed_mps or 0.0,
-                                                                 DEFAULT_CRUISE_MPS if abs(start.speed) < 0.3 else 0.0))
-        route = merge_onto(base, s0 + req.lane_change_after_m, target, length, final_offset_m=req.lateral_offset_m)
-    elif req.lateral_offset_m:
-        route = offset_route(base, s0, req.lateral_offset_m, ramp)
-    return route, route.project(start.xy)[0] if route is not base else s0
+    target = _neighbour_route(req, lanes)
+    length = max(MIN_RAMP_M * 1.5, req.lane_change_s * max(abs(start.speed), req.target_speed_mps or 0.0,
+                                                             DEFAULT_CRUISE_MPS if abs(start.speed) < 0.3 else 0.0))
+    return merge_onto(base, s0 + req.lane_change_after_m, target, length, final_offset_m=req.lateral_offset_m)
+
+
+def _shifted(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> Route:
+    """``base`` shifted ``lateral_offset_m`` sideways, eased in over :data:`SHIFT_S` at the cruise speed (at least
+    :data:`MIN_RAMP_M`)."""
+    ramp = max(MIN_RAMP_M, SHIFT_S * max(abs(req.start.speed), req.target_speed_mps or 0.0))
+    return offset_route(base, s0, req.lateral_offset_m, ramp)
+
+
+@dataclass(frozen=True)
+class RouteChange:
+    """How a behaviour changes a vehicle's route.
+
+    Attributes:
+        asked: whether a request asks it.
+        route: ``(request, base route, start arc length on it m, lanes) ->`` the changed route.
+        drives: a standing vehicle asked it drives off (at ``DEFAULT_CRUISE_MPS`` when no speed is asked).
+    """
+
+    asked: Callable[[VehicleMotionRequest], bool]
+    route: Callable[[VehicleMotionRequest, Route, float, LaneGraph | None], Route]
+    drives: bool
+
+
+#: The behaviours that change a vehicle's route, in precedence order (the first asked one makes the route; a turn and
+#: a lane change take the sideways shift along): behaviour name -> its route change.
+VEHICLE_ROUTES: tuple[tuple[str, RouteChange], ...] = (
+    ("turn", RouteChange(lambda r: r.turn is not None, _turned, drives=True)),
+    ("lane_change", RouteChange(lambda r: r.lane_change is not None, _lane_changed, drives=True)),
+    ("lateral_offset", RouteChange(lambda r: bool(r.lateral_offset_m), _shifted, drives=False)),
+)
+
+
+def _vehicle_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> tuple[Route, float]:
+    """Route with the requested change (:data:`VEHICLE_ROUTES`), and the start's arc length on it."""
+    route = next((change.route(req, base, s0, lanes) for _, change in VEHICLE_ROUTES if change.asked(req)), base)
+    return route, route.project(req.start.xy)[0] if route is not base else s0
 
 
 def _turn_route(req: VehicleMotionRequest, base: Route, s0: float, lanes: LaneGraph | None) -> tuple[float, Route]:

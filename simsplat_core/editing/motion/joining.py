@@ -10,8 +10,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from simsplat_core.editing.behaviours.gait import WALK_MPS
 from simsplat_core.editing.commands import Behaviour
-from simsplat_core.editing.motion.requests import DEFAULT_CRUISE_MPS, FOLLOW_GAP_M, WALK_MPS
+from simsplat_core.editing.motion.requests import DEFAULT_CRUISE_MPS, FOLLOW_GAP_M
 from simsplat_core.geometry import wrap_angle
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.trajectory import agent_kind

@@ -4,7 +4,7 @@
 * :func:`plan_inserted` -- how an inserted object moves: vehicles drive along their lane at a sensible speed
   (``editing.motion.requests.DEFAULT_CRUISE_MPS``, keeping a gap to the traffic ahead) unless told otherwise (an
   absolute speed of 0 parks them; one placed parked outside the lanes stays parked unless told to move),
-  pedestrians walk (``editing.motion.requests.WALK_MPS``) along the sidewalk or
+  pedestrians walk (``editing.behaviours.gait.WALK_MPS``) along the sidewalk or
   cross when told, static objects stand still;
 * :func:`plan_modified` -- a target's new motion from its log trajectory (``editing.motion.controller``);
 * :class:`Motion` -- the result on the step grid, and :func:`changed_motion` (does it differ from the log?).
@@ -34,8 +34,8 @@ from simsplat_core.editing.motion.requests import (
     StartState,
     VehicleMotionRequest,
     motion_kind,
+    target_speed,
     traffic_from_states,
-    vehicle_target_speed,
 )
 from simsplat_core.editing.placement.resolve import AnchorPose, PlacedPose, resolve_placement
 from simsplat_core.editing.result import EditRefused
@@ -581,10 +581,10 @@ def _check_speed_reached(draft: Draft, plan: PlannedTrajectory, behaviour: Behav
                          object_id: str) -> None:
     """Refuse a speed-up (a faster speed, ``accelerate``) that the traffic ahead takes away, never a silent
     no-op or a slow-down: when the plan keeping its gap ends (:func:`end_speed`) short of the asked speed
-    (``editing.motion.requests.vehicle_target_speed``; within the tolerance of an inserted car's for an asked speed,
+    (``editing.motion.requests.target_speed``; within the tolerance of an inserted car's for an asked speed,
     :data:`SPEED_REACHED_SHARE` of it for a plain "speed up") but the same plan on a free road ends there, or
     clearly faster (a physical limit such as a curve is no refusal; traffic taking the speed is)."""
-    target = vehicle_target_speed(behaviour, start.speed)
+    target = target_speed(behaviour, start.speed, "vehicle")
     if target is None or behaviour.reverse or target <= abs(start.speed) + 0.5:
         return
     # an asked speed ("at 40 km/h", "50 % faster") is met within the tolerance of an inserted car's; a plain

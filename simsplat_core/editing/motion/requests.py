@@ -5,18 +5,24 @@ state or log trajectory, with every field resolved to numbers (m, s, m/s, rad).
 * :class:`StartState` -- where and how fast the new motion begins (a log step, or a placed pose);
 * :class:`OtherAgent` -- another agent the motion refers to (a leader to follow, an object to stop behind);
 * :class:`VehicleMotionRequest` / :class:`PedestrianMotionRequest` -- ``from_behaviour`` checks the behaviour
-  fits the category (``EditRefused(reason="wrong_category")`` / ``"infeasible_motion"``) and resolves speeds
-  (``SpeedSpec.target_mps`` against the current speed, ``accelerate`` / ``decelerate`` / gaits), stops and
-  delays.
+  fits the category (``EditRefused(reason="wrong_category")`` / ``"infeasible_motion"``) and resolves it,
+  behaviour by behaviour: the speed asked (:func:`target_speed`: the behaviours' speed rules, declared in their
+  modules, in ``registry.SPEED_ORDER``), the fields a behaviour resolves into request fields
+  (:data:`RESOLVERS`: following, stops, timing, sideways shifts) and, as they are, the manoeuvre fields the
+  request has a field of the same name for (reverse, lane change, turn; crossing, jaywalking).
 """
 
 from __future__ import annotations
 
+import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from simsplat_core.editing.behaviours.registry import PEDESTRIAN_ONLY, VEHICLE_ONLY
+from simsplat_core.editing.behaviours.declaration import AgentKind, BehaviourDecl
+from simsplat_core.editing.behaviours.registry import BEHAVIOURS, PEDESTRIAN_ONLY, SPEED_ORDER, VEHICLE_ONLY
 from simsplat_core.editing.commands import Behaviour
 from simsplat_core.editing.motion.speed_profile import PEDESTRIAN_LIMITS, VEHICLE_LIMITS, LongitudinalLimits
 from simsplat_core.editing.result import EditRefused
@@ -24,16 +30,10 @@ from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.trajectory import agent_kind
 from simsplat_core.scenario.vocabulary import PEDESTRIAN, VEHICLE
 
-#: Speed of a standing vehicle asked to drive (turn, change lanes, follow) without a speed, m/s (~30 km/h).
+#: Speed of a standing vehicle asked to drive (turn, change lanes, follow) without a speed, m/s (~30 km/h). The
+#: speeds behaviours ask (``ACCELERATE_DELTA_MPS``, ``DECELERATE_FACTOR``, ``REVERSE_MPS``, ``WALK_MPS``,
+#: ``RUN_MPS``) are declared with them (``editing.behaviours``).
 DEFAULT_CRUISE_MPS = 8.0
-#: ``accelerate`` without a speed: this much faster, m/s; ``decelerate``: this fraction of the current speed.
-ACCELERATE_DELTA_MPS = 5.0
-DECELERATE_FACTOR = 0.5
-#: Reversing speed, m/s.
-REVERSE_MPS = 2.0
-#: Pedestrian gaits, m/s.
-WALK_MPS = 1.4
-RUN_MPS = 3.0
 #: Gaps kept when stopping, metres (front of the agent to the area / the other's rear).
 STOP_GAP_M = {"crosswalk": 1.5, "intersection": 1.0, "stop_line": 1.0, "behind": 2.0}
 #: Standstill gap kept to a leader, metres.
@@ -184,8 +184,8 @@ class VehicleMotionRequest(_Common):
     """A vehicle's new motion (fields of ``_Common`` plus):
 
     Attributes:
-        reverse: back up (along its own past path, else straight back) at ``target_speed_mps`` or
-            :data:`REVERSE_MPS`.
+        reverse: back up (along its own past path, else straight back) at ``target_speed_mps`` (by default
+            ``reverse.REVERSE_MPS``).
         lane_change: ``"left"`` / ``"right"``; lane_change_s: its duration at the cruise speed, s;
             lane_change_after_m: how far it drives on in its own lane before the move begins (waiting for a gap
             in the target lane), m.
@@ -220,15 +220,10 @@ class VehicleMotionRequest(_Common):
                 the grounded agent (``invalid_command``).
         """
         _refuse_fields(behaviour, PEDESTRIAN_ONLY, "vehicles", label)
-        if behaviour.follow is not None and leader is None:
-            raise EditRefused("follow: the agent to follow was not grounded", reason="invalid_command")
-        shared = _common_fields(behaviour, times, start, log, stop_behind, label)
-        target = vehicle_target_speed(behaviour, start.speed)
+        resolved = _resolved(behaviour, "vehicle", cls, _Grounded(times, start, label, leader, stop_behind))
         return cls(times=np.asarray(times, np.float64), frame_idx=np.asarray(frame_idx, np.int64), start=start,
-                   size=size, log=log, target_speed_mps=target, backfill=backfill, label=label,
-                   stop=shared.stop, hold_until_s=shared.hold_until_s, log_shift_s=shared.log_shift_s,
-                   lateral_offset_m=shared.lateral_offset_m, reverse=behaviour.reverse,
-                   lane_change=behaviour.lane_change, turn=behaviour.turn, leader=leader, traffic=traffic)
+                   size=size, log=log, target_speed_mps=target_speed(behaviour, start.speed, "vehicle"),
+                   backfill=backfill, label=label, traffic=traffic, **resolved)
 
 
 @dataclass(frozen=True)
@@ -266,7 +261,7 @@ class PedestrianMotionRequest(_Common):
                        size: tuple[float, float, float], log: LogTrajectory | None = None,
                        stop_behind: OtherAgent | None = None, backfill: bool = False,
                        label: str = "the pedestrian") -> PedestrianMotionRequest:
-        """Resolve ``behaviour`` for a pedestrian (gaits :data:`WALK_MPS` / :data:`RUN_MPS`; a standing
+        """Resolve ``behaviour`` for a pedestrian (gaits ``gait.WALK_MPS`` / ``gait.RUN_MPS``; a standing
         person asked to cross or to change speed walks).
 
         Raises:
@@ -277,39 +272,29 @@ class PedestrianMotionRequest(_Common):
             raise EditRefused(f"{label} is a pedestrian: pedestrians do not reverse (they can walk, run, stop, "
                               "cross the street or jaywalk)", reason="infeasible_motion")
         _refuse_fields(behaviour, VEHICLE_ONLY, "pedestrians", label)
-        shared = _common_fields(behaviour, times, start, log, stop_behind, label)
-        target = shared.target_speed_mps
-        current = abs(start.speed)
-        base = current if current > 0.3 else WALK_MPS
-        if behaviour.speed is not None:
-            target = behaviour.speed.target_mps(base)
-        elif behaviour.gait is not None:
-            target = RUN_MPS if behaviour.gait == "run" else WALK_MPS
-        elif behaviour.longitudinal == "accelerate":
-            target = max(base * 1.5, RUN_MPS if base > WALK_MPS else WALK_MPS * 1.5)
-        elif behaviour.longitudinal == "decelerate":
-            target = base * DECELERATE_FACTOR
-        elif behaviour.cross_street and current < 0.3:
-            target = WALK_MPS
+        resolved = _resolved(behaviour, "pedestrian", cls, _Grounded(times, start, label, None, stop_behind))
         return cls(times=np.asarray(times, np.float64), frame_idx=np.asarray(frame_idx, np.int64), start=start,
-                   size=size, log=log, target_speed_mps=target, backfill=backfill, label=label,
-                   stop=shared.stop, hold_until_s=shared.hold_until_s, log_shift_s=shared.log_shift_s,
-                   lateral_offset_m=shared.lateral_offset_m, limits=PEDESTRIAN_LIMITS,
-                   cross_street=behaviour.cross_street, jaywalk=behaviour.jaywalk)
+                   size=size, log=log, target_speed_mps=target_speed(behaviour, start.speed, "pedestrian"),
+                   backfill=backfill, label=label, limits=PEDESTRIAN_LIMITS, **resolved)
 
 
-def vehicle_target_speed(behaviour: Behaviour, current: float) -> float | None:
-    """The speed a vehicle driving at ``current`` m/s is asked for, m/s: the given speed (against the current
-    one), ``accelerate`` :data:`ACCELERATE_DELTA_MPS` faster, ``decelerate`` :data:`DECELERATE_FACTOR` of it,
-    reversing :data:`REVERSE_MPS`; ``None``: the behaviour keeps the log's (or the start) speed."""
-    current = abs(current)
-    if behaviour.speed is not None:
-        return behaviour.speed.target_mps(current)
-    if behaviour.longitudinal == "accelerate":
-        return current + ACCELERATE_DELTA_MPS
-    if behaviour.longitudinal == "decelerate":
-        return current * DECELERATE_FACTOR
-    return REVERSE_MPS if behaviour.reverse else None
+def _may_do(decl: BehaviourDecl, kind: AgentKind) -> bool:
+    """Whether an agent of ``kind`` may do the behaviour (it is not restricted to the other kind)."""
+    return decl.agent is None or decl.agent == kind
+
+
+def target_speed(behaviour: Behaviour, current: float, kind: AgentKind) -> float | None:
+    """The speed an agent of ``kind`` moving at ``current`` m/s (signed) is asked for, m/s: the first speed given by
+    the speed rules of ``registry.SPEED_ORDER`` (``BehaviourDecl.speed_rule``; a said speed, a gait, speeding up or
+    slowing down, reversing, a standing person crossing) of the behaviours ``kind`` may do; ``None``: the behaviour
+    keeps the log's (or the start) speed."""
+    pace = abs(current)
+    for decl in SPEED_ORDER:
+        if decl.speed_rule is not None and _may_do(decl, kind):
+            speed = decl.speed_rule(behaviour, pace, kind)
+            if speed is not None:
+                return speed
+    return None
 
 
 def traffic_from_states(states: AgentStates, exclude: tuple[str, ...] | list[str] = ()) -> tuple[OtherAgent, ...]:
@@ -343,35 +328,83 @@ def _refuse_fields(behaviour: Behaviour, fields: tuple[str, ...], who: str, labe
 
 
 @dataclass(frozen=True)
-class _Shared:
-    """What both requests resolve alike (see ``_Common``)."""
+class _Grounded:
+    """What a command's behaviour is resolved against: the step times ``[T]`` (s), where the motion begins, how
+    messages name the agent, and the grounded agents of ``follow`` / ``stop.behind`` (``None``: not grounded)."""
 
-    target_speed_mps: float | None
-    stop: StopRequest | None
-    hold_until_s: float | None
-    log_shift_s: float
-    lateral_offset_m: float
+    times: np.ndarray
+    start: StartState
+    label: str
+    leader: OtherAgent | None
+    stop_behind: OtherAgent | None
 
 
-def _common_fields(behaviour: Behaviour, times: np.ndarray, start: StartState, log: LogTrajectory | None,
-                   stop_behind: OtherAgent | None, label: str) -> _Shared:
-    """Speed target, stop, hold and offset shared by both requests."""
-    t_start = float(times[start.step])
-    target = behaviour.speed.target_mps(abs(start.speed)) if behaviour.speed is not None else None
-    stop = None
-    if behaviour.stop is not None or behaviour.longitudinal == "brake_hard":
-        spec = behaviour.stop
-        if spec is not None and spec.behind is not None and stop_behind is None:
-            raise EditRefused("stop behind: the object to stop behind was not grounded", reason="invalid_command")
-        stop = StopRequest(at_time_s=spec.at_time_s if spec else None, before=spec.before if spec else None,
-                           behind=stop_behind if spec and spec.behind is not None else None,
-                           gap_m=spec.gap_m if spec else None, hard=behaviour.longitudinal == "brake_hard")
+#: Resolves a behaviour's fields into request fields (``{request field: value}``).
+Resolver = Callable[[Behaviour, _Grounded], dict[str, Any]]
+
+
+def _follow_fields(behaviour: Behaviour, g: _Grounded) -> dict[str, Any]:
+    """The leader (the grounded agent of ``follow``)."""
+    if behaviour.follow is not None and g.leader is None:
+        raise EditRefused("follow: the agent to follow was not grounded", reason="invalid_command")
+    return {"leader": g.leader}
+
+
+def _stop_fields(behaviour: Behaviour, g: _Grounded) -> dict[str, Any]:
+    """The stop (``StopSpec`` with the grounded agent to stop behind); braking hard is a hard stop."""
+    if behaviour.stop is None and behaviour.longitudinal != "brake_hard":
+        return {"stop": None}
+    spec = behaviour.stop
+    if spec is not None and spec.behind is not None and g.stop_behind is None:
+        raise EditRefused("stop behind: the object to stop behind was not grounded", reason="invalid_command")
+    return {"stop": StopRequest(at_time_s=spec.at_time_s if spec else None, before=spec.before if spec else None,
+                                behind=g.stop_behind if spec and spec.behind is not None else None,
+                                gap_m=spec.gap_m if spec else None, hard=behaviour.longitudinal == "brake_hard")}
+
+
+def _timing_fields(behaviour: Behaviour, g: _Grounded) -> dict[str, Any]:
+    """A delayed start: standing until the delay is over (or the start time), the log replayed that much later."""
+    t_start = float(g.times[g.start.step])
     hold, shift = None, 0.0
     if behaviour.delay_s is not None:
         hold, shift = t_start + behaviour.delay_s, behaviour.delay_s
     if behaviour.start_time_s is not None:
         if behaviour.start_time_s < t_start:
-            raise EditRefused(f"{label} cannot start at {behaviour.start_time_s:g} s: the edit begins at "
+            raise EditRefused(f"{g.label} cannot start at {behaviour.start_time_s:g} s: the edit begins at "
                               f"{t_start:g} s", reason="infeasible_motion")
         hold, shift = behaviour.start_time_s, behaviour.start_time_s - t_start
-    return _Shared(target, stop, hold, shift, behaviour.lateral_offset_m or 0.0)
+    return {"hold_until_s": hold, "log_shift_s": shift}
+
+
+def _offset_fields(behaviour: Behaviour, g: _Grounded) -> dict[str, Any]:
+    """The sideways shift, m (none: 0)."""
+    return {"lateral_offset_m": behaviour.lateral_offset_m or 0.0}
+
+
+#: The behaviours whose fields are resolved into other request fields, in the order they are resolved (the first
+#: refusal wins): behaviour name -> its resolver. The fields of the other behaviours reach the request as they are,
+#: where it has a field of the same name (:func:`_resolved`); speeds come from the speed rules (:func:`target_speed`).
+RESOLVERS: tuple[tuple[str, Resolver], ...] = (
+    ("follow", _follow_fields), ("stop", _stop_fields), ("timing", _timing_fields), ("lateral_offset", _offset_fields),
+)
+_RESOLVED = {name for name, _ in RESOLVERS}
+_DECLARED: dict[str, BehaviourDecl] = {d.name: d for d in BEHAVIOURS}
+
+
+def copied_fields(kind: AgentKind, request: type[_Common]) -> tuple[str, ...]:
+    """The ``Behaviour`` fields that reach a ``request`` of an agent of ``kind`` as they are: the fields of the
+    behaviours it may do, not resolved by :data:`RESOLVERS`, that the request has a field of the same name for."""
+    names = {f.name for f in dataclasses.fields(request)}
+    return tuple(f for d in BEHAVIOURS if _may_do(d, kind) and d.name not in _RESOLVED for f in d.fields
+                 if f in names)
+
+
+def _resolved(behaviour: Behaviour, kind: AgentKind, request: type[_Common], g: _Grounded) -> dict[str, Any]:
+    """The request fields of ``behaviour`` for an agent of ``kind``: the :data:`RESOLVERS` of the behaviours it may
+    do, then the :func:`copied_fields`."""
+    out: dict[str, Any] = {}
+    for name, resolve in RESOLVERS:
+        if _may_do(_DECLARED[name], kind):
+            out.update(resolve(behaviour, g))
+    out.update({f: getattr(behaviour, f) for f in copied_fields(kind, request)})
+    return out

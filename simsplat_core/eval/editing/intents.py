@@ -10,6 +10,7 @@ grounding.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from simsplat_core.editing.commands import Behaviour, EditCommand, EditProgram, TargetRef
@@ -86,16 +87,21 @@ class MotionIntent:
     gait: str | None = None
 
     def behaviour(self) -> Behaviour:
-        """The ``commands.Behaviour`` of this intent."""
-        fields: dict[str, object] = {
-            "longitudinal": self.longitudinal, "reverse": self.reverse, "lane_change": self.lane_change,
-            "turn": self.turn, "delay_s": self.delay_s, "cross_street": self.cross_street or self.jaywalk,
-            "jaywalk": self.jaywalk, "gait": self.gait}
+        """The ``commands.Behaviour`` of this intent: its fields named as ``Behaviour``'s are taken as they are
+        (:data:`_AS_IN_BEHAVIOUR`; a jaywalk is a crossing, ``Behaviour`` sets ``cross_street``), ``speed`` as
+        worded and ``stop`` with where and by when."""
+        fields: dict[str, object] = {name: getattr(self, name) for name in _AS_IN_BEHAVIOUR}
         if self.speed is not None:
-            fields["speed"] = {"mode": self.speed.mode, "value": self.speed.value, "unit": self.speed.unit}
+            fields["speed"] = dataclasses.asdict(self.speed)
         if self.stop:
             fields["stop"] = {"before": self.stop_before, "at_time_s": self.stop_by_s}
         return Behaviour.model_validate(fields)
+
+
+#: The ``MotionIntent`` fields that are ``Behaviour`` fields of the same name and meaning (not ``speed``, worded
+#: differently, nor ``stop``, a flag here).
+_AS_IN_BEHAVIOUR: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(MotionIntent)
+                                          if f.name in Behaviour.model_fields and f.name not in ("speed", "stop"))
 
 
 @dataclass(frozen=True)

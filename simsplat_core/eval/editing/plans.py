@@ -579,76 +579,190 @@ def _room_behind(truth: SceneTruth, agent: Agent, metres: float = 8.0) -> bool:
     return True
 
 
-def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:  # noqa: C901 -- prompt table: one guarded draft per vehicle manoeuvre
-    out: list[Draft] = []
-    for agent, phrase in _named(truth, rng, ("vehicle",)):
-        oid, v0, label = agent.object_id, _speed0(agent), _label(truth, agent.object_id)
-        steady = float(np.std(agent.traj["speed"])) < 0.3
-        moving = v0 >= 3.0
-        slot = {"T": phrase()}
-        own, s0 = agent.motion.path, float(agent.traj["s"][0])
+#: Drafts of one kind, before the kind is attached: ``(intent, slots)`` pairs.
+Drafted = list[tuple[EditIntent, dict[str, str]]]
 
-        def clear(v1: float, _own: Path = own, _s0: float = s0, _v0: float = v0, _a: Agent = agent) -> bool:
-            """Driving its own path at ``v1`` (from ``v0``) stays clear of traffic: faster it may run into the car
-            ahead (or come closer to it than the editor's following gap), slower it may meet crossing traffic it
-            passed before."""
-            return _clear_run(truth, _own, _s0, _v0, v1, _a.size, _a.object_id, keep_gap=v1 > _v0)
 
-        if moving and label in _CRUISING:
-            unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))
-            delta = float(rng.uniform(2.5, 5.5)) * (1 if rng.random() < 0.5 or v0 < 6.5 else -1)
-            words, value, mps = speed_words(v0 + delta, unit, rng)
-            if abs(mps - v0) >= 2.0 and mps >= 3.0 and clear(mps):
-                out.append(Draft("vehicle_speed_abs", EditIntent("modify", (oid,), motion=MotionIntent(
-                    speed_mps=mps, speed=SpeedWords("absolute", value, unit))), {**slot, "v": words}))
-        if moving and steady and label in _CRUISING:
-            rel, mode, value, unit = VEHICLE_RELATIVE_SPEEDS[int(rng.integers(len(VEHICLE_RELATIVE_SPEEDS)))]
-            target = v0 * value if mode == "factor" else v0 + value * SPEED_UNITS[unit]
-            if 1.5 <= target <= 17.0 and abs(target - v0) <= 7.5 and clear(target):
-                out.append(Draft("vehicle_speed_rel", EditIntent("modify", (oid,), motion=MotionIntent(
-                    speed_mps=target, speed=SpeedWords(mode, value, unit))), {**slot, "rel": rel}))
-        if moving and label not in (voc.STOPPING, voc.SLOWING_DOWN):
-            if _crosswalk_stop_room(truth, agent):
-                out.append(Draft("vehicle_stop_crosswalk", EditIntent(
-                    "modify", (oid,), motion=MotionIntent(stop=True, stop_before="crosswalk")), slot))
-            if v0 / COMFORT_DECEL <= _span(truth) - 1.0:  # a comfortable stop ends within the log
-                out.append(Draft("vehicle_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)),
-                                 slot))
-            by = float(pick(rng, ("2", "2.5", "3")))
-            if v0 / by <= 4.5:
-                out.append(Draft("vehicle_stop_by", EditIntent("modify", (oid,), motion=MotionIntent(
-                    stop=True, stop_by_s=by)), {**slot, "t": seconds_phrase(by, rng)}))
-            out.append(Draft("vehicle_brake_hard", EditIntent("modify", (oid,), motion=MotionIntent(
-                longitudinal="brake_hard")), slot))
-            out.append(Draft("vehicle_decelerate", EditIntent("modify", (oid,), motion=MotionIntent(
-                longitudinal="decelerate")), slot))
-        if moving and label not in (voc.SPEEDING_UP, *_TURNING) and v0 <= 12.0 and clear(v0 + 3.0):
-            out.append(Draft("vehicle_accelerate", EditIntent("modify", (oid,), motion=MotionIntent(
-                longitudinal="accelerate")), slot))
-        if label in _STATIONARY and _room_behind(truth, agent):
-            out.append(Draft("vehicle_reverse", EditIntent("modify", (oid,), motion=MotionIntent(reverse=True)), slot))
-        if label not in (voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT, *_TURNING):
-            for side in ("left", "right"):
-                width = truth.layout.lane_w_h * (1 if side == "left" else -1)
-                if _lane_change_room(truth, agent, side) and _clear_run(truth, own, s0, v0, v0, agent.size, oid,
-                                                                          lateral=width):
-                    out.append(Draft("vehicle_lane_change", EditIntent("modify", (oid,), motion=MotionIntent(
-                        lane_change=side)), {**slot, "side": side}))
-        for turn in ("left", "right"):
-            if label != f"turning_{turn}" and _turn_reachable(truth, agent, turn) and _route_clear(truth, agent, turn):
-                out.append(Draft("vehicle_turn", EditIntent("modify", (oid,), motion=MotionIntent(turn=turn)),
-                                 {**slot, "side": turn}))
-        if label in _TURNING and _turn_reachable(truth, agent, "straight") and _route_clear(truth, agent, "straight"):
-            out.append(Draft("vehicle_straight", EditIntent("modify", (oid,), motion=MotionIntent(turn="straight")),
-                             slot))
-        if moving:
-            delay = float(pick(rng, ("1", "1.5", "2")))
-            if _delay_clear(truth, agent, delay):
-                out.append(Draft("vehicle_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
-                                 {**slot, "t": seconds_phrase(delay, rng)}))
-        asset, words = _vehicle_asset(pools, rng, avoid=(agent.subtype, agent.appearance["color"]))
-        out.append(Draft("vehicle_replace", EditIntent("replace", (oid,), asset=asset), {**slot, "A": words}))
+@dataclass(frozen=True)
+class _Subject:
+    """A named agent the drafters write prompts about: the scene, the agent, its namer and the slots its modify
+    drafts share (``{"T": its words}``, drawn once per agent; empty for the infeasible drafters, which name it
+    themselves)."""
+
+    truth: SceneTruth
+    agent: Agent
+    namer: _Namer
+    slot: dict[str, str]
+
+    @property
+    def oid(self) -> str:
+        return self.agent.object_id
+
+    @property
+    def v0(self) -> float:
+        """Speed at the first frame, m/s."""
+        return _speed0(self.agent)
+
+    @property
+    def label(self) -> str | None:
+        """The auto-labeller's motion class of the agent's log."""
+        return _label(self.truth, self.agent.object_id)
+
+    def modify(self, motion: MotionIntent, **slots: str) -> Drafted:
+        """One draft modifying the agent to ``motion``, with the shared slots and ``slots``."""
+        return [(EditIntent("modify", (self.oid,), motion=motion), {**self.slot, **slots})]
+
+
+#: A drafter of one intent kind: ``(subject, pools, rng) ->`` its ``(intent, slots)`` drafts about the subject (none
+#: when the subject's state does not suit the kind). Drafters draw from ``rng`` in their table's order.
+Drafter = Callable[[_Subject, AssetPools, np.random.Generator], Drafted]
+
+
+def _moving(s: _Subject) -> bool:
+    return s.v0 >= 3.0
+
+
+def _clear_own(s: _Subject, v1: float) -> bool:
+    """Driving its own path at ``v1`` (from its speed) stays clear of traffic: faster it may run into the car ahead
+    (or come closer to it than the editor's following gap), slower it may meet crossing traffic it passed before."""
+    a = s.agent
+    return _clear_run(s.truth, a.motion.path, float(a.traj["s"][0]), s.v0, v1, a.size, a.object_id, keep_gap=v1 > s.v0)
+
+
+def _vehicle_speed_abs(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if not (_moving(s) and s.label in _CRUISING):
+        return []
+    v0 = s.v0
+    unit = pick(rng, ("km/h", "m/s", "mph", "km/h"))
+    delta = float(rng.uniform(2.5, 5.5)) * (1 if rng.random() < 0.5 or v0 < 6.5 else -1)
+    words, value, mps = speed_words(v0 + delta, unit, rng)
+    if abs(mps - v0) >= 2.0 and mps >= 3.0 and _clear_own(s, mps):
+        return s.modify(MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit)), v=words)
+    return []
+
+
+def _vehicle_speed_rel(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    steady = float(np.std(s.agent.traj["speed"])) < 0.3
+    if not (_moving(s) and steady and s.label in _CRUISING):
+        return []
+    v0 = s.v0
+    rel, mode, value, unit = VEHICLE_RELATIVE_SPEEDS[int(rng.integers(len(VEHICLE_RELATIVE_SPEEDS)))]
+    target = v0 * value if mode == "factor" else v0 + value * SPEED_UNITS[unit]
+    if 1.5 <= target <= 17.0 and abs(target - v0) <= 7.5 and _clear_own(s, target):
+        return s.modify(MotionIntent(speed_mps=target, speed=SpeedWords(mode, value, unit)), rel=rel)
+    return []
+
+
+def _may_slow(s: _Subject) -> bool:
+    """Moving, and not slowing down or stopping already."""
+    return _moving(s) and s.label not in (voc.STOPPING, voc.SLOWING_DOWN)
+
+
+def _vehicle_stop_crosswalk(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if _may_slow(s) and _crosswalk_stop_room(s.truth, s.agent):
+        return s.modify(MotionIntent(stop=True, stop_before="crosswalk"))
+    return []
+
+
+def _vehicle_stop(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if _may_slow(s) and s.v0 / COMFORT_DECEL <= _span(s.truth) - 1.0:  # a comfortable stop ends within the log
+        return s.modify(MotionIntent(stop=True))
+    return []
+
+
+def _vehicle_stop_by(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if not _may_slow(s):
+        return []
+    by = float(pick(rng, ("2", "2.5", "3")))
+    if s.v0 / by <= 4.5:
+        return s.modify(MotionIntent(stop=True, stop_by_s=by), t=seconds_phrase(by, rng))
+    return []
+
+
+def _vehicle_brake_hard(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    return s.modify(MotionIntent(longitudinal="brake_hard")) if _may_slow(s) else []
+
+
+def _vehicle_decelerate(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    return s.modify(MotionIntent(longitudinal="decelerate")) if _may_slow(s) else []
+
+
+def _vehicle_accelerate(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if _moving(s) and s.label not in (voc.SPEEDING_UP, *_TURNING) and s.v0 <= 12.0 and _clear_own(s, s.v0 + 3.0):
+        return s.modify(MotionIntent(longitudinal="accelerate"))
+    return []
+
+
+def _vehicle_reverse(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if s.label in _STATIONARY and _room_behind(s.truth, s.agent):
+        return s.modify(MotionIntent(reverse=True))
+    return []
+
+
+def _vehicle_lane_change(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if s.label in (voc.CHANGING_LANE_LEFT, voc.CHANGING_LANE_RIGHT, *_TURNING):
+        return []
+    a, out = s.agent, []
+    for side in ("left", "right"):
+        width = s.truth.layout.lane_w_h * (1 if side == "left" else -1)
+        if _lane_change_room(s.truth, a, side) and _clear_run(s.truth, a.motion.path, float(a.traj["s"][0]), s.v0,
+                                                              s.v0, a.size, s.oid, lateral=width):
+            out += s.modify(MotionIntent(lane_change=side), side=side)
     return out
+
+
+def _vehicle_turn(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    out = []
+    for turn in ("left", "right"):
+        if s.label != f"turning_{turn}" and _turn_reachable(s.truth, s.agent, turn) and _route_clear(s.truth, s.agent,
+                                                                                                     turn):
+            out += s.modify(MotionIntent(turn=turn), side=turn)
+    return out
+
+
+def _vehicle_straight(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if s.label in _TURNING and _turn_reachable(s.truth, s.agent, "straight") and _route_clear(s.truth, s.agent,
+                                                                                              "straight"):
+        return s.modify(MotionIntent(turn="straight"))
+    return []
+
+
+def _vehicle_delay(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if not _moving(s):
+        return []
+    delay = float(pick(rng, ("1", "1.5", "2")))
+    if _delay_clear(s.truth, s.agent, delay):
+        return s.modify(MotionIntent(delay_s=delay), t=seconds_phrase(delay, rng))
+    return []
+
+
+def _vehicle_replace(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    asset, words = _vehicle_asset(pools, rng, avoid=(s.agent.subtype, s.agent.appearance["color"]))
+    return [(EditIntent("replace", (s.oid,), asset=asset), {**s.slot, "A": words})]
+
+
+#: The modify_vehicle drafters, by intent kind, in the order they run for each named vehicle.
+VEHICLE_DRAFTERS: tuple[tuple[str, Drafter], ...] = (
+    ("vehicle_speed_abs", _vehicle_speed_abs), ("vehicle_speed_rel", _vehicle_speed_rel),
+    ("vehicle_stop_crosswalk", _vehicle_stop_crosswalk), ("vehicle_stop", _vehicle_stop),
+    ("vehicle_stop_by", _vehicle_stop_by), ("vehicle_brake_hard", _vehicle_brake_hard),
+    ("vehicle_decelerate", _vehicle_decelerate), ("vehicle_accelerate", _vehicle_accelerate),
+    ("vehicle_reverse", _vehicle_reverse), ("vehicle_lane_change", _vehicle_lane_change),
+    ("vehicle_turn", _vehicle_turn), ("vehicle_straight", _vehicle_straight), ("vehicle_delay", _vehicle_delay),
+    ("vehicle_replace", _vehicle_replace),
+)
+
+
+def _drafts(subject: _Subject, drafters: tuple[tuple[str, Drafter], ...], pools: AssetPools,
+            rng: np.random.Generator) -> list[Draft]:
+    """The drafts of every drafter about ``subject``, in the drafters' order, each of its drafter's kind."""
+    return [Draft(kind, intent, slots) for kind, drafter in drafters for intent, slots in drafter(subject, pools, rng)]
+
+
+def plan_modify_vehicle(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
+    """Every :data:`VEHICLE_DRAFTERS` draft about every named vehicle."""
+    return [d for agent, namer in _named(truth, rng, ("vehicle",))
+            for d in _drafts(_Subject(truth, agent, namer, {"T": namer()}), VEHICLE_DRAFTERS, pools, rng)]
 
 
 def _near_kerb(truth: SceneTruth, agent: Agent) -> tuple[bool, bool]:
@@ -663,41 +777,72 @@ def _near_kerb(truth: SceneTruth, agent: Agent) -> tuple[bool, bool]:
     return near and off <= 3.0, near and off >= 3.0
 
 
+def _walking_throughout(s: _Subject) -> bool:
+    return s.v0 >= 0.8 and float(np.mean(s.agent.traj["speed"] >= 0.8)) >= 0.6
+
+
+def _pedestrian_speed_abs(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if not _walking_throughout(s):
+        return []
+    target = float(pick(rng, ("0.6", "0.8", "2", "2.5")))
+    unit = "km/h" if rng.random() < 0.3 else "m/s"
+    if unit == "km/h":
+        kmh = float(pick(rng, ("3", "7", "8")))
+        words, value, mps = f"{kmh:g} km/h", kmh, kmh / 3.6
+    else:
+        words, value, mps = speed_words(target, "m/s", rng)
+    if abs(mps - s.v0) >= 0.4:
+        return s.modify(MotionIntent(speed_mps=mps, speed=SpeedWords("absolute", value, unit)), v=words)
+    return []
+
+
+def _pedestrian_speed_rel(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if not _walking_throughout(s):
+        return []
+    rel, mode, factor, unit = PEDESTRIAN_RELATIVE_SPEEDS[int(rng.integers(len(PEDESTRIAN_RELATIVE_SPEEDS)))]
+    return s.modify(MotionIntent(speed_mps=s.v0 * factor, speed=SpeedWords(mode, factor, unit)), rel=rel)
+
+
+def _pedestrian_run(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    return s.modify(MotionIntent(gait="run")) if _walking_throughout(s) else []
+
+
+def _pedestrian_stop(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    return s.modify(MotionIntent(stop=True)) if _walking_throughout(s) else []
+
+
+def _pedestrian_delay(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    if not _walking_throughout(s):
+        return []
+    delay = float(pick(rng, ("1", "1.5", "2")))
+    return s.modify(MotionIntent(delay_s=delay), t=seconds_phrase(delay, rng))
+
+
+def _kerb_side(s: _Subject) -> tuple[bool, bool]:
+    """:func:`_near_kerb` of a standing or walking subject (``(False, False)`` for others)."""
+    return _near_kerb(s.truth, s.agent) if s.label in (voc.STANDING, voc.WALKING_ALONG) else (False, False)
+
+
+def _pedestrian_cross(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    return s.modify(MotionIntent(cross_street=True)) if _kerb_side(s)[0] else []
+
+
+def _pedestrian_jaywalk(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    return s.modify(MotionIntent(cross_street=True, jaywalk=True)) if _kerb_side(s)[1] else []
+
+
+#: The modify_pedestrian drafters, by intent kind, in the order they run for each named pedestrian.
+PEDESTRIAN_DRAFTERS: tuple[tuple[str, Drafter], ...] = (
+    ("pedestrian_speed_abs", _pedestrian_speed_abs), ("pedestrian_speed_rel", _pedestrian_speed_rel),
+    ("pedestrian_run", _pedestrian_run), ("pedestrian_stop", _pedestrian_stop), ("pedestrian_delay", _pedestrian_delay),
+    ("pedestrian_cross", _pedestrian_cross), ("pedestrian_jaywalk", _pedestrian_jaywalk),
+)
+
+
 def plan_modify_pedestrian(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
-    del pools
-    out: list[Draft] = []
-    for agent, phrase in _named(truth, rng, ("pedestrian",)):
-        oid, v0, label = agent.object_id, _speed0(agent), _label(truth, agent.object_id)
-        walking_throughout = v0 >= 0.8 and float(np.mean(agent.traj["speed"] >= 0.8)) >= 0.6
-        slot = {"T": phrase()}
-        if walking_throughout:
-            target = float(pick(rng, ("0.6", "0.8", "2", "2.5")))
-            unit = "km/h" if rng.random() < 0.3 else "m/s"
-            if unit == "km/h":
-                kmh = float(pick(rng, ("3", "7", "8")))
-                words, value, mps = f"{kmh:g} km/h", kmh, kmh / 3.6
-            else:
-                words, value, mps = speed_words(target, "m/s", rng)
-            if abs(mps - v0) >= 0.4:
-                out.append(Draft("pedestrian_speed_abs", EditIntent("modify", (oid,), motion=MotionIntent(
-                    speed_mps=mps, speed=SpeedWords("absolute", value, unit))), {**slot, "v": words}))
-            rel, mode, factor, unit = PEDESTRIAN_RELATIVE_SPEEDS[int(rng.integers(len(PEDESTRIAN_RELATIVE_SPEEDS)))]
-            out.append(Draft("pedestrian_speed_rel", EditIntent("modify", (oid,), motion=MotionIntent(
-                speed_mps=v0 * factor, speed=SpeedWords(mode, factor, unit))), {**slot, "rel": rel}))
-            out.append(Draft("pedestrian_run", EditIntent("modify", (oid,), motion=MotionIntent(gait="run")), slot))
-            out.append(Draft("pedestrian_stop", EditIntent("modify", (oid,), motion=MotionIntent(stop=True)), slot))
-            delay = float(pick(rng, ("1", "1.5", "2")))
-            out.append(Draft("pedestrian_delay", EditIntent("modify", (oid,), motion=MotionIntent(delay_s=delay)),
-                             {**slot, "t": seconds_phrase(delay, rng)}))
-        if label in (voc.STANDING, voc.WALKING_ALONG):
-            by_crosswalk, away = _near_kerb(truth, agent)
-            if by_crosswalk:
-                out.append(Draft("pedestrian_cross", EditIntent("modify", (oid,), motion=MotionIntent(
-                    cross_street=True)), slot))
-            if away:
-                out.append(Draft("pedestrian_jaywalk", EditIntent("modify", (oid,), motion=MotionIntent(
-                    cross_street=True, jaywalk=True)), slot))
-    return out
+    """Every :data:`PEDESTRIAN_DRAFTERS` draft about every named pedestrian."""
+    return [d for agent, namer in _named(truth, rng, ("pedestrian",))
+            for d in _drafts(_Subject(truth, agent, namer, {"T": namer()}), PEDESTRIAN_DRAFTERS, pools, rng)]
 
 
 # ---------------------------------------------------------------------------------------------- remove
@@ -712,6 +857,34 @@ def plan_remove(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) 
 
 
 # ---------------------------------------------------------------------------------------------- infeasible
+def _turn_without_intersection(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    """A turn for a vehicle driving away from the junction (refused: no intersection ahead)."""
+    pos = s.truth.road_position(s.agent.traj["xy"][0], float(s.agent.traj["heading"][0]))
+    if pos.arm is None or pos.inbound is not False or pos.along <= s.truth.layout.stopline_s(pos.arm):
+        return []
+    side = pick(rng, ("left", "right"))
+    return [(EditIntent("modify", (s.oid,), motion=MotionIntent(turn=side), expected_refusals=("infeasible_motion",)),
+             {"T": s.namer(), "side": side})]
+
+
+def _pedestrian_lane_change(s: _Subject, pools: AssetPools, rng: np.random.Generator) -> Drafted:
+    """A lane change for a pedestrian (refused: the wrong kind of agent)."""
+    side = pick(rng, ("left", "right"))
+    return [(EditIntent("modify", (s.oid,), motion=MotionIntent(lane_change=side),
+                        expected_refusals=("wrong_category", "infeasible_motion")), {"T": s.namer(), "side": side})]
+
+
+#: The infeasible drafters about named vehicles / pedestrians, by intent kind.
+INFEASIBLE_VEHICLE_DRAFTERS: tuple[tuple[str, Drafter], ...] = (("turn_no_intersection", _turn_without_intersection),)
+INFEASIBLE_PEDESTRIAN_DRAFTERS: tuple[tuple[str, Drafter], ...] = (
+    ("pedestrian_lane_change", _pedestrian_lane_change),
+)
+#: Every drafter about a named agent, by intent kind: the ``prompt_forms`` kinds the behaviours declare
+#: (``registry.PROMPT_FORMS``) and replacing a vehicle.
+AGENT_DRAFTERS: dict[str, Drafter] = dict((*VEHICLE_DRAFTERS, *PEDESTRIAN_DRAFTERS, *INFEASIBLE_VEHICLE_DRAFTERS,
+                                           *INFEASIBLE_PEDESTRIAN_DRAFTERS))
+
+
 def plan_infeasible(truth: SceneTruth, pools: AssetPools, rng: np.random.Generator) -> list[Draft]:
     out: list[Draft] = []
     for _ in range(3):
@@ -728,18 +901,10 @@ def plan_infeasible(truth: SceneTruth, pools: AssetPools, rng: np.random.Generat
         out.append(Draft("car_on_sidewalk", EditIntent(
             "insert", asset=asset, placement=PlacementIntent("on_sidewalk", EGO, distance),
             expected_refusals=("infeasible_placement",)), {"A": words, "d": distance_phrase(distance, rng)}))
-    for agent, phrase in _named(truth, rng, ("vehicle",)):
-        pos = truth.road_position(agent.traj["xy"][0], float(agent.traj["heading"][0]))
-        if pos.arm is not None and pos.inbound is False and pos.along > truth.layout.stopline_s(pos.arm):
-            side = pick(rng, ("left", "right"))
-            out.append(Draft("turn_no_intersection", EditIntent(
-                "modify", (agent.object_id,), motion=MotionIntent(turn=side),
-                expected_refusals=("infeasible_motion",)), {"T": phrase(), "side": side}))
-    for agent, phrase in _named(truth, rng, ("pedestrian",)):
-        side = pick(rng, ("left", "right"))
-        out.append(Draft("pedestrian_lane_change", EditIntent(
-            "modify", (agent.object_id,), motion=MotionIntent(lane_change=side),
-            expected_refusals=("wrong_category", "infeasible_motion")), {"T": phrase(), "side": side}))
+    for category, drafters in (("vehicle", INFEASIBLE_VEHICLE_DRAFTERS),
+                               ("pedestrian", INFEASIBLE_PEDESTRIAN_DRAFTERS)):
+        out += [d for agent, namer in _named(truth, rng, (category,))
+                for d in _drafts(_Subject(truth, agent, namer, {}), drafters, pools, rng)]
     for agent, phrase in _named(truth, rng, ("static", "sign")):
         words, value, mps = speed_words(8.0, "km/h", rng)
         out.append(Draft("static_motion", EditIntent(
@@ -763,4 +928,5 @@ PLANNERS: dict[str, Planner] = {
     "infeasible": plan_infeasible,
 }
 
-__all__ = ["AssetPools", "Draft", "PLANNERS", "STATIC_ASSETS"]
+__all__ = ["AGENT_DRAFTERS", "AssetPools", "Draft", "Drafter", "INFEASIBLE_PEDESTRIAN_DRAFTERS",
+           "INFEASIBLE_VEHICLE_DRAFTERS", "PEDESTRIAN_DRAFTERS", "PLANNERS", "STATIC_ASSETS", "VEHICLE_DRAFTERS"]

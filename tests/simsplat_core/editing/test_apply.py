@@ -423,7 +423,7 @@ def test_accelerate_ends_faster_or_is_refused_naming_the_traffic(ctx):
     """"Speed up" without a speed asks ``ACCELERATE_DELTA_MPS`` more than the start speed: every vehicle either
     ends clearly faster than it started, or is refused naming the traffic ahead (never carried out ending slower,
     as when it braked for traffic its log passed, or took a logged curve slower than the log)."""
-    from simsplat_core.editing.motion.requests import ACCELERATE_DELTA_MPS
+    from simsplat_core.editing.behaviours.longitudinal import ACCELERATE_DELTA_MPS
 
     outcomes = {"faster": 0, "refused": 0}
     for oid, category in zip(ctx.states.object_ids, ctx.states.categories, strict=True):

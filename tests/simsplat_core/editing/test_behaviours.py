@@ -13,6 +13,7 @@ from simsplat_core.editing.behaviours.registry import (
     INTENT_FIELDS,
     LABEL_CHECKED,
     PARSE_ORDER,
+    SPEED_ORDER,
 )
 from simsplat_core.editing.behaviours.turn import TURN
 from simsplat_core.editing.parse.behaviour import parse_predicate
@@ -64,3 +65,9 @@ def test_a_label_check_must_read_one_of_its_behaviours_fields() -> None:
     with pytest.raises(ValueError, match="label check reads 'turn'"):
         BehaviourDecl("u_turn", fields=("u_turn",), intents=(Intent("u_turn", fields={"u_turn": True}),),
                       label_check=LabelCheck("turn", lambda asked, motion: True, lambda asked: ""))
+
+
+def test_speed_order_lists_every_speed_rule_once() -> None:
+    with_rule = [b.name for b in BEHAVIOURS if b.speed_rule is not None]
+    assert sorted(b.name for b in SPEED_ORDER) == sorted(with_rule)
+    assert all(b.speed_rule is not None for b in SPEED_ORDER)

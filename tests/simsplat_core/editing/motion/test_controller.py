@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from simsplat_core.editing.behaviours.gait import RUN_MPS
 from simsplat_core.editing.commands import Behaviour, SpeedSpec, StopSpec
 from simsplat_core.editing.motion.controller import PlannedTrajectory, plan_pedestrian, plan_vehicle
 from simsplat_core.editing.motion.requests import (
-    RUN_MPS,
     LogTrajectory,
     OtherAgent,
     PedestrianMotionRequest,
