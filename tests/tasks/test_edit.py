@@ -15,15 +15,8 @@ import torch
 from typer.testing import CliRunner
 
 from flows.cli import app
-from simsplat_core.editing.assets.bank import AssetBank
-from simsplat_core.editing.assets.procedural import procedural_asset
-from simsplat_core.eval.grounding.gt_scene import language_scene_from_log
-from simsplat_core.language.text import default_text_encoder
-from simsplat_core.scene import InitConfig
-from simsplat_core.scene.init import initial_graph
 from simsplat_core.world import WorldConfig, generate_log
-from storage import ArtifactStore, read_exr_header, write_scene, write_scene_log
-from storage.assets import write_asset_bank
+from storage import ArtifactStore, read_exr_header
 from storage.edits import (
     edit_dir,
     list_edits,
@@ -31,8 +24,7 @@ from storage.edits import (
     read_edit_records,
     read_trajectories,
 )
-from storage.language_scenes import write_language_scene
-from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
+from tests.small_store import write_small_store
 
 runner = CliRunner()
 SCENE_HASH = "5ce4e0000000000000000000000000000000000000000000000000000000beef"
@@ -67,21 +59,7 @@ def target(world) -> Target:
 def store_root(tmp_path_factory, world) -> str:
     """Seed 0 of the world over 6 frames, 64 x 48 cameras, no pixels."""
     root = tmp_path_factory.mktemp("edit_store")
-    store = ArtifactStore(str(root))
-    log = world
-    write_scene_log(store, log)
-    graph = initial_graph(log, InitConfig(), set(range(FRAMES)))
-    records = graph.to_records(f"{log.seq_id}/{SCENE_HASH}")
-    write_scene(store, log.seq_id, SCENE_HASH, records, {})
-    language = language_scene_from_log(log, default_text_encoder(), appearance="ground_truth")
-    node_of = {n.object_id: n.node_id for n in graph.object_nodes}
-    nodes = tuple(sorted((dataclasses.replace(n, node_id=node_of[n.object_id]) for n in language.nodes),
-                         key=lambda n: n.node_id))
-    write_language_scene(store, MODEL_HASH, LANGUAGE_HASH,
-                         dataclasses.replace(language, nodes=nodes, scene_hash=SCENE_HASH), records)
-    bank = AssetBank.from_assets([mesh_vehicle("t.yellow-sedan", color="yellow"),
-                                  procedural_asset("traffic cone", "orange")])
-    write_asset_bank(store, bank)
+    write_small_store(str(root), world, scene_hash=SCENE_HASH, model_hash=MODEL_HASH, language_hash=LANGUAGE_HASH)
     return str(root)
 
 

@@ -60,7 +60,7 @@ def serve(store_root: str, **kw: Any) -> ServedDashboard:
     return ServedDashboard(DashboardSettings(store_root, port=_free_port(), **kw))
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def dashboard(dashboard_store: DashboardStore) -> Iterator[ServedDashboard]:
     served = serve(dashboard_store.root, refresh_s=0.5)
     yield served
@@ -75,8 +75,10 @@ def chromium_path() -> str | None:
     return next((p for p in map(shutil.which, CHROMIUM_NAMES) if p), None)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="package")
 def browser() -> Iterator[Any]:
+    """Chromium, for this package's tests only: playwright's sync API keeps an asyncio loop running on the main
+    thread while it is open, and Prefect would then take every later test for async code."""
     path = chromium_path()
     if path is None:
         if os.environ.get("CI"):

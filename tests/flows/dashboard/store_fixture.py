@@ -8,24 +8,17 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from simsplat_core.editing.assets.bank import AssetBank
-from simsplat_core.editing.assets.procedural import procedural_asset
-from simsplat_core.eval.grounding.gt_scene import language_scene_from_log
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.mining.rule_client import RuleBasedVLMClient
 from simsplat_core.mining.rule_judge import JudgeConfig
-from simsplat_core.scene import InitConfig
-from simsplat_core.scene.init import initial_graph
 from simsplat_core.world import WorldConfig, generate_log
-from storage import ArtifactStore, write_scene, write_scene_log
-from storage.assets import write_asset_bank
-from storage.language_scenes import write_language_scene
+from storage import ArtifactStore
 from tasks.export import ExportConfig, export_dataset
 from tasks.export_inputs import ExportFilters
 from tasks.mine import MiningSummary, mine_sequence_task
 from tests.flows.dashboard.evaluation_fixture import add_evaluation_runs
 from tests.flows.dashboard.run_records_fixture import add_run_records
-from tests.simsplat_core.editing.assets.fixtures import mesh_vehicle
+from tests.small_store import write_small_store
 
 SEQ = "synth-000000"
 MINING_RUN = "mine-dash"
@@ -54,18 +47,7 @@ def build_dashboard_store(root: Path) -> DashboardStore:
     """Build the store under ``root`` (module docstring); about half a minute on 2 cores."""
     store = ArtifactStore(str(root))
     log = generate_log(0, WorldConfig(num_frames=FRAMES, width=64, height=48))
-    write_scene_log(store, log)
-    graph = initial_graph(log, InitConfig(), set(range(FRAMES)))
-    records = graph.to_records(f"{log.seq_id}/{SCENE_HASH}")
-    write_scene(store, log.seq_id, SCENE_HASH, records, {})
-    language = language_scene_from_log(log, default_text_encoder(), appearance="ground_truth")
-    node_of = {n.object_id: n.node_id for n in graph.object_nodes}
-    nodes = tuple(sorted((dataclasses.replace(n, node_id=node_of[n.object_id]) for n in language.nodes),
-                         key=lambda n: n.node_id))
-    write_language_scene(store, MODEL_HASH, LANGUAGE_HASH,
-                         dataclasses.replace(language, nodes=nodes, scene_hash=SCENE_HASH), records)
-    write_asset_bank(store, AssetBank.from_assets([mesh_vehicle("t.yellow-sedan", color="yellow"),
-                                                   procedural_asset("traffic cone", "orange")]))
+    write_small_store(str(root), log, scene_hash=SCENE_HASH, model_hash=MODEL_HASH, language_hash=LANGUAGE_HASH)
     client = RuleBasedVLMClient(0, encoder=default_text_encoder(), judge_config=RELAXED)
     mining = mine_sequence_task.fn(str(root), SEQ, MINING_RUN, per_sequence=2, max_attempts=2, seed=0, client=client)
     export_dataset(str(root), None, dataclasses.replace(
