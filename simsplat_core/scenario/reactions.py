@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from simsplat_core.scenario import vocabulary as voc
 from simsplat_core.scenario.agents import AgentStates
 
 #: Centre distance (metres) from the log beyond which a refined agent counts as moved.
@@ -82,7 +83,7 @@ def _reaction(edited: AgentStates, log: AgentStates, k: int, j: int, path_offset
         return "detoured"
     mine, theirs = np.abs(edited.speed[k][both]), np.abs(log.speed[j][both])
     if mine.size and (theirs[mine < STOP_SPEED] >= STOP_SPEED).any():
-        return "stopped"
+        return voc.STOPPED
     if mine.size and mine.mean() < theirs.mean() - PACE_DELTA:
         return "slowed"
     if mine.size and mine.mean() > theirs.mean() + PACE_DELTA:
