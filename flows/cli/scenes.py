@@ -71,8 +71,9 @@ def run(
     alignment (motion aligner trained on every log + one queryable language scene per log; a log without
     images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K,
     scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/) and, with --export
-    DIR, their export as a dataset for planner training. With --landing DIR, new logs in DIR are ingested first
-    (see `simsplat run --help` and docs/usage.md)."""
+    DIR, their export as a dataset for planner training. With --landing DIR, the logs in DIR not yet ingested are
+    ingested first; one that fails to load is quarantined under STORE/landing/quarantine/ and not retried until
+    it changes."""
     from flows.pipeline import ExportPlan, MiningPlan, main_flow, reconstruction_config
     from tasks.answers import mining_as_dict
 
