@@ -26,6 +26,7 @@ from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_m
 from tasks.assets import BuiltBank, build_asset_bank
 from tasks.export import ExportConfig, ExportResult, export_dataset_task
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
+from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task
 from tasks.reconstruct import StoredScene, reconstruct_scene
@@ -88,6 +89,17 @@ def generate_logs(store_root: str, seeds: list[int], config: WorldConfig,
     logs = _gather(futures, "generate", run=run)
     _publish_logs_table(logs)
     return logs
+
+
+def land_logs(store_root: str, landing: str, run: StageRecorder = UNRECORDED) -> list[StoredLog]:
+    """Ingest the new logs of the landing location (``tasks.landing``: one task per log, a log that fails to load
+    quarantined with its reason); the logs stored now. Counted in the run as ``landed`` and ``quarantined``."""
+    plan = scan_landing(store_root, landing)
+    futures = [land_log.submit(store_root, log) for log in plan.new]
+    outcomes: list[LandingOutcome] = _gather(futures, "landing", label=lambda outcome: outcome.label)
+    stored = [o.stored for o in outcomes if o.stored is not None]
+    run.count(landed=len(stored), quarantined=len(outcomes) - len(stored) + len(plan.quarantined_known))
+    return stored
 
 
 def _report_stages(plans: list[LogStages], stages: tuple[str, ...] = STAGES) -> None:
@@ -368,6 +380,7 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
     run_id: str | None = None,
     mining: MiningPlan | None = None,
     export: ExportPlan | None = None,
+    landing: str | None = None,
 ) -> MainResult:
     """The main job over every log in the store: ``seeds`` synthetic logs generated first (none: only the
     stored ones, ingested real logs included), one reconstructed scene per log with camera images, language
@@ -388,13 +401,16 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
         mining: after alignment, mine every sequence with a reconstructed scene for scenarios (asset bank built
             first when missing; ``None``: no mining).
         export: after mining, export this run's accepted scenarios as a dataset (``None``: no export).
+        landing: a folder (path or ``file://`` URI) scanned first for new logs of any registered source
+            (``tasks.landing``: ingested once, a log that fails to load quarantined); ``None``: no scan.
 
     Raises:
-        MissingInputError: the store holds no log and ``seeds`` is empty.
+        MissingInputError: the store holds no log, ``seeds`` is empty and the landing location added none.
     """
     run_id = run_id or new_run_id("main")
     with recorded_run(store_root, run_id) as run:
         generated = generate_logs(store_root, seeds, config, run) if seeds else []
+        generated += land_logs(store_root, landing, run) if landing else []
         logs, plans = store_logs(store_root, generated)
         record_planned_skips(run, plans, generated, align=align, evaluate=evaluate)
         run.count(logs=len(logs))
@@ -510,15 +526,18 @@ def scheduled_main_flow(
     height: int = 160,
     runner: str = "ray",
     iterations: int | None = None,
+    landing: str | None = None,
 ) -> MainResult:
     """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
 
     A deployment cannot choose a task runner per run, so this parent flow picks it and runs
-    ``main_flow`` as a subflow. ``iterations`` overrides the reconstruction iteration count.
+    ``main_flow`` as a subflow. ``iterations`` overrides the reconstruction iteration count; ``landing`` is the
+    folder scanned for new logs first (see ``main_flow``).
     """
     from flows.runtime import RunnerKind, make_task_runner
 
     config = WorldConfig(num_frames=frames, width=width, height=height)
     task_runner = make_task_runner(RunnerKind(runner))
     seeds = list(range(seed, seed + sequences))
-    return main_flow.with_options(task_runner=task_runner)(store_root, seeds, config, reconstruction_config(iterations))
+    return main_flow.with_options(task_runner=task_runner)(store_root, seeds, config, reconstruction_config(iterations),
+                                                           landing=landing)

@@ -118,17 +118,50 @@ def ingest_real_log(store_root: str, source: str, path: str, image_scale: float 
         ValueError: ``image_scale != 1`` for a source without images to scale.
         CorruptLogError, FileNotFoundError: the loader's errors.
     """
+    started = time.perf_counter()
+    decoded = decode_real_log(source, path, image_scale)
+    return store_real_log(store_root, decoded, started)
+
+
+@dataclass(frozen=True)
+class DecodedLog:
+    """A real log decoded by its source's loader, not stored yet.
+
+    Attributes:
+        log: the decoded log.
+        source: the registered source that loaded it.
+        path: the file or folder it came from.
+        image_scale: the image scale it was decoded at.
+    """
+
+    log: SceneLog
+    source: str
+    path: str
+    image_scale: float
+
+
+def decode_real_log(source: str, path: str, image_scale: float = 1.0) -> DecodedLog:
+    """Decode ``path`` with the loader of ``source`` (``"auto"``: detected); see ``ingest_real_log``.
+
+    Raises:
+        UnknownLogSourceError, ValueError, CorruptLogError, FileNotFoundError: see ``ingest_real_log``.
+    """
     from simsplat_core.data.registry import load_log, resolve_source
 
-    started = time.perf_counter()
     chosen = resolve_source(source, path)
     options: dict[str, Any] = {"image_scale": image_scale} if "image_scale" in chosen.options else {}
     if not options and image_scale != 1.0:
         raise ValueError(f"log source {chosen.name!r} has no images to scale (image_scale {image_scale})")
-    log = load_log(chosen.name, Path(path), **options)
-    summary = summarize_log(log)
-    provenance = {"source_path": str(path), "image_scale": image_scale, "summary": summary.to_dict()}
-    written = write_scene_log(ArtifactStore(store_root), log, provenance=provenance)
+    return DecodedLog(load_log(chosen.name, Path(path), **options), chosen.name, str(path), image_scale)
+
+
+def store_real_log(store_root: str, decoded: DecodedLog, started: float) -> StoredLog:
+    """Write a decoded real log into the store (skipped when an identical log is there); ``started`` is the
+    ``time.perf_counter()`` when its decoding began (for the reported seconds)."""
+    summary = summarize_log(decoded.log)
+    provenance = {"source_path": decoded.path, "image_scale": decoded.image_scale, "summary": summary.to_dict()}
+    written = write_scene_log(ArtifactStore(store_root), decoded.log, provenance=provenance)
     seconds = time.perf_counter() - started
-    logger.info("%s: ingested from %s as %s (%d bytes, %.1f s)", log.seq_id, path, chosen.name, written.bytes, seconds)
+    logger.info("%s: ingested from %s as %s (%d bytes, %.1f s)", decoded.log.seq_id, decoded.path, decoded.source,
+                written.bytes, seconds)
     return StoredLog(summary, written.relpath, written.bytes, round(seconds, 3), written.skipped)

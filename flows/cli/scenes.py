@@ -62,13 +62,18 @@ def run(
     export: Annotated[str | None, typer.Option(help="With --mine: export the run's accepted scenarios as a dataset "
                                                "into EXPORT/<run_id>/ (WOMD shards, ScenarioNet, Parquet; see "
                                                "`simsplat export`).")] = None,
+    landing: Annotated[str | None, typer.Option(help="Landing folder (path or file:// URI) scanned first for new "
+                                                "logs of any registered source: each is ingested once, one that "
+                                                "fails to load is quarantined with its reason.")] = None,
 ) -> None:
     """Run the main job over every log in the store (ingested real logs included), after generating
     --sequences synthetic ones: one reconstructed scene per log with camera images, then language
     alignment (motion aligner trained on every log + one queryable language scene per log; a log without
     images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K,
     scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/) and, with --export
-    DIR, their export as a dataset for planner training."""
+    DIR, their export as a dataset for planner training. With --landing DIR, the logs in DIR not yet ingested are
+    ingested first; one that fails to load is quarantined under STORE/landing/quarantine/ and not retried until
+    it changes."""
     from flows.pipeline import ExportPlan, MiningPlan, main_flow, reconstruction_config
     from tasks.answers import mining_as_dict
 
@@ -77,12 +82,14 @@ def run(
     if export is not None and not mine:
         raise typer.BadParameter("--export exports mined scenarios: give --mine K too (or run `simsplat export`)",
                                  param_hint="--export")
-    if sequences == 0:
+    if landing is not None:
+        check_landing(landing)
+    elif sequences == 0:
         stored_sequences(store, param_hint="--sequences")
     result = run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                       config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
                       alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
-                      export=ExportPlan(out=export) if export is not None else None)
+                      export=ExportPlan(out=export) if export is not None else None, landing=landing)
     print_logs(result.logs)
     print_stages(result.stages)
     if result.scenes:
@@ -99,6 +106,16 @@ def run(
     if result.export is not None:
         print_export(result.export)
     print_artifacts(store)
+
+
+def check_landing(landing: str) -> None:
+    """Fail before the run when the landing location cannot be scanned (``tasks.landing.landing_folder``)."""
+    from tasks.landing import landing_folder
+
+    try:
+        landing_folder(landing)
+    except (ValueError, FileNotFoundError) as exc:
+        raise typer.BadParameter(str(exc), param_hint="--landing") from exc
 
 
 @commands.command("align")
