@@ -35,12 +35,14 @@ def run_flow(flow_fn: Any, runner: RunnerKind, workers: int | None, **params: An
 
     Tasks' step progress (e.g. reconstruction iterations) is drawn live for either runner: reports of tasks in
     this process (threads) through a listener, those of Ray workers relayed through a folder
-    (``flows.progress.RelayedSteps``).
+    (``flows.progress.RelayedSteps``). The Prefect server and Ray's processes end with this process even when it is
+    killed outright (``flows.lifetime``).
     """
+    from flows.lifetime import children_die_with_this_process
     from flows.progress import StepBars
     from flows.runtime import make_task_runner, prefect_api
 
-    with prefect_api(), StepBars(relay=runner == RunnerKind.ray):
+    with children_die_with_this_process(), prefect_api(), StepBars(relay=runner == RunnerKind.ray):
         return flow_fn.with_options(task_runner=make_task_runner(runner, workers))(**params)
 
 
