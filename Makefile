@@ -40,6 +40,7 @@ demo: $(STAMP)
 	$(VENV)/bin/simsplat edit --store $(STORE) --seq synth-000000 "add a yellow taxi in our lane 15 m ahead"
 
 test: $(STAMP) lint browser
+	$(VENV)/bin/simsplat deploy check
 	$(VENV)/bin/pytest -q
 
 lint: $(STAMP)

@@ -517,7 +517,7 @@ def reconstruct_flow(store_root: str, seq_ids: list[str], config: Reconstruction
 
 
 @flow(name="simsplat-scheduled-main")
-def scheduled_main_flow(
+def scheduled_main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the deployment's inputs
     store_root: str,
     sequences: int = 2,
     seed: int = 0,
@@ -527,17 +527,23 @@ def scheduled_main_flow(
     runner: str = "ray",
     iterations: int | None = None,
     landing: str | None = None,
+    mine: int = 0,
+    export: str | None = None,
 ) -> MainResult:
     """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
 
     A deployment cannot choose a task runner per run, so this parent flow picks it and runs
     ``main_flow`` as a subflow. ``iterations`` overrides the reconstruction iteration count; ``landing`` is the
-    folder scanned for new logs first (see ``main_flow``).
+    folder scanned for new logs first (see ``main_flow``); ``mine`` accepted scenarios are mined per sequence
+    (0: no mining; the rule-based client with ``seed``) and, with ``mine``, ``export`` is the folder the run's
+    accepted scenarios go in as a dataset (``ExportPlan.out``; ``None``: no export).
     """
     from flows.runtime import RunnerKind, make_task_runner
 
     config = WorldConfig(num_frames=frames, width=width, height=height)
     task_runner = make_task_runner(RunnerKind(runner))
     seeds = list(range(seed, seed + sequences))
+    mining = MiningPlan(mine, seed=seed) if mine else None
+    export_plan = ExportPlan(out=export) if export is not None and mining is not None else None
     return main_flow.with_options(task_runner=task_runner)(store_root, seeds, config, reconstruction_config(iterations),
-                                                           landing=landing)
+                                                           landing=landing, mining=mining, export=export_plan)

@@ -13,7 +13,7 @@ from typing import Annotated
 
 import typer
 
-from flows.cli import assets, dashboard, evaluate, explore, export, ingest, logs, recordings, scenarios, scenes
+from flows.cli import assets, dashboard, deploy, evaluate, explore, export, ingest, logs, recordings, scenarios, scenes
 
 # Our own loggers go to the Prefect UI too when they log inside a flow or task.
 os.environ.setdefault("PREFECT_LOGGING_EXTRA_LOGGERS", "simsplat_core,storage,tasks,flows")
@@ -33,6 +33,7 @@ GROUPS: tuple[tuple[typer.Typer, str | None], ...] = (
     (export.commands, None),  # export
     (dashboard.commands, None),  # dashboard
     (recordings.commands, None),  # export-rerun
+    (deploy.commands, "deploy"),  # deploy check
 )
 
 app = typer.Typer(help="SIMSplat scenario-mining pipeline.", no_args_is_help=True, add_completion=False)

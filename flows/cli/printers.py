@@ -339,3 +339,19 @@ def print_export(result: Any) -> None:
              f"{result.seconds.get('validate', 0.0):.1f}, write {result.seconds.get('write', 0.0):.1f})"]
     lines += [f"left out {sid}: {why}" for sid, why in result.left_out.items()]
     print_lines(lines)
+
+
+# ------------------------------------------------------------------------------------------- deploy
+def print_deploy_findings(findings: Sequence[Any], files: Sequence[Any]) -> None:
+    """Problems in the deployment files (``flows.deploy_check.Finding``), or that ``files`` passed."""
+    out = console()
+    if not findings:
+        out.print(f"deployment files ok: {', '.join(str(f) for f in files)}", markup=False)
+        return
+    table = Table(title=f"Deployment files: {len(findings)} problem(s)")
+    for col in ("file", "deployment / part", "field"):
+        table.add_column(col, no_wrap=True)
+    table.add_column("problem")
+    for f in findings:
+        table.add_row(f.file, f.item, f.field, f.problem)
+    out.print(table)

@@ -1,23 +1,90 @@
-"""deploy/prefect.yaml points at real flows with parameters they accept."""
+"""The files under deploy/ pass ``simsplat deploy check``, and each kind of mistake in a broken copy is one finding
+naming the file, the deployment and the field."""
 
 from __future__ import annotations
 
-import inspect
+import json
 from pathlib import Path
 
+import pytest
 import yaml
-from prefect.flows import load_flow_from_entrypoint
+from typer.testing import CliRunner
 
-DEPLOY = Path(__file__).resolve().parents[2] / "deploy" / "prefect.yaml"
+from flows.cli import app
+from flows.deploy_check import check_deploy_files, check_kuberay, check_prefect_file, check_ray_cluster
+
+REPO = Path(__file__).resolve().parents[2]
+DEPLOY = REPO / "deploy"
+PREFECT, RAY, KUBERAY = DEPLOY / "prefect.yaml", DEPLOY / "ray-cluster.yaml", DEPLOY / "kuberay-raycluster.yaml"
 
 
-def test_every_deployment_entrypoint_loads_and_accepts_its_parameters(monkeypatch):
-    monkeypatch.chdir(DEPLOY.parents[1])
-    spec = yaml.safe_load(DEPLOY.read_text())
-    assert spec["deployments"]
-    for deployment in spec["deployments"]:
-        flow = load_flow_from_entrypoint(deployment["entrypoint"])
-        accepted = set(inspect.signature(flow.fn).parameters)
-        assert set(deployment["parameters"]) <= accepted, deployment["name"]
-        for schedule in deployment.get("schedules", []):
-            assert len(schedule["cron"].split()) == 5
+def _write(path: Path, spec: dict) -> Path:
+    path.write_text(yaml.safe_dump(spec))
+    return path
+
+
+def test_the_shipped_deployment_files_pass():
+    assert check_deploy_files(PREFECT, RAY, KUBERAY, root=REPO) == []
+    names = {d["name"] for d in yaml.safe_load(PREFECT.read_text())["deployments"]}
+    assert {"nightly-mining", "dataset-generation"} <= names
+
+
+def test_deploy_check_exits_0_on_the_shipped_files_and_1_with_the_findings_as_json(tmp_path, monkeypatch):
+    monkeypatch.chdir(REPO)
+    assert CliRunner().invoke(app, ["deploy", "check"]).exit_code == 0
+    broken = yaml.safe_load(KUBERAY.read_text())
+    broken["kind"] = "Pod"
+    result = CliRunner().invoke(app, ["deploy", "check", "--kuberay", str(_write(tmp_path / "k.yaml", broken)),
+                                      "--json"])
+    assert result.exit_code == 1
+    assert json.loads(result.stdout) == [{"file": str(tmp_path / "k.yaml"), "item": "-", "field": "kind",
+                                          "problem": "'Pod' is not 'RayCluster'"}]
+
+
+@pytest.mark.parametrize(("breakage", "field"), [
+    ("unknown entrypoint", "entrypoint"),
+    ("unaccepted parameter", "parameters.no_such_parameter"),
+    ("missing required parameter", "parameters.store_root"),
+    ("wrong parameter type", "parameters.sequences"),
+    ("bad cron", "schedules[0].cron"),
+    ("undeclared work pool", "work_pool.name"),
+])
+def test_each_broken_deployment_gives_one_finding_naming_file_deployment_and_field(tmp_path, breakage, field):
+    spec = yaml.safe_load(PREFECT.read_text())
+    nightly = next(d for d in spec["deployments"] if d["name"] == "nightly-mining")
+    if breakage == "unknown entrypoint":
+        nightly["entrypoint"] = "flows/pipeline.py:no_such_flow"
+    elif breakage == "unaccepted parameter":
+        nightly["parameters"]["no_such_parameter"] = 1
+    elif breakage == "missing required parameter":
+        del nightly["parameters"]["store_root"]
+    elif breakage == "wrong parameter type":
+        nightly["parameters"]["sequences"] = "eight"
+    elif breakage == "bad cron":
+        nightly["schedules"][0]["cron"] = "0 25 * * *"
+    else:
+        nightly["work_pool"]["name"] = "no-such-pool"
+    path = _write(tmp_path / "prefect.yaml", spec)
+    findings = check_prefect_file(path, root=REPO)
+    assert [(f.file, f.item, f.field) for f in findings] == [(str(path), "nightly-mining", field)]
+
+
+def test_a_kuberay_manifest_without_head_group_and_a_ray_yaml_without_provider_are_named(tmp_path):
+    kuberay = yaml.safe_load(KUBERAY.read_text())
+    del kuberay["spec"]["headGroupSpec"]
+    path = _write(tmp_path / "kuberay.yaml", kuberay)
+    assert [(f.file, f.field) for f in check_kuberay(path)] == [(str(path), "spec.headGroupSpec")]
+    ray = yaml.safe_load(RAY.read_text())
+    del ray["provider"]
+    path = _write(tmp_path / "ray.yaml", ray)
+    assert (str(path), "provider") in [(f.file, f.field) for f in check_ray_cluster(path)]
+
+
+def test_a_worker_container_without_resources_and_a_file_that_is_not_yaml_are_named(tmp_path):
+    kuberay = yaml.safe_load(KUBERAY.read_text())
+    del kuberay["spec"]["workerGroupSpecs"][0]["template"]["spec"]["containers"][0]["resources"]
+    path = _write(tmp_path / "kuberay.yaml", kuberay)
+    assert [f.field for f in check_kuberay(path)] == ["spec.workerGroupSpecs[0].template.spec.containers[0].resources"]
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("deployments: [unclosed\n")
+    assert [f.file for f in check_prefect_file(bad, root=REPO)] == [str(bad)]
