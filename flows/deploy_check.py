@@ -49,6 +49,17 @@ def load_yaml(path: Path) -> tuple[Any, list[Finding]]:
         return None, [Finding(str(path), "-", "-", f"cannot read: {exc}")]
 
 
+def load_mapping(path: Path) -> tuple[dict[str, Any], list[Finding]]:
+    """The YAML mapping in ``path``, or ``{}`` and the finding saying why there is none (missing, not YAML, not a
+    mapping)."""
+    spec, found = load_yaml(path)
+    if found:
+        return {}, found
+    if not isinstance(spec, dict):
+        return {}, [Finding(str(path), "-", "-", "not a mapping")]
+    return spec, []
+
+
 def _is_template(value: Any) -> bool:
     """Whether ``value`` is a Prefect template (``{{ $ENV }}``, ``{{ prefect.variables.x }}``): set at deploy time."""
     return isinstance(value, str) and value.strip().startswith("{{") and value.strip().endswith("}}")
@@ -197,12 +208,10 @@ def check_prefect_file(path: Path, root: Path | None = None) -> list[Finding]:
 def check_ray_cluster(path: Path) -> list[Finding]:
     """A ``ray up`` cluster YAML: a name, a provider with a type, and a head/worker layout (node types or the older
     head/worker spec; a ``local`` provider lists its machines instead)."""
-    spec, found = load_yaml(path)
+    spec, found = load_mapping(path)
     if found:
         return found
     file = str(path)
-    if not isinstance(spec, dict):
-        return [Finding(file, "-", "-", "not a mapping")]
     found = [Finding(file, "-", key, "missing") for key in RAY_REQUIRED if not spec.get(key)]
     provider = spec.get("provider")
     if isinstance(provider, dict) and not provider.get("type"):
@@ -238,12 +247,10 @@ def _check_pod(template: Any, file: str, item: str, field: str) -> list[Finding]
 def check_kuberay(path: Path) -> list[Finding]:
     """A KubeRay manifest: ``apiVersion: ray.io/v1``, ``kind: RayCluster``, a ``headGroupSpec`` and
     ``workerGroupSpecs``, every container with an image and resources."""
-    spec, found = load_yaml(path)
+    spec, found = load_mapping(path)
     if found:
         return found
     file = str(path)
-    if not isinstance(spec, dict):
-        return [Finding(file, "-", "-", "not a mapping")]
     if spec.get("apiVersion") != "ray.io/v1":
         found.append(Finding(file, "-", "apiVersion", f"{spec.get('apiVersion')!r} is not 'ray.io/v1'"))
     if spec.get("kind") != "RayCluster":

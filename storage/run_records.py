@@ -23,6 +23,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from storage.errors import CorruptArtifactError
 from storage.runs import RUNS_DIR, run_dir
 from storage.store import TMP_TAG, ArtifactStore, join_relpath
@@ -58,16 +60,19 @@ def parse_time(text: str | None) -> datetime.datetime | None:
 
 
 def json_safe(value: Any) -> Any:
-    """``value`` as plain JSON data for a record's parameters: dataclasses and mappings as objects, sequences as
-    lists, enums by value, non-finite floats as ``None``, anything else (paths) by its ``str``."""
+    """``value`` as strict JSON data (a record's parameters, the dashboard's JSON twins): dataclasses and mappings as
+    objects, sequences and numpy arrays as lists, numpy scalars and enums by value, non-finite floats as ``None``,
+    anything else (paths) by its ``str``."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {f.name: json_safe(getattr(value, f.name)) for f in dataclasses.fields(value)}
     if isinstance(value, Mapping):
         return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, list | tuple | set | frozenset):
         return [json_safe(v) for v in value]
-    if isinstance(value, enum.Enum):
-        return json_safe(value.value)
+    if isinstance(value, np.ndarray):
+        return json_safe(value.tolist())
+    if isinstance(value, enum.Enum | np.generic):
+        return json_safe(value.item() if isinstance(value, np.generic) else value.value)
     if isinstance(value, bool | int | str) or value is None:
         return value
     if isinstance(value, float):

@@ -13,23 +13,20 @@ missing. Path and query parameters are declared on the view function as FastAPI 
 
 from __future__ import annotations
 
-import dataclasses
-import enum
 import functools
 import inspect
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from fastapi import APIRouter, Request
 from fastapi.responses import HTMLResponse, JSONResponse, Response
 from fastapi.templating import Jinja2Templates
 
 from flows.dashboard.settings import DashboardSettings
 from storage.artifact_ids import ArtifactIndex
+from storage.run_records import json_safe
 from storage.store import ArtifactStore
 from tasks.dashboard.files import MadePictures
 
@@ -65,26 +62,6 @@ def state_of(request: Request) -> DashboardState:
     """The app's ``DashboardState``."""
     state: DashboardState = request.app.state.dashboard
     return state
-
-
-def jsonable(value: Any) -> Any:
-    """``value`` as strict JSON data: dataclasses as objects, numpy values as numbers and lists, non-finite floats
-    as ``None``, enums by value, tuples and sets as lists."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return {f.name: jsonable(getattr(value, f.name)) for f in dataclasses.fields(value)}
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, list | tuple | set | frozenset):
-        return [jsonable(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return jsonable(value.tolist())
-    if isinstance(value, np.generic):
-        return jsonable(value.item())
-    if isinstance(value, float):
-        return value if math.isfinite(value) else None
-    if isinstance(value, enum.Enum):
-        return jsonable(value.value)
-    return value
 
 
 def render(request: Request, template: str, title: str, view: Any, status_code: int = 200) -> HTMLResponse:
@@ -123,7 +100,7 @@ def page(router: APIRouter, path: str, template: str, *, title: str | Callable[[
                 view = call(request, kwargs)
             except NotFound as exc:
                 return JSONResponse({"error": str(exc)}, status_code=404)
-            return JSONResponse(jsonable(view))
+            return JSONResponse(json_safe(view))
 
         api_path = "/api" + (path if path != "/" else "")
         endpoints: tuple[tuple[Callable[..., Any], str, type[Response], str], ...] = (

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from simsplat_core.viz.images import encode_png, to_uint8
-from storage.artifact_ids import ArtifactIndex, artifact_id, media_type
+from storage.artifact_ids import ArtifactIndex, media_type
 from storage.exr import read_exr
 from storage.store import ArtifactStore
 
@@ -29,11 +29,6 @@ class ServedFile:
 
     data: bytes
     media_type: str
-
-
-def picture_id(relpath: str) -> str:
-    """The artifact id of a stored picture (``storage.artifact_ids.artifact_id``)."""
-    return artifact_id(relpath)
 
 
 def exr_preview(store: ArtifactStore, relpath: str) -> bytes:

@@ -21,11 +21,11 @@ from typing import Any
 from simsplat_core.editing.commands import EditProgram, program_from_json
 from simsplat_core.eval.mining_funnel import failure_classes, stage_reached
 from simsplat_core.mining.attempts import judge_reasons_of
+from storage.artifact_ids import artifact_id
 from storage.datasets import DatasetFolder, list_datasets
 from storage.edits import edit_dir, read_edit_manifest, read_edit_program, read_edit_records, validation_from_json
 from storage.logs import log_dir
 from storage.store import ArtifactStore, join_relpath
-from tasks.dashboard.files import picture_id
 from tasks.dashboard.mining import edit_rows
 from tasks.dashboard.scenario_motion import ScenarioMotion, read_motion
 from tasks.dashboard.sections import Section, section
@@ -210,13 +210,13 @@ def _pictures(store: ArtifactStore, run_id: str, seq_id: str, edit_id: str) -> P
         pairs = []
         for frame in sorted(frames):
             name = f"{camera}/{frame:06d}.exr"
-            before = picture_id(join_relpath(log_dir(seq_id), "images", name)) if name in images else ""
-            pairs.append(FramePair(frame, before, picture_id(join_relpath(rel, "renders", name))))
+            before = artifact_id(join_relpath(log_dir(seq_id), "images", name)) if name in images else ""
+            pairs.append(FramePair(frame, before, artifact_id(join_relpath(rel, "renders", name))))
         cameras.append(CameraFrames(camera, pairs))
     frames = sorted({p.frame for c in cameras for p in c.frames})
 
     def still(name: str) -> str:
-        return picture_id(join_relpath(rel, name)) if store.exists(join_relpath(rel, name)) else ""
+        return artifact_id(join_relpath(rel, name)) if store.exists(join_relpath(rel, name)) else ""
 
     return Pictures(still("bev.png"), still("before_after.png"), frames, cameras)
 
