@@ -32,6 +32,7 @@ function setupFrames(pictures) {
     });
   }
   slider.addEventListener("input", () => show(Number(slider.value)));
+  slider.dataset.ready = "true";  // the card's data has arrived: the slider now changes the frames
 }
 
 // ---------------------------------------------------------------------------------------------- BEV

@@ -45,8 +45,9 @@ def test_a_scenario_card_shows_its_frames_and_slides_through_them(page: Any, das
     slider = page.locator("#frame")
     last = int(slider.get_attribute("max"))
     assert last > 0
+    page.wait_for_selector("#frame[data-ready='true']")  # the script has the card's data (fetched after load)
     slider.fill(str(last))  # a range input: fill sets the value and fires input
-    page.wait_for_function(f"document.querySelector('{first}').src !== {before_src!r} && "
+    page.wait_for_function(f"document.querySelector('{first}').getAttribute('src') !== {before_src!r} && "
                            f"document.querySelector('{first}').naturalWidth > 0")
     assert page.get_attribute(first, "src") != before_src
     assert page.locator("#frame-label").inner_text() != "0"
