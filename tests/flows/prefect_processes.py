@@ -24,7 +24,8 @@ from pathlib import Path
 from flows.lifetime import ProcessKey, descendants, end_processes, process_table
 
 REPO = Path(__file__).resolve().parents[2]
-PREFECT = str(Path(sys.executable).with_name("prefect"))
+#: The Prefect CLI of this interpreter.
+PREFECT = (sys.executable, "-m", "prefect")
 #: Settings that would point a child at another API, profile or Ray cluster than the test's.
 FOREIGN_SETTINGS = ("PREFECT_API_URL", "PREFECT_API_KEY", "PREFECT_PROFILE", "PREFECT_PROFILES_PATH", "RAY_ADDRESS")
 
@@ -103,7 +104,7 @@ class PrefectServer:
         """Start ``prefect ARGS...`` against this server (``env`` added to its environment), output in
         ``home/<log_name>``; recorded in ``processes``."""
         log = (self.home / log_name).open("w")
-        process = subprocess.Popen([PREFECT, *args], env={**self.env, **(env or {})}, cwd=cwd, stdout=log,
+        process = subprocess.Popen([*PREFECT, *args], env={**self.env, **(env or {})}, cwd=cwd, stdout=log,
                                    stderr=subprocess.STDOUT, start_new_session=True)
         log.close()
         self.processes.roots.append(process)
