@@ -56,23 +56,24 @@ def _session_of(pid: int) -> int | None:
 @dataclass
 class ProcessRecord:
     """Every process started for a test: the ones it starts itself (``roots``) and, each time ``scan`` is called,
-    their descendants."""
+    what they have started (``descendants``)."""
 
     roots: list[subprocess.Popen] = field(default_factory=list)
-    seen: set[ProcessKey] = field(default_factory=set)
+    root_keys: set[ProcessKey] = field(default_factory=set)
+    descendants: set[ProcessKey] = field(default_factory=set)
 
     def scan(self) -> None:
-        """Record the roots' descendants running now (a flow-run process while it runs, say)."""
+        """Record what the roots have started and runs now (a flow-run process while it runs, say)."""
         table = process_table()
-        self.seen |= descendants([p.pid for p in self.roots], table)
-        self.seen |= {(p.pid, table[p.pid][1]) for p in self.roots if p.pid in table}
+        self.descendants |= descendants([p.pid for p in self.roots], table)
+        self.root_keys |= {(p.pid, table[p.pid][1]) for p in self.roots if p.pid in table}
 
     def running(self) -> set[int]:
         """The recorded processes still running as the same process, and any process left in a root's session."""
         table = process_table()
         sessions = {p.pid for p in self.roots}
-        alive = {pid for pid, start in self.seen if pid in table and table[pid][1] == start}
-        return alive | {pid for pid in table if pid != os.getpid() and _session_of(pid) in sessions}
+        alive = {pid for pid, start in self.root_keys | self.descendants if pid in table and table[pid][1] == start}
+        return alive | {pid for pid in table if _session_of(pid) in sessions}
 
     def end_all(self, grace_s: float = 10.0) -> None:
         """SIGTERM every running recorded process (and what it started), SIGKILL what is left after ``grace_s``."""

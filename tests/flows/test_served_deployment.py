@@ -48,7 +48,7 @@ class ServedRun:
         parameters: the flow run's parameters (the deployment's, with the trigger's overrides).
         worker_exit: the worker's exit code.
         worker_log: the end of the worker's log (the flow run's log lines included).
-        processes_seen: how many processes were started for the test (server, CLI, worker, flow run).
+        descendants_seen: how many processes the server, the CLI and the worker started (the flow run's).
         left: the pids of those still running after the end.
     """
 
@@ -58,7 +58,7 @@ class ServedRun:
     parameters: dict[str, Any]
     worker_exit: int | None
     worker_log: str
-    processes_seen: int = 0
+    descendants_seen: int = 0
     left: frozenset[int] = frozenset()
 
 
@@ -140,7 +140,7 @@ def served_run(tmp_path_factory) -> tuple[ServedRun, ArtifactStore, Path, Path]:
         run = _run_worker(served, deployment, flow_run.id)
     left = served.processes.running()
     served.processes.end_all(grace_s=2.0)  # never leave one behind, even when the test fails on it
-    run = dataclasses.replace(run, processes_seen=len(served.processes.seen), left=frozenset(left))
+    run = dataclasses.replace(run, descendants_seen=len(served.processes.descendants), left=frozenset(left))
     return run, ArtifactStore(str(store)), landing, export
 
 
@@ -202,5 +202,5 @@ def test_the_export_holds_what_the_run_accepted(served_run) -> None:
 
 def test_no_server_worker_or_flow_run_process_is_left(served_run) -> None:
     run, _, _, _ = served_run
-    assert run.processes_seen >= 3  # at least the server, the worker and the flow run's own process
+    assert run.descendants_seen >= 1  # the flow run's own process, at least: the check below is not vacuous
     assert not run.left
