@@ -8,6 +8,7 @@ fails to import is a finding too.
 
 from __future__ import annotations
 
+import copy
 import inspect
 import types
 import typing
@@ -205,9 +206,43 @@ def check_prefect_file(path: Path, root: Path | None = None) -> list[Finding]:
     return found
 
 
+#: What makes ``ray start --head`` run the autoscaler, which is what starts the worker nodes of a ``ray up`` cluster.
+RAY_AUTOSCALER_FLAG = "--autoscaling-config"
+
+
+def _ray_launcher_findings(spec: dict[str, Any], file: str) -> list[Finding]:
+    """What ``ray up`` itself refuses before it contacts any machine: its preparation of the config (defaults, a
+    local provider's machine list) and its JSON schema (``ray.autoscaler``; nothing when Ray's cluster launcher or
+    its ``jsonschema`` is not installed)."""
+    try:
+        from ray.autoscaler._private.util import prepare_config, validate_config
+    except ImportError:
+        return []
+    try:
+        validate_config(prepare_config(copy.deepcopy(spec)))
+    except ImportError:
+        return []
+    except Exception as exc:  # noqa: BLE001 -- whatever Ray's own validation raises is the finding
+        field = ".".join(str(part) for part in getattr(exc, "absolute_path", ())) or "-"
+        return [Finding(file, "-", field, f"`ray up` refuses it: {getattr(exc, 'message', None) or exc}")]
+    return []
+
+
+def _check_ray_commands(spec: dict[str, Any], file: str) -> list[Finding]:
+    """The head's start commands, when given, start the autoscaler (without it ``ray up`` never starts a worker
+    node; Ray's own default commands do)."""
+    commands = spec.get("head_start_ray_commands")
+    if not isinstance(commands, list) or any(RAY_AUTOSCALER_FLAG in str(c) for c in commands):
+        return []
+    return [Finding(file, "head", "head_start_ray_commands",
+                    f"no `ray start --head ... {RAY_AUTOSCALER_FLAG}=~/ray_bootstrap_config.yaml`: without the "
+                    "autoscaler the head never starts the worker nodes")]
+
+
 def check_ray_cluster(path: Path) -> list[Finding]:
     """A ``ray up`` cluster YAML: a name, a provider with a type, and a head/worker layout (node types or the older
-    head/worker spec; a ``local`` provider lists its machines instead)."""
+    head/worker spec; a ``local`` provider lists its machines instead); when those are there, what ``ray up``'s own
+    validation refuses, and head start commands that would start no worker node."""
     spec, found = load_mapping(path)
     if found:
         return found
@@ -222,7 +257,9 @@ def check_ray_cluster(path: Path) -> list[Finding]:
     elif not any(all(key in spec for key in layout) for layout in RAY_NODE_LAYOUTS):
         found.append(Finding(file, "-", "head_node_type", "neither head_node_type + available_node_types nor "
                              "head_node + worker_nodes"))
-    return found
+    if not found:
+        found = _ray_launcher_findings(spec, file)
+    return found + _check_ray_commands(spec, file)
 
 
 def _check_pod(template: Any, file: str, item: str, field: str) -> list[Finding]:
