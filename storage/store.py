@@ -41,6 +41,7 @@ import pyarrow.fs as pafs
 
 from storage import parquet_io
 from storage.errors import CorruptArtifactError, UnsafePathError
+from storage.uris import is_uri, join_uri, reject_credentials, split_query
 
 logger = logging.getLogger(__name__)
 
@@ -84,8 +85,9 @@ class ArtifactStore:
 
     Args:
         root: a local directory (absolute or relative to the working directory) or any URI that
-            ``pyarrow.fs.FileSystem.from_uri`` accepts (``file:///data/run``, ``s3://bucket/prefix``).
-            With ``filesystem`` given, ``root`` is a path inside that filesystem (may be ``""``).
+            ``pyarrow.fs.FileSystem.from_uri`` accepts (``file:///data/run``, ``s3://bucket/prefix``, options such
+            as ``?endpoint_override=host:port&scheme=http`` after the path; credentials come from the environment
+            and a URI carrying them is refused: ``storage.uris``). With ``filesystem`` given, ``root`` is a path inside that filesystem (may be ``""``).
         filesystem: an explicit ``pyarrow.fs.FileSystem`` (e.g. a ``SubTreeFileSystem``); optional.
     """
 
@@ -93,7 +95,8 @@ class ArtifactStore:
         root = os.fspath(root)
         if filesystem is not None:
             fs, base, display = filesystem, root, f"{filesystem.type_name}:{root}"
-        elif "://" in root:
+        elif is_uri(root):
+            reject_credentials(root)
             fs, base = pafs.FileSystem.from_uri(root)
             display = root
         else:
@@ -101,7 +104,8 @@ class ArtifactStore:
             fs, display = pafs.LocalFileSystem(), base
         self._fs: pafs.FileSystem = fs
         self._base = base.rstrip("/") if base not in ("", "/") else base
-        self._display = display.rstrip("/") if display != "/" else display
+        path, query = split_query(display)
+        self._display = (path.rstrip("/") if path != "/" else path) + query
         self._renames_atomically = _local_base(fs) is not None
 
     def __repr__(self) -> str:
@@ -123,12 +127,9 @@ class ArtifactStore:
         return self._renames_atomically
 
     def uri(self, relpath: str = "") -> str:
-        """Human-readable location of ``relpath`` (root URI or absolute local path joined with it)."""
-        rel = normalize_relpath(relpath, allow_root=True)
-        if not rel:
-            return self._display
-        sep = "" if self._display.endswith("/") or self._display.endswith(":") else "/"
-        return f"{self._display}{sep}{rel}"
+        """Location of ``relpath``: the root URI or absolute local path joined with it (a URI's options kept last,
+        so ``ArtifactStore(store.uri(rel))`` opens ``rel`` as a store; never carries credentials)."""
+        return join_uri(self._display, normalize_relpath(relpath, allow_root=True))
 
     def _path(self, rel: str) -> str:
         """Filesystem path of a normalised relative path."""
