@@ -87,7 +87,8 @@ class ArtifactStore:
         root: a local directory (absolute or relative to the working directory) or any URI that
             ``pyarrow.fs.FileSystem.from_uri`` accepts (``file:///data/run``, ``s3://bucket/prefix``, options such
             as ``?endpoint_override=host:port&scheme=http`` after the path; credentials come from the environment
-            and a URI carrying them is refused: ``storage.uris``). With ``filesystem`` given, ``root`` is a path inside that filesystem (may be ``""``).
+            and a URI carrying them is refused: ``storage.uris``). With ``filesystem`` given, ``root`` is a path
+            inside that filesystem (may be ``""``).
         filesystem: an explicit ``pyarrow.fs.FileSystem`` (e.g. a ``SubTreeFileSystem``); optional.
     """
 

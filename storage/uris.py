@@ -46,6 +46,14 @@ def join_uri(uri: str, relpath: str) -> str:
     return f"{base}{sep}{relpath}{query}"
 
 
+def split_name(location: str) -> tuple[str, str]:
+    """``(parent, last name)`` of a ``/``-separated path or URI; a URI's query stays with the parent, so the parent
+    opens the same filesystem (``"s3://b/p/x.png?o=1"`` -> ``("s3://b/p?o=1", "x.png")``)."""
+    base, query = split_query(location) if is_uri(location) else (location, "")
+    parent, _, name = base.rstrip("/").rpartition("/")
+    return f"{parent}{query}" if parent else parent, name
+
+
 def reject_credentials(uri: str) -> None:
     """Raise when ``uri`` carries credentials in its user-info or query (module docstring).
 

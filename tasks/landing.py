@@ -24,13 +24,12 @@ last tried) and returns the reason instead of raising, so one bad file never sto
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-
-import dataclasses
 
 import pyarrow.fs as pafs
 from prefect import task
