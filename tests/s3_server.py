@@ -40,6 +40,13 @@ class S3Server:
         """A location under a new, unique prefix of ``bucket`` (tests share the session's server and buckets)."""
         return self.uri(bucket, f"{label}-{uuid.uuid4().hex[:8]}")
 
+    def objects(self, uri: str) -> dict[str, int]:
+        """Every object below the location ``uri`` as the server lists it: path below it -> modification time (ns)."""
+        base = uri.split("://", 1)[1].split("?", 1)[0].rstrip("/")
+        selector = pafs.FileSelector(base, recursive=True, allow_not_found=True)
+        return {info.path[len(base) + 1:]: int(info.mtime_ns or 0)
+                for info in self.filesystem().get_file_info(selector) if info.type == pafs.FileType.File}
+
     def filesystem(self) -> pafs.S3FileSystem:
         """A filesystem on the server that sees every bucket (for listings in assertions)."""
         return pafs.S3FileSystem(endpoint_override=self.endpoint, scheme="http", region="us-east-1")

@@ -5,6 +5,7 @@ and a landing folder in a bucket is mirrored locally with only changed objects d
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +24,7 @@ from tests.s3_server import S3Server
 
 def _objects(s3: S3Server, uri: str) -> list[str]:
     """Every object under the location ``uri`` as the server lists it (paths below it)."""
-    base = uri.split("://", 1)[1].split("?", 1)[0].rstrip("/")
-    selector = pafs.FileSelector(base, recursive=True, allow_not_found=True)
-    return sorted(i.path[len(base) + 1:] for i in s3.filesystem().get_file_info(selector) if i.type == pafs.FileType.File)
+    return sorted(s3.objects(uri))
 
 
 @pytest.fixture()
@@ -114,6 +113,20 @@ def test_a_crash_during_the_group_copy_leaves_no_marker(bucket: ArtifactStore) -
         bucket.write_json(f"{tmp}/_SUCCESS.json", {"version": 2})
     assert not bucket.exists("group/_SUCCESS.json")  # incomplete: readers that need the marker see no group
     assert not any(f.startswith(".") for f in bucket.listdir(""))  # the staged copy was removed
+
+
+def test_threads_of_one_process_take_turns_on_a_shared_object(bucket: ArtifactStore) -> None:
+    bucket.write_json("counter.json", 0)
+
+    def add_one() -> None:
+        with bucket.exclusive("counter.json"):
+            value = bucket.read_json("counter.json")
+            bucket.write_json("counter.json", value + 1)
+
+    with ThreadPoolExecutor(4) as pool:
+        for _ in range(12):
+            pool.submit(add_one)
+    assert bucket.read_json("counter.json") == 12  # no read-modify-write lost between the threads
 
 
 class _CopyDiesAfter:
