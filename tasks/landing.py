@@ -47,7 +47,7 @@ from storage.landing import (
 )
 from storage.remote_folder import default_mirror_dir, fetched, is_remote, list_remote_files, mirror_folder
 from storage.run_records import utc_now
-from storage.uris import join_uri
+from storage.uris import join_uri, split_query
 from tasks.logs import DecodedLog, StoredLog, decode_real_log, store_real_log
 from tasks.run_record import error_text
 
@@ -203,7 +203,7 @@ def ingest_landing_log(store_root: str, landed: LandingLog, image_scale: float =
     try:
         decoded = _decode_landed(landed, image_scale)
     except Exception as exc:  # any decoding failure is the log's: quarantine it and go on with the others
-        error = error_text(exc)
+        error = str(exc) if isinstance(exc, FetchedLogError) else error_text(exc)
         now = utc_now()
         previous = read_quarantine(store, landed.path)
         write_quarantine(store, QuarantineRecord(landed.path, landed.source, error, landed.key,
@@ -217,12 +217,24 @@ def ingest_landing_log(store_root: str, landed: LandingLog, image_scale: float =
     return LandingOutcome(landed, stored)
 
 
+class FetchedLogError(Exception):
+    """A landing log fetched from an object store failed to decode; the message is the loader's error
+    (``"<type>: <message>"``) with the temporary local copy named by the log's location in the bucket instead."""
+
+
 def _decode_landed(landed: LandingLog, image_scale: float) -> DecodedLog:
-    """Decode a landing log; one in an object store from a temporary local copy (recorded under its URI)."""
+    """Decode a landing log; one in an object store from a temporary local copy (recorded under its URI).
+
+    Raises:
+        FetchedLogError: a log from an object store failed to decode (its files named by their bucket paths).
+    """
     if not is_remote(landed.path):
         return decode_real_log(landed.source, landed.path, image_scale)
     with fetched(landed.path) as local:
-        decoded = decode_real_log(landed.source, str(local), image_scale)
+        try:
+            decoded = decode_real_log(landed.source, str(local), image_scale)
+        except Exception as exc:
+            raise FetchedLogError(error_text(exc).replace(str(local), split_query(landed.path)[0])) from exc
     return dataclasses.replace(decoded, path=landed.path)
 
 

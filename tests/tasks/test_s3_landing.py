@@ -48,6 +48,7 @@ def test_a_landing_bucket_is_ingested_once(s3_server: S3Server, shared_data: Pat
     assert record is not None and record.path == waymo.path and record.seq_id == stored.summary.seq_id
     (quarantined,) = list_quarantined(store)
     assert quarantined.path.split("?")[0].endswith("/broken") and "position_x" in quarantined.error
+    assert f"{base}broken/scenario_bad.parquet: column 'position_x'" in quarantined.error  # the file in the bucket
 
     monkeypatch.setenv("SIMSPLAT_LANDING_MIRROR", str(tmp_path / "fresh-mirrors"))  # another machine: same keys
     again = scan_landing(store_uri, landing)
