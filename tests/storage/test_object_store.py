@@ -42,14 +42,15 @@ def test_uris_keep_their_options_after_the_path(s3_server: S3Server, bucket: Art
     assert not bucket.renames_atomically and is_remote(bucket.uri()) and not is_remote("file:///tmp/x")
 
 
-@pytest.mark.parametrize("query", ["access_key=AKIA&secret_key=hush", "session_token=tok"])
-def test_credentials_in_a_uri_are_refused_without_showing_them(s3_server: S3Server, query: str) -> None:
+@pytest.mark.parametrize("credentials", ["?access_key=AKIA&secret_key=hush&", "?session_token=hush&", "?"])
+def test_credentials_in_a_uri_are_refused_without_showing_them(s3_server: S3Server, credentials: str) -> None:
+    userinfo = "AKIA:hush@" if credentials == "?" else ""
     with pytest.raises(CredentialsInUriError, match="AWS_ACCESS_KEY_ID") as caught:
-        ArtifactStore(f"s3://store/p?{query}&{s3_server.options}")
-    assert "hush" not in str(caught.value) and "tok" not in str(caught.value).replace("session_token", "")
+        ArtifactStore(f"s3://{userinfo}store/p{credentials}{s3_server.options}")
+    assert "hush" not in str(caught.value) and "store/p" in str(caught.value)
 
 
-def test_every_kind_of_file_round_trips(bucket: ArtifactStore, tmp_path: Path) -> None:
+def test_every_kind_of_file_round_trips(bucket: ArtifactStore) -> None:
     log = generate_log(0, WorldConfig(num_frames=4, width=32, height=24))
     written = write_scene_log(bucket, log)
     back = read_scene_log(bucket, log.seq_id)
