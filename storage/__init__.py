@@ -1,6 +1,8 @@
 """Storage layer: everything that reads or writes the artifact store, with atomic writes throughout.
 
 * ``store``: ``ArtifactStore`` over ``pyarrow.fs`` (local paths or object-store URIs), atomic puts.
+* ``uris``: object-store URIs (a path joined before the query options; credentials refused: environment only).
+* ``remote_folder``: local mirrors and temporary copies of object-store folders (landing locations in buckets).
 * ``schemas``: every Parquet table's ``pyarrow.schema`` with its version, validated on read.
 * ``parquet_io``, ``exr``, ``pictures``: table, EXR (OpenImageIO, zip) and PNG / MP4 I/O.
 * ``keys``, ``markers``: content keys of stage inputs/configs and the ``_SUCCESS.json`` manifests that

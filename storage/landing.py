@@ -20,6 +20,7 @@ from typing import TypeVar
 from storage.errors import CorruptArtifactError
 from storage.keys import content_key
 from storage.store import ArtifactStore, join_relpath
+from storage.uris import split_name
 
 LANDING_DIR = "landing"
 INGESTED_DIR = join_relpath(LANDING_DIR, "ingested")
@@ -77,7 +78,7 @@ def ingested_relpath(key: str) -> str:
 def quarantine_relpath(path: str) -> str:
     """``landing/quarantine/<name>-<hash of the path>.json`` of the landing log at ``path`` (the hash keeps two
     logs with the same name in different folders apart)."""
-    name = _safe(path.rstrip("/").rsplit("/", 1)[-1]) or "log"
+    name = _safe(split_name(path)[1]) or "log"
     return join_relpath(QUARANTINE_DIR, f"{name[:80]}-{content_key('landing-path', path)[:12]}.json")
 
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from simsplat_core.viz.images import encode_png
 from storage.store import ArtifactStore
+from storage.uris import is_uri, split_name
 
 logger = logging.getLogger(__name__)
 
@@ -29,14 +30,14 @@ def write_png(target: str | os.PathLike[str], rgb: np.ndarray) -> str:
     rgb = np.asarray(rgb)
     if rgb.ndim != 3 or rgb.shape[2] != 3 or rgb.dtype != np.uint8:
         raise ValueError(f"{target}: expected an [H, W, 3] uint8 image, got {rgb.shape} {rgb.dtype}")
-    if not target.lower().endswith(".png"):
+    parent, name = split_name(target)
+    if not name.lower().endswith(".png"):
         raise ValueError(f"{target}: a PNG file name must end in .png")
     try:
         encoded = encode_png(rgb)
     except OSError as exc:
         raise OSError(f"{target}: {exc}") from exc
-    parent, _, name = target.rstrip("/").rpartition("/")
-    if "://" not in target:
+    if not is_uri(target):
         parent, name = os.path.split(os.path.abspath(target))
     store = ArtifactStore(parent or ".")
     store.write_bytes(name, encoded)

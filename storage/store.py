@@ -20,6 +20,28 @@ Atomicity (``DESIGN.md``: every write is atomic):
   see a mixed group; a crash during that copy leaves the group without its marker (incomplete), and
   the previous version is not kept.
 
+**Object stores in detail** (an object store has no rename, so nothing is ever "moved into place"):
+
+* A file is one PUT of its whole content, made only after the writer finished without error; the object does not
+  exist (or keeps its previous content) until that request completes, and a writer killed before it leaves
+  nothing. Readers never see part of a file. (A large file goes as a multipart upload, which the store likewise
+  shows only once it is completed; one abandoned by a killed writer stays invisible until a bucket lifecycle rule
+  aborts it.) Libraries that need a local file (OpenImageIO for EXR, OpenCV for
+  MP4) write to a local temporary file that is then sent as that one PUT (``local_path_for_write``).
+* A group is staged under a hidden ``.<name>.tmp-<uuid>/`` prefix, then copied into place marker-last (server-side
+  copies), and the staged prefix is deleted. The marker (``_SUCCESS.json``, which carries the content key readers
+  and re-runs check) is the last object written, so a group is complete exactly when its marker is there. A
+  crash during the copy leaves the group without a marker: it reads as absent, the next run rewrites it, and the
+  previous version of that group is gone (its marker was removed first). The hidden staged prefix of a killed
+  writer may stay behind; it is never read.
+* ``exclusive`` is not a lock there (see its docstring). Two runs on one bucket stay safe because everything they
+  write is either a content-keyed artifact (both would write identical bytes, each file one PUT, so whichever
+  PUT lands last leaves the same content) or a record of their own run (``runs/<run_id>``, ``edits/<run_id>``).
+  The exception is a read-modify-write of one shared object, the edits table of a run appended by several
+  *processes* at once (Ray workers of one run mining different sequences): the last PUT wins and the rows the
+  other appended in that moment are missing from the table, while their edit folders stay complete. Threads of
+  one process take turns (a process lock), and locally ``flock`` serialises every process.
+
 Temporary names start with ``.`` so listings of artifact groups can ignore them. A writer killed
 with SIGKILL can leave a hidden ``.tmp-`` directory behind; it is never read and can be deleted.
 """
@@ -31,6 +53,7 @@ import json
 import logging
 import os
 import tempfile
+import threading
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -41,6 +64,7 @@ import pyarrow.fs as pafs
 
 from storage import parquet_io
 from storage.errors import CorruptArtifactError, UnsafePathError
+from storage.uris import is_uri, join_uri, reject_credentials, split_query
 
 logger = logging.getLogger(__name__)
 
@@ -84,8 +108,10 @@ class ArtifactStore:
 
     Args:
         root: a local directory (absolute or relative to the working directory) or any URI that
-            ``pyarrow.fs.FileSystem.from_uri`` accepts (``file:///data/run``, ``s3://bucket/prefix``).
-            With ``filesystem`` given, ``root`` is a path inside that filesystem (may be ``""``).
+            ``pyarrow.fs.FileSystem.from_uri`` accepts (``file:///data/run``, ``s3://bucket/prefix``, options such
+            as ``?endpoint_override=host:port&scheme=http`` after the path; credentials come from the environment
+            and a URI carrying them is refused: ``storage.uris``). With ``filesystem`` given, ``root`` is a path
+            inside that filesystem (may be ``""``).
         filesystem: an explicit ``pyarrow.fs.FileSystem`` (e.g. a ``SubTreeFileSystem``); optional.
     """
 
@@ -93,7 +119,8 @@ class ArtifactStore:
         root = os.fspath(root)
         if filesystem is not None:
             fs, base, display = filesystem, root, f"{filesystem.type_name}:{root}"
-        elif "://" in root:
+        elif is_uri(root):
+            reject_credentials(root)
             fs, base = pafs.FileSystem.from_uri(root)
             display = root
         else:
@@ -101,7 +128,8 @@ class ArtifactStore:
             fs, display = pafs.LocalFileSystem(), base
         self._fs: pafs.FileSystem = fs
         self._base = base.rstrip("/") if base not in ("", "/") else base
-        self._display = display.rstrip("/") if display != "/" else display
+        path, query = split_query(display)
+        self._display = (path.rstrip("/") if path != "/" else path) + query
         self._renames_atomically = _local_base(fs) is not None
 
     def __repr__(self) -> str:
@@ -123,12 +151,9 @@ class ArtifactStore:
         return self._renames_atomically
 
     def uri(self, relpath: str = "") -> str:
-        """Human-readable location of ``relpath`` (root URI or absolute local path joined with it)."""
-        rel = normalize_relpath(relpath, allow_root=True)
-        if not rel:
-            return self._display
-        sep = "" if self._display.endswith("/") or self._display.endswith(":") else "/"
-        return f"{self._display}{sep}{rel}"
+        """Location of ``relpath``: the root URI or absolute local path joined with it (a URI's options kept last,
+        so ``ArtifactStore(store.uri(rel))`` opens ``rel`` as a store; never carries credentials)."""
+        return join_uri(self._display, normalize_relpath(relpath, allow_root=True))
 
     def _path(self, rel: str) -> str:
         """Filesystem path of a normalised relative path."""
@@ -362,15 +387,17 @@ class ArtifactStore:
         one artifact, e.g. appending rows to a table).
 
         Locally this is ``flock`` on a hidden ``.<name>.lock`` sibling, which serialises the processes of
-        one machine (Ray workers included). Object stores have no locks: the block runs unlocked and the
-        last writer wins, so give concurrent writers there artifacts of their own.
+        one machine (Ray workers included). Object stores have no locks: there the block only holds a lock of
+        this process (its threads, e.g. the thread runner's workers, take turns), and between processes the
+        last writer wins: give concurrent writers there artifacts of their own.
         """
         rel = normalize_relpath(relpath)
         parent, name = _split(rel)
         lock_rel = join_relpath(parent, f".{name}.lock")
         os_path = self._os_path(lock_rel)
         if os_path is None:
-            yield
+            with _process_lock(self.uri(rel)):
+                yield
             return
         self._fs.create_dir(self._path(parent), recursive=True)
         with open(os_path, "a+b") as handle:
@@ -430,6 +457,16 @@ class ArtifactStore:
         if local is None:
             return None
         return os.path.join(local, self._path(rel)) if local else self._path(rel)
+
+
+_PROCESS_LOCKS: dict[str, threading.Lock] = {}
+_PROCESS_LOCKS_GUARD = threading.Lock()
+
+
+def _process_lock(key: str) -> threading.Lock:
+    """The lock of this process for the artifact ``key`` (one per key, made on first use)."""
+    with _PROCESS_LOCKS_GUARD:
+        return _PROCESS_LOCKS.setdefault(key, threading.Lock())
 
 
 def _is_marker(relpath: str) -> bool:

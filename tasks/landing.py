@@ -12,6 +12,11 @@ large logs takes moments; a log replaced, appended to or touched gets a new key.
   is not retried until it changes;
 * **new**: anything else (never seen, changed since, or its stored log was removed).
 
+A landing location in an object store (``s3://bucket/prefix?endpoint_override=...``) is scanned through a local
+mirror (``storage.remote_folder``: only new or changed objects are downloaded, each mirrored file keeps its object's
+size and modification time, so the landing key is that of the objects); its logs are named by their URI
+(``LandingLog.path``), and the ingest of one downloads that log to a temporary folder on whichever worker runs it.
+
 ``land_log`` ingests one new log (``tasks.logs``' decode and store): on success it records the ingest and clears
 an older quarantine record; when decoding fails it writes the quarantine record (path, source, error, first seen,
 last tried) and returns the reason instead of raising, so one bad file never stops the others.
@@ -19,6 +24,7 @@ last tried) and returns the reason instead of raising, so one bad file never sto
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import os
 import time
@@ -39,8 +45,10 @@ from storage.landing import (
     write_ingested,
     write_quarantine,
 )
+from storage.remote_folder import default_mirror_dir, fetched, is_remote, list_remote_files, mirror_folder
 from storage.run_records import utc_now
-from tasks.logs import StoredLog, decode_real_log, store_real_log
+from storage.uris import join_uri, split_query
+from tasks.logs import DecodedLog, StoredLog, decode_real_log, store_real_log
 from tasks.run_record import error_text
 
 logger = logging.getLogger(__name__)
@@ -52,7 +60,7 @@ class LandingLog:
 
     Attributes:
         source: the registered source that recognises it.
-        path: its file or folder (absolute).
+        path: its file or folder (absolute), or its URI in a landing location in an object store.
         key: its landing key (module docstring).
     """
 
@@ -90,18 +98,30 @@ class LandingOutcome:
         return self.stored.summary.seq_id if self.stored else f"{Path(self.log.path).name} (quarantined)"
 
 
+def check_landing(landing: str) -> None:
+    """Fail early when the landing location cannot be scanned (a local folder or an object-store folder).
+
+    Raises:
+        FileNotFoundError: the folder does not exist (named).
+        CredentialsInUriError: the URI carries credentials (``storage.uris``).
+    """
+    if is_remote(landing):
+        list_remote_files(landing)
+    else:
+        landing_folder(landing)
+
+
 def landing_folder(landing: str) -> Path:
     """The local folder of a landing location given as a path or a ``file://`` URI.
 
     Raises:
-        ValueError: a URI of another filesystem (object stores are not scanned yet), naming it.
+        ValueError: a URI of an object store (those are mirrored: ``scan_landing``), naming it.
         FileNotFoundError: the folder does not exist (named).
     """
     if "://" in landing:
         filesystem, path = pafs.FileSystem.from_uri(landing)
         if not isinstance(filesystem, pafs.LocalFileSystem):
-            raise ValueError(f"landing location {landing!r}: only local folders (a path or file:// URI) are "
-                             f"scanned, not {filesystem.type_name} URIs")
+            raise ValueError(f"landing location {landing!r}: not a local folder ({filesystem.type_name})")
         landing = path
     folder = Path(landing)
     if not folder.is_dir():
@@ -152,8 +172,11 @@ def scan_landing(store_root: str, landing: str) -> LandingPlan:
     new: list[LandingLog] = []
     already: list[tuple[LandingLog, str]] = []
     quarantined: list[tuple[LandingLog, QuarantineRecord]] = []
-    for source, path in find_logs(landing_folder(landing)):
-        found = LandingLog(source, os.path.abspath(path), landing_key(source, path))
+    remote = is_remote(landing)
+    folder = mirror_folder(landing, default_mirror_dir(landing)) if remote else landing_folder(landing)
+    for source, path in find_logs(folder):
+        name = join_uri(landing, Path(path).relative_to(folder).as_posix()) if remote else os.path.abspath(path)
+        found = LandingLog(source, name, landing_key(source, path))
         seq_id = _already_stored(store, found.key)
         if seq_id is not None:
             already.append((found, seq_id))
@@ -178,9 +201,9 @@ def ingest_landing_log(store_root: str, landed: LandingLog, image_scale: float =
     store = ArtifactStore(store_root)
     started = time.perf_counter()
     try:
-        decoded = decode_real_log(landed.source, landed.path, image_scale)
+        decoded = _decode_landed(landed, image_scale)
     except Exception as exc:  # any decoding failure is the log's: quarantine it and go on with the others
-        error = error_text(exc)
+        error = str(exc) if isinstance(exc, FetchedLogError) else error_text(exc)
         now = utc_now()
         previous = read_quarantine(store, landed.path)
         write_quarantine(store, QuarantineRecord(landed.path, landed.source, error, landed.key,
@@ -192,6 +215,27 @@ def ingest_landing_log(store_root: str, landed: LandingLog, image_scale: float =
     if clear_quarantine(store, landed.path):
         logger.info("landing %s: loads now, out of quarantine", landed.path)
     return LandingOutcome(landed, stored)
+
+
+class FetchedLogError(Exception):
+    """A landing log fetched from an object store failed to decode; the message is the loader's error
+    (``"<type>: <message>"``) with the temporary local copy named by the log's location in the bucket instead."""
+
+
+def _decode_landed(landed: LandingLog, image_scale: float) -> DecodedLog:
+    """Decode a landing log; one in an object store from a temporary local copy (recorded under its URI).
+
+    Raises:
+        FetchedLogError: a log from an object store failed to decode (its files named by their bucket paths).
+    """
+    if not is_remote(landed.path):
+        return decode_real_log(landed.source, landed.path, image_scale)
+    with fetched(landed.path) as local:
+        try:
+            decoded = decode_real_log(landed.source, str(local), image_scale)
+        except Exception as exc:
+            raise FetchedLogError(error_text(exc).replace(str(local), split_query(landed.path)[0])) from exc
+    return dataclasses.replace(decoded, path=landed.path)
 
 
 @task(name="land-log", retries=0, cache_policy=NO_CACHE)

@@ -22,3 +22,17 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"real driving-log samples not found at {SHARED_DATA}")
     return SHARED_DATA
+
+
+@pytest.fixture(scope="session")
+def s3_server():
+    """An S3-compatible server (moto) on 127.0.0.1 with the ``store``, ``landing`` and ``export`` buckets, and
+    fake AWS credentials in the environment for the whole session (``tests.s3_server``)."""
+    pytest.importorskip("moto.server", reason="moto[server] (a dev extra) is not installed")
+    from tests.s3_server import AWS_ENVIRONMENT, running_s3_server
+
+    with pytest.MonkeyPatch.context() as patch:
+        for name, value in AWS_ENVIRONMENT.items():
+            patch.setenv(name, value)
+        with running_s3_server() as server:
+            yield server

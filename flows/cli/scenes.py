@@ -62,7 +62,8 @@ def run(
     export: Annotated[str | None, typer.Option(help="With --mine: export the run's accepted scenarios as a dataset "
                                                "into EXPORT/<run_id>/ (WOMD shards, ScenarioNet, Parquet; see "
                                                "`simsplat export`).")] = None,
-    landing: Annotated[str | None, typer.Option(help="Landing folder (path or file:// URI) scanned first for new "
+    landing: Annotated[str | None, typer.Option(help="Landing folder (path, file:// or object-store URI such as "
+                                                "s3://bucket/prefix) scanned first for new "
                                                 "logs of any registered source: each is ingested once, one that "
                                                 "fails to load is quarantined with its reason.")] = None,
 ) -> None:
@@ -109,11 +110,11 @@ def run(
 
 
 def check_landing(landing: str) -> None:
-    """Fail before the run when the landing location cannot be scanned (``tasks.landing.landing_folder``)."""
-    from tasks.landing import landing_folder
+    """Fail before the run when the landing location cannot be scanned (``tasks.landing.check_landing``)."""
+    from tasks.landing import check_landing
 
     try:
-        landing_folder(landing)
+        check_landing(landing)
     except (ValueError, FileNotFoundError) as exc:
         raise typer.BadParameter(str(exc), param_hint="--landing") from exc
 

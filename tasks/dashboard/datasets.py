@@ -24,6 +24,7 @@ from typing import Any
 
 from storage.datasets import DATACARD_NAME, DatasetFolder, list_datasets
 from storage.store import ArtifactStore
+from storage.uris import split_name
 from tasks.dashboard.sections import READ_ERRORS, Section, section
 
 logger = logging.getLogger(__name__)
@@ -170,7 +171,7 @@ def dataset_folder(entry: Mapping[str, Any]) -> DatasetFolder:
         ValueError: the entry has no ``uri`` or ``name``, or its uri does not end in its name (naming both).
     """
     uri, name = str(entry.get("uri", "")), str(entry.get("name", ""))
-    parent, _, last = uri.rstrip("/").rpartition("/")
+    parent, last = split_name(uri)
     if not uri or not name or last != name:
         raise ValueError(f"dataset listing entry {name!r}: its uri {uri!r} does not name a folder called {name!r}")
     return DatasetFolder(parent or "/", name)

@@ -26,6 +26,7 @@ from storage.datasets import DatasetFolder, list_datasets
 from storage.edits import edit_dir, read_edit_manifest, read_edit_program, read_edit_records, validation_from_json
 from storage.logs import log_dir
 from storage.store import ArtifactStore, join_relpath
+from storage.uris import split_name
 from tasks.dashboard.mining import edit_rows
 from tasks.dashboard.scenario_motion import ScenarioMotion, read_motion
 from tasks.dashboard.sections import Section, section
@@ -233,7 +234,7 @@ def _exports(store: ArtifactStore, run_id: str, seq_id: str, edit_id: str) -> li
     out = []
     for listing in list_datasets(store):
         uri = str(listing.get("uri", ""))
-        parent, _, name = uri.rstrip("/").rpartition("/")
+        parent, name = split_name(uri)
         label = str(listing.get("name", name))
         read = section(f"dataset {label}", lambda parent=parent, name=name: DatasetFolder(parent, name).read_manifest()
                        if parent and name else None)  # type: ignore[misc]

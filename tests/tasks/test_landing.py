@@ -10,7 +10,7 @@ import pytest
 
 from storage import ArtifactStore, list_logs, log_dir
 from storage.landing import list_quarantined, read_quarantine
-from tasks.landing import LandingPlan, ingest_landing_log, landing_folder, landing_key, scan_landing
+from tasks.landing import LandingPlan, check_landing, ingest_landing_log, landing_folder, landing_key, scan_landing
 from tests.tasks.landing_files import AV2_FORECASTING, bad_scenario, make_landing
 
 
@@ -117,5 +117,7 @@ def test_landing_locations_that_cannot_be_scanned_are_named(tmp_path: Path) -> N
     assert landing_folder(tmp_path.as_uri()) == tmp_path
     with pytest.raises(FileNotFoundError, match="missing"):
         landing_folder(str(tmp_path / "missing"))
-    with pytest.raises(ValueError, match="only local folders"):
-        landing_folder("mock://bucket/landing")
+    with pytest.raises(ValueError, match="not a local folder"):
+        landing_folder("mock://bucket/landing")  # object stores are mirrored instead (tests/tasks/test_s3_landing.py)
+    with pytest.raises(FileNotFoundError, match="mock://bucket/landing: no such folder"):
+        check_landing("mock://bucket/landing")
