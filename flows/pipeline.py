@@ -463,7 +463,8 @@ def idle_main_run(params: Mapping[str, Any]) -> MainResult | None:
         logger.info("work to do: %s", "; ".join(plan.pending))
         return None
     run_id = args["run_id"] or new_run_id("main")
-    record_idle_run(args["store_root"], run_id, plan, args, export=args["export"] is not None)
+    record_idle_run(args["store_root"], run_id, plan, args, evaluate=args["evaluate"],
+                    export=args["export"] is not None)
     return MainResult(list(plan.logs), list(plan.scenes), plan.aligner, list(plan.language), None, run_id,
                       list(plan.stages))
 

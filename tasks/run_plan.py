@@ -165,8 +165,9 @@ def _plan_alignment(store: ArtifactStore, asked: RunAsked, found: RunPlan) -> Ru
     return _pending(found, f"mine {', '.join(split.to_mine)}") if split.to_mine else found
 
 
-def skip_reasons(plan: RunPlan, export: bool) -> dict[tuple[str, str], str]:
-    """``(seq_id, stage) -> reason`` of every stage an idle run skips (``export``: the run was asked to export)."""
+def skip_reasons(plan: RunPlan, *, evaluate: bool, export: bool) -> dict[tuple[str, str], str]:
+    """``(seq_id, stage) -> reason`` of every stage an idle run skips, among those it was asked to run
+    (``evaluate``: the grounding benchmark, ``export``: an export)."""
     scenes = {s.seq_id: s for s in plan.scenes}
     language = {s.seq_id: s for s in plan.language}
     mined = {r.seq_id: r for r in plan.mining.mined} if plan.mining is not None else {}
@@ -178,7 +179,8 @@ def skip_reasons(plan: RunPlan, export: bool) -> dict[tuple[str, str], str]:
         reasons[seq_id, "reconstruct"] = f"scene {scene.scene_hash[:12]} stored" if scene else stages.skip_reconstruct
         if seq_id in language:
             reasons[seq_id, "align"] = f"language scene {language[seq_id].language_hash[:12]} stored"
-            reasons[seq_id, "evaluate"] = stages.skip_evaluate or "nothing new: its language scene is unchanged"
+            if evaluate:
+                reasons[seq_id, "evaluate"] = stages.skip_evaluate or "nothing new: its language scene is unchanged"
         if plan.mining is not None:
             record = mined.get(seq_id)
             reasons[seq_id, "mine"] = mined_reason(record) if record is not None else NOT_MINABLE
@@ -200,14 +202,14 @@ def idle_counts(plan: RunPlan) -> dict[str, int]:
     return counts
 
 
-def record_idle_run(store_root: str, run_id: str, plan: RunPlan, parameters: Mapping[str, Any], *, export: bool,
-                    flow: str = "simsplat-main") -> None:
+def record_idle_run(store_root: str, run_id: str, plan: RunPlan, parameters: Mapping[str, Any], *,  # noqa: PLR0913
+                    evaluate: bool, export: bool, flow: str = "simsplat-main") -> None:
     """Record run ``run_id`` of ``flow`` that found nothing new (``plan.nothing_new``): completed, with
     ``idle_counts`` and every sequence's stages skipped with ``skip_reasons``. Needs no Prefect run."""
     if not plan.nothing_new:
         raise ValueError(f"run {run_id} has work to do ({'; '.join(plan.pending)}): it is not idle")
     with recorded_run(store_root, run_id, flow=flow, parameters=parameters) as run:
-        for (seq_id, stage), reason in skip_reasons(plan, export).items():
+        for (seq_id, stage), reason in skip_reasons(plan, evaluate=evaluate, export=export).items():
             run.skip(stage, [seq_id], reason)
         run.count(**idle_counts(plan))
     logger.info("nothing new in %s: %s; recorded as run %s", store_root, describe_idle(plan), run_id)
