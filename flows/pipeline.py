@@ -455,9 +455,9 @@ def idle_main_run(params: Mapping[str, Any]) -> MainResult | None:
     bound.apply_defaults()
     args = bound.arguments
     mining: MiningPlan | None = args["mining"]
-    asked = RunAsked(tuple(args["seeds"]), args["landing"], args["reconstruction"] or ReconstructionConfig(),
-                     args["alignment"] or AlignmentConfig(), args["aligner"], args["align"],
-                     mining.ledger() if mining is not None else None, minable)
+    asked = RunAsked(tuple(args["seeds"]), args["config"], args["landing"],
+                     args["reconstruction"] or ReconstructionConfig(), args["alignment"] or AlignmentConfig(),
+                     args["aligner"], args["align"], mining.ledger() if mining is not None else None, minable)
     plan = plan_run(args["store_root"], asked)
     if not plan.nothing_new:
         logger.info("work to do: %s", "; ".join(plan.pending))
@@ -574,9 +574,9 @@ def scheduled_main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are th
     """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
 
     A deployment cannot choose a task runner per run, so this parent flow picks it and runs
-    ``main_flow`` as a subflow, unless the run has nothing new to do (``idle_main_run``: no new landing log, no
-    synthetic sequence asked, every stored log reconstructed, aligned and mined for these settings), which is
-    recorded without starting the task runner.
+    ``main_flow`` as a subflow, unless the run has nothing new to do (``idle_main_run``: no new landing log, the
+    synthetic sequences already stored alike, every stored log reconstructed, aligned and mined for these
+    settings), which is recorded without starting the task runner.
 
     ``iterations`` overrides the reconstruction iteration count; ``landing`` is the folder scanned for new logs
     first (see ``main_flow``); ``mine`` accepted scenarios are mined per sequence (0: no mining; the rule-based

@@ -4,8 +4,9 @@ has not.
 ``plan_run`` asks the same questions the run's tasks ask before they work, through the same functions (content keys
 and stored manifests, no decoding, no training):
 
-1. landing: does the landing location hold a log not yet ingested (``tasks.landing.scan_landing``)? are synthetic
-   sequences asked for?
+1. ingest: does the landing location hold a log not yet ingested (``tasks.landing.scan_landing``)? is a synthetic
+   sequence asked for that the store does not hold as it would be generated now
+   (``tasks.logs.reusable_synthetic_log``: same seed and world settings)?
 2. reconstruct: does every stored log with camera images have its scene for this configuration
    (``tasks.reconstruct.reusable_scene``)?
 3. align: is the motion aligner of every stored log stored, and each log's language scene
@@ -30,11 +31,12 @@ from typing import Any
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
 from simsplat_core.scene import ReconstructionConfig
+from simsplat_core.world import WorldConfig
 from storage import ArtifactStore
 from storage.errors import MissingInputError
 from tasks.align import StoredAligner, StoredLanguageScene, reusable_aligner, reusable_language_scene
 from tasks.landing import LandingPlan, scan_landing
-from tasks.logs import StoredLog, stored_log
+from tasks.logs import StoredLog, reusable_synthetic_log, stored_log
 from tasks.mining_ledger import LedgerSettings, LedgerSplit, mined_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reusable_scene
 from tasks.run_record import recorded_run
@@ -85,13 +87,15 @@ class RunAsked:
     """What a main run is asked to do (the main flow's parameters that decide its work).
 
     Attributes:
-        seeds: synthetic sequences to generate; landing: the landing location (``None``: none).
+        seeds, world: synthetic sequences to generate and their world settings.
+        landing: the landing location (``None``: none).
         reconstruction, alignment, aligner: the stages' configurations (``aligner`` ``None``: the default).
         align: whether the run aligns; mining: the ledger settings of its mining (``None``: no mining).
         minable: which aligned sequences it mines.
     """
 
     seeds: tuple[int, ...] = ()
+    world: WorldConfig = field(default_factory=WorldConfig)
     landing: str | None = None
     reconstruction: ReconstructionConfig = field(default_factory=ReconstructionConfig)
     alignment: AlignmentConfig = field(default_factory=AlignmentConfig)
@@ -110,8 +114,9 @@ def plan_run(store_root: str, asked: RunAsked) -> RunPlan:
     landing = scan_landing(store_root, asked.landing) if asked.landing is not None else None
     if landing is not None and landing.new:
         return RunPlan((f"{len(landing.new)} new log(s) in the landing location",), landing)
-    if asked.seeds:
-        return RunPlan((f"{len(asked.seeds)} synthetic sequence(s) asked",), landing)
+    unstored = [seed for seed in asked.seeds if reusable_synthetic_log(store_root, seed, asked.world) is None]
+    if unstored:
+        return RunPlan((f"generate the synthetic sequence(s) of seed(s) {unstored}",), landing)
     try:
         logs = tuple(stored_log(store_root, seq_id) for seq_id in resolve_seq_ids(store_root))
     except MissingInputError:

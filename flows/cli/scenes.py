@@ -74,9 +74,9 @@ def run(
     scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/) and, with --export
     DIR, their export as a dataset for planner training. With --landing DIR, the logs in DIR not yet ingested are
     ingested first; one that fails to load is quarantined under STORE/landing/quarantine/ and not retried until
-    it changes. A run with nothing new (no new landing log, no --sequences, every stored log reconstructed, aligned
-    and, with --mine, mined before with the same settings) is recorded as such in seconds, without starting
-    Prefect or Ray."""
+    it changes. A run with nothing new (no new landing log, the --sequences already stored alike, every stored
+    log reconstructed, aligned and, with --mine, mined before with the same settings) is recorded as such in
+    seconds, without starting Prefect or Ray."""
     from flows.pipeline import ExportPlan, MiningPlan, idle_main_run, main_flow, reconstruction_config
     from tasks.answers import mining_as_dict
 
