@@ -120,7 +120,8 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
 
 def _check_mined_once(tmp_path, store, mined) -> None:
     """The same mining again mines nothing (the mining ledger has both sequences: the record says by which run);
-    with nothing new at all the run is recorded without a flow; another seed or K is work to do."""
+    with nothing new at all (the synthetic sequences asked stored alike) the run is recorded without a flow; another
+    mining seed or K, or other world settings, is work to do."""
     mining = MiningPlan(per_sequence=1, max_attempts=1)
     flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.threads, 2))
     again = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
@@ -132,7 +133,7 @@ def _check_mined_once(tmp_path, store, mined) -> None:
         assert matrix.cell(seq, "mine").skip_reason.startswith(f"mined by run mined with these settings ({n} accepted")
         assert matrix.cell(seq, "export").skip_reason == "no new scenario (mined by run mined)"
 
-    params = dict(store_root=str(tmp_path), seeds=[], config=WORLD, reconstruction=RECON, evaluate=False,
+    params = dict(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
                   mining=mining, **ALIGN)
     idle = idle_main_run(params)
     assert idle is not None and [s.seq_id for s in idle.language] == list(accepted)
@@ -145,6 +146,7 @@ def _check_mined_once(tmp_path, store, mined) -> None:
     runs = set(list_run_ids(store))
     for changed in (dataclasses.replace(mining, seed=3), dataclasses.replace(mining, per_sequence=2)):
         assert idle_main_run({**params, "mining": changed}) is None
+    assert idle_main_run({**params, "config": dataclasses.replace(WORLD, num_frames=7)}) is None
     assert set(list_run_ids(store)) == runs  # a run with work to do is left to the flow, not recorded here
 
 
