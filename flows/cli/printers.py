@@ -215,8 +215,8 @@ def print_mining(data: dict[str, Any]) -> None:
 def print_nothing_new(result: Any) -> None:
     """A main run that found nothing new (``flows.pipeline.idle_main_run``): what the store holds, the run record."""
     console().print(f"Nothing new: {len(result.logs)} log(s), {len(result.scenes)} scene(s) and {len(result.language)} "
-                    f"language scene(s) stored, every sequence already mined with these settings where mining was "
-                    f"asked; every stage skipped (run {result.run_id}).", markup=False, soft_wrap=True)
+                    "language scene(s) stored; nothing left to ingest, reconstruct, align or mine with these "
+                    f"settings. Every stage skipped (run {result.run_id}).", markup=False, soft_wrap=True)
 
 
 def print_built_bank(built: Any) -> None:
