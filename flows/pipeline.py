@@ -31,7 +31,7 @@ from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task
-from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, split_by_ledger
+from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reconstruct_scene
 from tasks.run_plan import RunAsked, plan_run, record_idle_run
 from tasks.run_record import StageRecorder, recorded_run
@@ -494,7 +494,7 @@ def _mine_and_export(store_root: str, language: list[StoredLanguageScene], run_i
         for record in ledgered.mined:
             run.skip("mine", [record.seq_id], mined_reason(record))
             if export is not None:
-                run.skip("export", [record.seq_id], f"no new scenario (mined by run {record.run_id})")
+                run.skip("export", [record.seq_id], not_exported_reason(record))
         to_mine = list(ledgered.to_mine)
     mined = mine_scenarios(store_root, to_mine, run_id, mining, run, [positions[s] for s in to_mine]) \
         if mining is not None and to_mine else []

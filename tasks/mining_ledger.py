@@ -141,6 +141,11 @@ def mined_reason(record: LedgerRecord) -> str:
             f"{': ' + ids if ids else ''})")
 
 
+def not_exported_reason(record: LedgerRecord) -> str:
+    """Why a sequence mined before exports nothing now: its scenarios belong to the run that mined it."""
+    return f"no new scenario (mined by run {record.run_id})"
+
+
 @dataclass(frozen=True)
 class MinedSequence:
     """What the mining task tells the ledger about one sequence it mined and stored.

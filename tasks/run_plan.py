@@ -37,7 +37,7 @@ from storage.errors import MissingInputError
 from tasks.align import StoredAligner, StoredLanguageScene, reusable_aligner, reusable_language_scene
 from tasks.landing import LandingPlan, scan_landing
 from tasks.logs import StoredLog, reusable_synthetic_log, stored_log
-from tasks.mining_ledger import LedgerSettings, LedgerSplit, mined_reason, split_by_ledger
+from tasks.mining_ledger import LedgerSettings, LedgerSplit, mined_reason, not_exported_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reusable_scene
 from tasks.run_record import recorded_run
 from tasks.stages import LogStages, decide_stages, resolve_seq_ids
@@ -191,8 +191,7 @@ def skip_reasons(plan: RunPlan, *, evaluate: bool, export: bool) -> dict[tuple[s
             record = mined.get(seq_id)
             reasons[seq_id, "mine"] = mined_reason(record) if record is not None else NOT_MINABLE
             if export:
-                reasons[seq_id, "export"] = f"no new scenario (mined by run {record.run_id})" if record is not None \
-                    else NOT_MINABLE
+                reasons[seq_id, "export"] = not_exported_reason(record) if record is not None else NOT_MINABLE
     return {cell: reason for cell, reason in reasons.items() if reason}
 
 
