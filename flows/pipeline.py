@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import logging
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+from typing import Any
 
 from prefect import flow
 from prefect.artifacts import create_markdown_artifact, create_table_artifact
@@ -29,7 +31,9 @@ from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task
+from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reconstruct_scene
+from tasks.run_plan import RunAsked, plan_run, record_idle_run
 from tasks.run_record import StageRecorder, recorded_run
 from tasks.stages import STAGES, LogStages, decide_stages, plan_alignment, plan_stages, resolve_seq_ids
 
@@ -240,6 +244,10 @@ class MiningPlan:
     vlm: str = "rule"
     seed: int = 0
 
+    def ledger(self) -> LedgerSettings:
+        """The settings the mining ledger keys its records by: a sequence is mined once per log and settings."""
+        return ledger_settings(self)
+
 
 @dataclass(frozen=True)
 class ExportPlan:
@@ -282,19 +290,22 @@ def _publish_mining_table(summaries: list[MiningSummary], run_id: str) -> None:
                           f"{attempts} attempts over {len(summaries)} sequence(s)")
 
 
-def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan,
-                   run: StageRecorder = UNRECORDED) -> list[MiningSummary]:
+def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan,  # noqa: PLR0913
+                   run: StageRecorder = UNRECORDED, positions: list[int] | None = None) -> list[MiningSummary]:
     """Build the asset bank when the store has none for its scenes (one task; a stored bank is reused, recorded as
     the mine stage of ``seq_ids`` until their mining starts), then fan out one mining task per sequence, each with
-    its share of the cores; publish the accepted scenarios' table."""
+    its share of the cores, each recorded in the mining ledger once stored; publish the accepted scenarios' table.
+    ``positions``: each sequence's place among the run's minable ones (default: its index in ``seq_ids``): the
+    sequences take the edit categories in turn from there."""
     bank: BuiltBank = run.result(run.submit(build_asset_bank, "mine", seq_ids, store_root))
     logger.info("asset bank %s: %d assets%s", bank.bank_hash[:12], bank.assets, " (stored)" if bank.skipped else "")
     threads = task_cpu_share(len(seq_ids))
     with reserving_cpus(threads):
         futures = [run.submit(mine_sequence_task, "mine", [seq_id], store_root, seq_id, run_id,
                               per_sequence=plan.per_sequence, max_attempts=plan.max_attempts, vlm=plan.vlm,
-                              seed=plan.seed, category_offset=i * plan.per_sequence, threads=threads)
-                   for i, seq_id in enumerate(seq_ids)]  # the sequences take the edit categories in turn
+                              seed=plan.seed, category_offset=i * plan.per_sequence, threads=threads,
+                              ledger=plan.ledger())
+                   for i, seq_id in zip(positions or range(len(seq_ids)), seq_ids)]
     summaries = _gather(futures, "mine", label=lambda s: s.seq_id, run=run)
     _publish_mining_table(summaries, run_id)
     return summaries
@@ -436,6 +447,28 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
     return result
 
 
+def idle_main_run(params: Mapping[str, Any]) -> MainResult | None:
+    """A main run with ``params`` (``main_flow``'s parameters) when it has nothing new to do (``tasks.run_plan``):
+    recorded now as a completed run whose stages are all skipped, without Prefect or Ray, and returned as its result;
+    ``None`` when the flow has work to do."""
+    bound = inspect.signature(main_flow.fn).bind(**params)
+    bound.apply_defaults()
+    args = bound.arguments
+    mining: MiningPlan | None = args["mining"]
+    asked = RunAsked(tuple(args["seeds"]), args["config"], args["landing"],
+                     args["reconstruction"] or ReconstructionConfig(), args["alignment"] or AlignmentConfig(),
+                     args["aligner"], args["align"], mining.ledger() if mining is not None else None, minable)
+    plan = plan_run(args["store_root"], asked)
+    if not plan.nothing_new:
+        logger.info("work to do: %s", "; ".join(plan.pending))
+        return None
+    run_id = args["run_id"] or new_run_id("main")
+    record_idle_run(args["store_root"], run_id, plan, args, evaluate=args["evaluate"],
+                    export=args["export"] is not None)
+    return MainResult(list(plan.logs), list(plan.scenes), plan.aligner, list(plan.language), None, run_id,
+                      list(plan.stages))
+
+
 def record_planned_skips(run: StageRecorder, plans: list[LogStages], generated: list[StoredLog], *, align: bool,
                          evaluate: bool) -> None:
     """Record the stages each log skips by plan (``tasks.stages``' reasons; logs stored before this run skip
@@ -451,12 +484,20 @@ def record_planned_skips(run: StageRecorder, plans: list[LogStages], generated: 
 def _mine_and_export(store_root: str, language: list[StoredLanguageScene], run_id: str, mining: MiningPlan | None,
                      export: ExportPlan | None, run: StageRecorder
                      ) -> tuple[list[MiningSummary], ExportResult | None]:
-    """The main job's mining (``mining``: every minable sequence) and export (``export``: this run's accepted
-    scenarios), each recorded per sequence with the reason of a skip."""
+    """The main job's mining (``mining``: every minable sequence not in the mining ledger for these settings) and
+    export (``export``: this run's accepted scenarios), each recorded per sequence with the reason of a skip."""
     to_mine = minable(language) if mining is not None else []
+    positions = {seq_id: i for i, seq_id in enumerate(to_mine)}
     if mining is not None:
         run.skip("mine", [s.seq_id for s in language if s.seq_id not in to_mine], "no reconstructed scene to render")
-    mined = mine_scenarios(store_root, to_mine, run_id, mining, run) if mining is not None and to_mine else []
+        ledgered = split_by_ledger(store_root, [s for s in language if s.seq_id in positions], mining.ledger().key)
+        for record in ledgered.mined:
+            run.skip("mine", [record.seq_id], mined_reason(record))
+            if export is not None:
+                run.skip("export", [record.seq_id], not_exported_reason(record))
+        to_mine = list(ledgered.to_mine)
+    mined = mine_scenarios(store_root, to_mine, run_id, mining, run, [positions[s] for s in to_mine]) \
+        if mining is not None and to_mine else []
     run.count(accepted_scenarios=sum(s.accepted for s in mined))
     if export is None:
         return mined, None
@@ -533,17 +574,24 @@ def scheduled_main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are th
     """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
 
     A deployment cannot choose a task runner per run, so this parent flow picks it and runs
-    ``main_flow`` as a subflow. ``iterations`` overrides the reconstruction iteration count; ``landing`` is the
-    folder scanned for new logs first (see ``main_flow``); ``mine`` accepted scenarios are mined per sequence
-    (0: no mining; the rule-based client with ``seed``) and, with ``mine``, ``export`` is the folder the run's
-    accepted scenarios go in as a dataset (``ExportPlan.out``; ``None``: no export).
+    ``main_flow`` as a subflow, unless the run has nothing new to do (``idle_main_run``: no new landing log, the
+    synthetic sequences already stored alike, every stored log reconstructed, aligned and mined for these
+    settings), which is recorded without starting the task runner.
+
+    ``iterations`` overrides the reconstruction iteration count; ``landing`` is the folder scanned for new logs
+    first (see ``main_flow``); ``mine`` accepted scenarios are mined per sequence (0: no mining; the rule-based
+    client with ``seed``) and, with ``mine``, ``export`` is the folder the run's accepted scenarios go in as a
+    dataset (``ExportPlan.out``; ``None``: no export).
     """
     from flows.runtime import RunnerKind, make_task_runner
 
     config = WorldConfig(num_frames=frames, width=width, height=height)
-    task_runner = make_task_runner(RunnerKind(runner))
     seeds = list(range(seed, seed + sequences))
     mining = MiningPlan(mine, seed=seed) if mine else None
     export_plan = ExportPlan(out=export) if export is not None and mining is not None else None
-    return main_flow.with_options(task_runner=task_runner)(store_root, seeds, config, reconstruction_config(iterations),
-                                                           landing=landing, mining=mining, export=export_plan)
+    params: dict[str, Any] = dict(store_root=store_root, seeds=seeds, config=config, landing=landing, mining=mining,
+                                  reconstruction=reconstruction_config(iterations), export=export_plan)
+    idle = idle_main_run(params)
+    if idle is not None:  # nothing new: recorded as such, and no task runner (no Ray) started
+        return idle
+    return main_flow.with_options(task_runner=make_task_runner(RunnerKind(runner)))(**params)

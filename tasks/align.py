@@ -67,6 +67,25 @@ def aligner_hash(log_keys: list[str], config: MotionAlignerConfig, encoder_name:
     return content_key("align-model", ALIGNER_VERSION, sorted(log_keys), config.to_json(), encoder_name)
 
 
+def _training_log_keys(store: ArtifactStore, seq_ids: list[str]) -> list[str]:
+    return [str(require_log_manifest(store, seq_id, "to train the aligner on")["key"]) for seq_id in seq_ids]
+
+
+def reusable_aligner(store: ArtifactStore, seq_ids: list[str], config: MotionAlignerConfig,
+                     encoder_name: str) -> StoredAligner | None:
+    """The stored aligner that ``train_motion_aligner`` would reuse for ``seq_ids`` (keyed by ``aligner_hash``),
+    ``None`` when it has to train one. Reads manifests only: the run planner asks it too.
+
+    Raises:
+        FileNotFoundError: a log is missing from the store (named).
+    """
+    key = aligner_hash(_training_log_keys(store, seq_ids), config, encoder_name)
+    existing = read_aligner_manifest(store, key)
+    if existing is None:
+        return None
+    return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
+
+
 @task(name="train-motion-aligner", retries=0, cache_policy=NO_CACHE)
 def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None
                          ) -> StoredAligner:
@@ -80,15 +99,13 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
         raise ValueError("train_motion_aligner: no logs to train on")
     config = config or MotionAlignerConfig()
     store = ArtifactStore(store_root)
-    keys = []
-    for seq_id in seq_ids:
-        keys.append(require_log_manifest(store, seq_id, "to train the aligner on")["key"])
     encoder = default_text_encoder()
+    keys = _training_log_keys(store, seq_ids)
+    stored = reusable_aligner(store, seq_ids, config, encoder.name)
+    if stored is not None:
+        logger.info("motion aligner %s already stored, skipping", stored.model_hash[:12])
+        return stored
     key = aligner_hash(keys, config, encoder.name)
-    existing = read_aligner_manifest(store, key)
-    if existing is not None:
-        logger.info("motion aligner %s already stored, skipping", key[:12])
-        return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
     started = time.perf_counter()
     logs = [read_scene_log(store, seq_id, load_images=False) for seq_id in seq_ids]
     aligner = MotionAligner.fit(logs, config, encoder)
@@ -148,6 +165,30 @@ def _log_key(store: ArtifactStore, seq_id: str) -> str:
     return str(require_log_manifest(store, seq_id, "to align")["key"])
 
 
+def _scene_language_hash(log_key: str, scene_hash: str | None, model_hash: str, config: AlignmentConfig,
+                         encoder_name: str, embedder_name: str) -> str:
+    """``language_hash`` of a reconstructed scene, or of a log without images (keyed by its log's content key)."""
+    return language_hash(model_hash, scene_hash if scene_hash is not None else f"log-{log_key}", config, encoder_name,
+                         embedder_name)
+
+
+def reusable_language_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None, model_hash: str,
+                            config: AlignmentConfig, encoder_name: str, embedder_name: str
+                            ) -> StoredLanguageScene | None:
+    """The stored language scene that ``align_scene`` would reuse (``scene_hash`` ``None``: a log without images),
+    ``None`` when it has to align. Reads manifests only: the run planner asks it too.
+
+    Raises:
+        FileNotFoundError: the log is missing from the store (named).
+    """
+    key = _scene_language_hash(_log_key(store, seq_id), scene_hash, model_hash, config, encoder_name, embedder_name)
+    existing = read_language_manifest(store, model_hash, seq_id, key)
+    if existing is None:
+        return None
+    return StoredLanguageScene(seq_id, scene_hash or "", model_hash, key, language_dir(model_hash, seq_id, key),
+                               dict(existing.get("metrics", {})), 0.0, True)
+
+
 @task(name="align-scene", retries=0, cache_policy=NO_CACHE)
 def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash: str,
                 config: AlignmentConfig | None = None, threads: int = 0) -> StoredLanguageScene:
@@ -167,15 +208,13 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash
     store = ArtifactStore(store_root)
     encoder = default_text_encoder()
     embedder = appearance_embedder(config.captioner, encoder)
+    stored = reusable_language_scene(store, seq_id, scene_hash, model_hash, config, encoder.name, embedder.name)
+    if stored is not None:
+        logger.info("%s: language scene %s already stored, skipping", seq_id, stored.language_hash[:12])
+        return stored
     log_key = _log_key(store, seq_id)
-    key = language_hash(model_hash, scene_hash if scene_hash is not None else f"log-{log_key}", config, encoder.name,
-                        embedder.name)
+    key = _scene_language_hash(log_key, scene_hash, model_hash, config, encoder.name, embedder.name)
     relpath = language_dir(model_hash, seq_id, key)
-    existing = read_language_manifest(store, model_hash, seq_id, key)
-    if existing is not None:
-        logger.info("%s: language scene %s already stored, skipping", seq_id, key[:12])
-        return StoredLanguageScene(seq_id, scene_hash or "", model_hash, key, relpath,
-                                   dict(existing.get("metrics", {})), 0.0, True)
     if threads:
         set_compute_threads(threads)
     started = time.perf_counter()

@@ -52,13 +52,21 @@ class StoredLog:
     skipped: bool
 
 
-def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[], SceneLog]) -> StoredLog:
-    relpath = f"logs/{seq_id}"
+def _produced_before(store: ArtifactStore, seq_id: str, key: str) -> StoredLog | None:
+    """The complete log ``seq_id`` when its producer stored it under ``key``, else ``None``."""
     manifest = read_log_manifest(store, seq_id)
     provenance = (manifest or {}).get("provenance", {})
     if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
-        logger.info("%s: already stored for producer key %s, skipping", seq_id, key[:12])
         return _already_stored(store, seq_id, manifest)
+    return None
+
+
+def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[], SceneLog]) -> StoredLog:
+    relpath = f"logs/{seq_id}"
+    stored = _produced_before(store, seq_id, key)
+    if stored is not None:
+        logger.info("%s: already stored for producer key %s, skipping", seq_id, key[:12])
+        return stored
     started = time.perf_counter()
     log = produce()
     summary = summarize_log(log)
@@ -93,11 +101,21 @@ def _already_stored(store: ArtifactStore, seq_id: str, manifest: dict) -> Stored
     return StoredLog(summary, f"logs/{seq_id}", manifest_bytes(manifest), 0.0, True)
 
 
+def _synthetic_key(seed: int, config: WorldConfig) -> str:
+    return content_key("synthetic-log", WORLD_VERSION, seed, dataclasses.asdict(config))
+
+
+def reusable_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> StoredLog | None:
+    """The synthetic log of ``seed`` when the store holds it as ``generate_synthetic_log`` would produce it now
+    (same seed, world settings and version), else ``None``. Reads one manifest: the run planner asks it too."""
+    return _produced_before(ArtifactStore(store_root), default_seq_id(seed), _synthetic_key(seed, config))
+
+
 @task(name="generate-synthetic-log", retries=1, retry_delay_seconds=2, cache_policy=NO_CACHE)
 def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> StoredLog:
     """Generate the synthetic sequence of ``seed`` into ``<store>/logs/<seq_id>``."""
     seq_id = default_seq_id(seed)
-    key = content_key("synthetic-log", WORLD_VERSION, seed, dataclasses.asdict(config))
+    key = _synthetic_key(seed, config)
     return _store_log(
         ArtifactStore(store_root), seq_id, key, lambda: generate_log(seed=seed, config=config, seq_id=seq_id)
     )

@@ -8,7 +8,8 @@ one of the seed, or the OpenAI-compatible one from ``SIMSPLAT_VLM_URL`` / ``SIMS
   writes one (``tasks.stored_edits.write_edit``; a scenario already stored under the same key is not re-rendered);
 * one row per attempt in the run's ``edits`` table, all rows of the sequence appended in one atomic rewrite
   (``storage.edits.append_edit_records``), with the mining columns (``mining_status``, ``category``,
-  ``plausibility``, ``export``, stage seconds, the judge's reasons in ``judge_reasons``, ...).
+  ``plausibility``, ``export``, stage seconds, the judge's reasons in ``judge_reasons``, ...);
+* when the run keeps a mining ledger, after both: the sequence's ledger record (``tasks.mining_ledger``).
 
 Inside a Prefect run it publishes a progress artifact (accepted / wanted) while mining and a table artifact of the
 accepted scenarios at the end; called as ``mine_sequence_task.fn(...)`` it is a plain function.
@@ -38,6 +39,7 @@ from storage import ArtifactStore
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
 from storage.inventory import require_asset_bank
 from storage.schemas.edits import EDITS_MINING_COLUMNS
+from tasks.mining_ledger import LedgerSettings, MinedSequence, record_mined
 from tasks.progress import StepProgress, publish_rows
 from tasks.stored_edits import LoadedEdit, edit_key, load_edit_context, write_edit
 
@@ -149,12 +151,14 @@ def _artifact_key(seq_id: str) -> str:
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,  # noqa: PLR0913 -- Prefect task: its parameters are the run's inputs (options keyword-only)
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str | Proposal] = (),
                        client: VLMClient | None = None, category_offset: int | None = None,
-                       threads: int = 0) -> MiningSummary:
+                       threads: int = 0, ledger: LedgerSettings | None = None) -> MiningSummary:
     """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
     under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client
     with another judge configuration). ``category_offset``: where the sequence starts in the run's order of edit
     categories (``MiningConfig.category_offset``; a run passes ``i * per_sequence`` for its ``i``-th sequence).
-    ``threads``: torch/numba threads for this task (0 = leave the process setting).
+    ``threads``: torch/numba threads for this task (0 = leave the process setting). ``ledger``: the run's mining
+    settings; once the sequence's edits and rows are stored, the mining ledger records it as mined with them
+    (``tasks.mining_ledger``; ``None``: not recorded).
 
     Raises:
         FileNotFoundError: the store lacks the sequence's log, language scene, or (for a log with images) an asset
@@ -198,6 +202,10 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     append_edit_records(store, records)
     if error is not None:
         raise error
+    if ledger is not None:
+        record_mined(store, ledger, MinedSequence(seq_id, run_id, loaded.log_key, loaded.scene_hash,
+                                                  loaded.language_hash, len(result.records),
+                                                  tuple((s.edit_id, s.prompt, s.category) for s in scenarios)))
     step(per_sequence, per_sequence)  # the last report: done, whatever was accepted
     seconds["total"] = time.perf_counter() - started
 

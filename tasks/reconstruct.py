@@ -67,6 +67,20 @@ def scene_hash(log_key: str, config: ReconstructionConfig) -> str:
     )
 
 
+def reusable_scene(store: ArtifactStore, seq_id: str, config: ReconstructionConfig) -> StoredScene | None:
+    """The complete stored scene of ``seq_id`` under ``config`` (keyed by ``scene_hash``), ``None`` when
+    ``reconstruct_scene`` has to reconstruct it. Reads two manifests: the run planner asks it too.
+
+    Raises:
+        FileNotFoundError: the store holds no complete log ``seq_id``.
+    """
+    key = scene_hash(require_log_manifest(store, seq_id, "to reconstruct")["key"], config)
+    existing = read_scene_manifest(store, seq_id, key)
+    if existing is None:
+        return None
+    return StoredScene(seq_id, key, scene_dir(seq_id, key), metrics_from_json(existing.get("metrics", {})), 0.0, True)
+
+
 @task(name="reconstruct-scene", retries=0, cache_policy=NO_CACHE)
 def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig) -> StoredScene:
     """Reconstruct ``<store>/logs/<seq_id>`` into ``<store>/scenes/<seq_id>/<scene_hash>``.
@@ -75,13 +89,12 @@ def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig
         FileNotFoundError: the store holds no complete log ``seq_id``.
     """
     store = ArtifactStore(store_root)
+    stored = reusable_scene(store, seq_id, config)
+    if stored is not None:
+        logger.info("%s: scene %s already stored, skipping", seq_id, stored.scene_hash[:12])
+        return stored
     log_manifest = require_log_manifest(store, seq_id, "to reconstruct")
     key = scene_hash(log_manifest["key"], config)
-    relpath = scene_dir(seq_id, key)
-    existing = read_scene_manifest(store, seq_id, key)
-    if existing is not None:
-        logger.info("%s: scene %s already stored, skipping", seq_id, key[:12])
-        return StoredScene(seq_id, key, relpath, metrics_from_json(existing.get("metrics", {})), 0.0, True)
 
     started = time.perf_counter()
     log = read_scene_log(store, seq_id)
@@ -107,4 +120,5 @@ def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig
         seconds,
         result.metrics.get("psnr_test", float("nan")),
     )
-    return StoredScene(seq_id, key, relpath, {k: float(v) for k, v in result.metrics.items()}, round(seconds, 3), False)
+    return StoredScene(seq_id, key, scene_dir(seq_id, key), {k: float(v) for k, v in result.metrics.items()},
+                       round(seconds, 3), False)

@@ -212,6 +212,13 @@ def print_mining(data: dict[str, Any]) -> None:
               f"sequence(s) ({per}); every attempt: {data['edits_table']}", markup=False, soft_wrap=True)
 
 
+def print_nothing_new(result: Any) -> None:
+    """A main run that found nothing new (``flows.pipeline.idle_main_run``): what the store holds, the run record."""
+    console().print(f"Nothing new: {len(result.logs)} log(s), {len(result.scenes)} scene(s) and {len(result.language)} "
+                    "language scene(s) stored; nothing left to ingest, reconstruct, align or mine with these "
+                    f"settings. Every stage skipped (run {result.run_id}).", markup=False, soft_wrap=True)
+
+
 def print_built_bank(built: Any) -> None:
     """A built (or found) asset bank (``tasks.assets.BuiltBank``): the cut-out report and the totals."""
     out = console()

@@ -24,6 +24,7 @@ from flows.cli.printers import (
     print_language,
     print_logs,
     print_mining,
+    print_nothing_new,
     print_scenes,
     print_stages,
     print_tables,
@@ -74,8 +75,10 @@ def run(
     scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/) and, with --export
     DIR, their export as a dataset for planner training. With --landing DIR, the logs in DIR not yet ingested are
     ingested first; one that fails to load is quarantined under STORE/landing/quarantine/ and not retried until
-    it changes."""
-    from flows.pipeline import ExportPlan, MiningPlan, main_flow, reconstruction_config
+    it changes. A run with nothing new (no new landing log, the --sequences already stored alike, every stored
+    log reconstructed, aligned and, with --mine, mined before with the same settings) is recorded as such in
+    seconds, without starting Prefect or Ray."""
+    from flows.pipeline import ExportPlan, MiningPlan, idle_main_run, main_flow, reconstruction_config
     from tasks.answers import mining_as_dict
 
     alignment = alignment_config(captioner)
@@ -87,10 +90,16 @@ def run(
         check_landing(landing)
     elif sequences == 0:
         stored_sequences(store, param_hint="--sequences")
-    result = run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
-                      config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
-                      alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
-                      export=ExportPlan(out=export) if export is not None else None, landing=landing)
+    params = dict(store_root=store, seeds=list(range(seed, seed + sequences)),
+                  config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
+                  alignment=alignment, align=align,
+                  mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
+                  export=ExportPlan(out=export) if export is not None else None, landing=landing)
+    idle = idle_main_run(params)  # nothing new: recorded without starting Prefect or Ray
+    if idle is not None:
+        print_nothing_new(idle)
+        return
+    result = run_flow(main_flow, runner, workers, **params)
     print_logs(result.logs)
     print_stages(result.stages)
     if result.scenes:

@@ -2,9 +2,19 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 
-from flows.pipeline import ExportPlan, MiningPlan, main_flow, reconstruction_config
+from flows.pipeline import (
+    ExportPlan,
+    MainResult,
+    MiningPlan,
+    idle_main_run,
+    main_flow,
+    reconstruction_config,
+    scheduled_main_flow,
+)
 from flows.runtime import RunnerKind, make_task_runner
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
@@ -13,7 +23,7 @@ from storage import ArtifactStore, list_logs, list_scenes, read_scene, read_scen
 from storage.assets import list_asset_banks
 from storage.edits import read_edit_records
 from storage.language_scenes import list_language_scenes, read_language_scene
-from storage.run_records import read_run_record, read_stage_matrix
+from storage.run_records import list_run_ids, read_run_record, read_stage_matrix
 from tests.flows.test_cli import _tree_digest
 
 pytestmark = pytest.mark.orchestration
@@ -94,6 +104,7 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
         assert (tmp_path / "exported" / "mined" / "manifest.json").is_file()
         assert store.exists("datasets/mined.json")
     _check_mined_record(store, mined)
+    _check_mined_once(tmp_path, store, mined)
 
     changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
     third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20),
@@ -105,6 +116,38 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
     assert list_scenes(store, "synth-000001") == [first.scenes[0].scene_hash, third.scenes[0].scene_hash]
     newest = read_scene(store, "synth-000001")
     assert newest.scene_hash == third.scenes[0].scene_hash and newest.metrics["iterations"] == 20
+
+
+def _check_mined_once(tmp_path, store, mined) -> None:
+    """The same mining again mines nothing (the mining ledger has both sequences: the record says by which run);
+    with nothing new at all (the synthetic sequences asked stored alike) the run is recorded without a flow; another
+    mining seed or K, or other world settings, is work to do."""
+    mining = MiningPlan(per_sequence=1, max_attempts=1)
+    flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.threads, 2))
+    again = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
+                 mining=mining, run_id="mined-again", export=ExportPlan(out=str(tmp_path / "exported")), **ALIGN)
+    assert again.mining == [] and again.export is None and not store.exists("edits/mined-again")
+    accepted = {m.seq_id: m.accepted for m in mined.mining}
+    matrix = read_stage_matrix(store, "mined-again")
+    for seq, n in accepted.items():
+        assert matrix.cell(seq, "mine").skip_reason.startswith(f"mined by run mined with these settings ({n} accepted")
+        assert matrix.cell(seq, "export").skip_reason == "no new scenario (mined by run mined)"
+
+    params = dict(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
+                  mining=mining, **ALIGN)
+    idle = idle_main_run(params)
+    assert idle is not None and [s.seq_id for s in idle.language] == list(accepted)
+    record = read_run_record(store, idle.run_id)
+    assert record.status == "completed" and record.counts["mined_before"] == 2 and record.counts["logs"] == 2
+    matrix = read_stage_matrix(store, idle.run_id)
+    assert all(matrix.cell(seq, stage).status == "skipped" for seq in accepted for stage in ("reconstruct", "align",
+                                                                                              "mine"))
+    assert all(matrix.cell(seq, "mine").skip_reason.startswith("mined by run mined") for seq in accepted)
+    runs = set(list_run_ids(store))
+    for changed in (dataclasses.replace(mining, seed=3), dataclasses.replace(mining, per_sequence=2)):
+        assert idle_main_run({**params, "mining": changed}) is None
+    assert idle_main_run({**params, "config": dataclasses.replace(WORLD, num_frames=7)}) is None
+    assert set(list_run_ids(store)) == runs  # a run with work to do is left to the flow, not recorded here
 
 
 def _artifact_digest(root) -> dict[str, str]:
@@ -144,3 +187,17 @@ def _check_mined_record(store, mined) -> None:
     by_seq = {m.seq_id: m.accepted for m in mined.mining}
     assert {seq: matrix.cell(seq, "export").status for seq in matrix.seq_ids} == {
         seq: "completed" if n else "skipped" for seq, n in by_seq.items()}
+
+
+def test_the_scheduled_run_with_nothing_new_starts_no_task_runner(monkeypatch, tmp_path):
+    """The deployment's flow asks ``idle_main_run`` first; an idle run is returned as recorded, no Ray started."""
+    idle, asked = MainResult([], [], run_id="idle"), []
+    monkeypatch.setattr("flows.pipeline.idle_main_run", lambda params: asked.append(params) or idle)
+    monkeypatch.setattr("flows.runtime.make_task_runner", _no_task_runner)
+    assert scheduled_main_flow.fn(str(tmp_path), sequences=0, landing=str(tmp_path), mine=2, seed=4) is idle
+    (params,) = asked
+    assert (params["seeds"], params["landing"], params["mining"]) == ([], str(tmp_path), MiningPlan(2, seed=4))
+
+
+def _no_task_runner(*args, **kwargs):
+    raise AssertionError("a scheduled run with nothing new built a task runner")
