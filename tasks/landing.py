@@ -41,6 +41,7 @@ from storage.landing import (
 )
 from storage.run_records import utc_now
 from tasks.logs import StoredLog, decode_real_log, store_real_log
+from tasks.retry_policy import STAGE_RETRIES
 from tasks.run_record import error_text
 
 logger = logging.getLogger(__name__)
@@ -194,7 +195,7 @@ def ingest_landing_log(store_root: str, landed: LandingLog, image_scale: float =
     return LandingOutcome(landed, stored)
 
 
-@task(name="land-log", retries=0, cache_policy=NO_CACHE)
+@task(name="land-log", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def land_log(store_root: str, landed: LandingLog, image_scale: float = 1.0) -> LandingOutcome:
     """``ingest_landing_log`` as a task of the run's ingest fan-out."""
     return ingest_landing_log(store_root, landed, image_scale)

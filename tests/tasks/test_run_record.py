@@ -28,6 +28,9 @@ class FakeFuture:
             raise self.outcome
         return self.outcome
 
+    def wait(self) -> None:
+        """Done at once."""
+
 
 @dataclass
 class FakeTask:
@@ -45,7 +48,7 @@ class FakeTask:
         task_run = SimpleNamespace(start_time=T0, run_count=self.run_count, name=f"{self.name}-0")
         for hook in self.hooks:
             hook(self, task_run, SimpleNamespace(timestamp=T0))
-        done = SimpleNamespace(timestamp=T0 + datetime.timedelta(seconds=4))
+        done = SimpleNamespace(timestamp=T0 + datetime.timedelta(seconds=4), is_crashed=lambda: False)
         return FakeFuture(f"tr-{args}", self.outcome, done)
 
 
