@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import datetime
 import logging
+import threading
 import time
 from collections.abc import Iterable, Iterator, Mapping
 from contextlib import contextmanager
@@ -36,6 +37,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from storage.run_records import (
+    HEARTBEAT_S,
     RunRecord,
     StageRecord,
     json_safe,
@@ -194,11 +196,16 @@ class StageRecorder:
 class RunRecorder(StageRecorder):
     """Records run ``run_id`` of ``flow`` in the store at ``store_root`` (module docstring)."""
 
-    def __init__(self, store_root: str, run_id: str, flow: str, policy: RetryPolicy = STAGE_RETRIES) -> None:
+    def __init__(self, store_root: str, run_id: str, flow: str, policy: RetryPolicy = STAGE_RETRIES,
+                 heartbeat_s: float = HEARTBEAT_S) -> None:
         super().__init__(policy)
         self.store_root = store_root
         self.store = ArtifactStore(store_root)
+        self.heartbeat_s = heartbeat_s
         self._record = RunRecord(run_id, flow, "running", utc_now())
+        self._record_lock = threading.Lock()
+        self._stopped = threading.Event()
+        self._heartbeat: threading.Thread | None = None
 
     @property
     def run_id(self) -> str:
@@ -209,28 +216,47 @@ class RunRecorder(StageRecorder):
         """The run record as last written."""
         return self._record
 
-    def _write_run(self, record: RunRecord) -> None:
-        self._record = record
-        try:
-            write_run_record(self.store, record)
-        except (OSError, ValueError) as exc:
-            logger.warning("run %s: could not write its run record: %s", record.run_id, exc)
+    def _update(self, **changes: Any) -> None:
+        """Rewrite the run record with ``changes`` (from the flow or the heartbeat thread, one at a time)."""
+        with self._record_lock:
+            if "counts" in changes:
+                changes["counts"] = {**self._record.counts, **changes["counts"]}
+            self._record = record = replace(self._record, **changes)
+            try:
+                write_run_record(self.store, record)
+            except (OSError, ValueError) as exc:
+                logger.warning("run %s: could not write its run record: %s", record.run_id, exc)
 
     def start(self, parameters: Mapping[str, Any]) -> None:
-        """Write the run as ``running`` with its ``parameters`` and the code version."""
-        self._write_run(replace(self._record, started_at=utc_now(), code_version=code_version(),
-                                parameters=json_safe(dict(parameters))))
+        """Write the run as ``running`` with its ``parameters`` and the code version, then rewrite it every
+        ``heartbeat_s`` seconds until the run ends (``RunRecord.observed_status`` tells a dead run by that)."""
+        now = utc_now()
+        self._update(started_at=now, heartbeat_at=now, code_version=code_version(),
+                     parameters=json_safe(dict(parameters)))
+        self._heartbeat = threading.Thread(target=self._beat, name=f"heartbeat-{self.run_id}", daemon=True)
+        self._heartbeat.start()
+
+    def _beat(self) -> None:
+        while not self._stopped.wait(self.heartbeat_s):
+            self._update(heartbeat_at=utc_now())
+
+    def _stop_heartbeat(self) -> None:
+        self._stopped.set()
+        if self._heartbeat is not None:
+            self._heartbeat.join()
 
     def count(self, **counts: int) -> None:
-        self._write_run(replace(self._record, counts={**self._record.counts, **counts}))
+        self._update(counts=counts)
 
     def complete(self) -> None:
         """The run finished."""
-        self._write_run(replace(self._record, status="completed", finished_at=utc_now()))
+        self._stop_heartbeat()
+        self._update(status="completed", finished_at=utc_now())
 
     def fail(self, exc: BaseException) -> None:
         """The run failed with ``exc``."""
-        self._write_run(replace(self._record, status="failed", finished_at=utc_now(), error=error_text(exc)))
+        self._stop_heartbeat()
+        self._update(status="failed", finished_at=utc_now(), error=error_text(exc))
 
     def _stage(self, record: StageRecord) -> None:
         _write_quietly(self.store, self.run_id, record)

@@ -43,7 +43,8 @@ def test_a_worker_killed_mid_reconstruction_is_resubmitted_and_every_scene_is_st
         assert list_scenes(store, scene.seq_id) == [scene.scene_hash]
         assert read_scene(store, scene.seq_id).scene_hash == scene.scene_hash
     leftovers = [p for p in store.walk("scenes") if TMP_TAG in p]
-    assert leftovers and all(p.split("/")[1].startswith(".") for p in leftovers)  # the killed commit's staging folder, hidden
+    # the killed commit's staging folder is left behind, hidden, and was never read
+    assert leftovers and all(p.split("/")[1].startswith(".") for p in leftovers)
 
     record = read_run_record(store, "crashed-worker")
     assert record.status == "completed" and record.counts["scenes"] == 2
