@@ -18,6 +18,7 @@ from flows.cpu_shares import reserving_cpus, task_cpu_share
 from flows.dashboard.links import run_link, scenario_link
 from flows.dashboard.settings import dashboard_url
 from flows.progress import FlowProgress
+from flows.runtime import flow_resubmits_crashed_tasks
 from simsplat_core.eval.grounding.metrics import CATEGORIES
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
@@ -99,8 +100,8 @@ def land_logs(store_root: str, landing: str, run: StageRecorder = UNRECORDED) ->
     """Ingest the new logs of the landing location (``tasks.landing``: one task per log, a log that fails to load
     quarantined with its reason); the logs stored now. Counted in the run as ``landed`` and ``quarantined``."""
     plan = scan_landing(store_root, landing)
-    futures = [land_log.submit(store_root, log) for log in plan.new]
-    outcomes: list[LandingOutcome] = _gather(futures, "landing", label=lambda outcome: outcome.label)
+    futures = [run.submit(land_log, "ingest", (), store_root, log) for log in plan.new]
+    outcomes: list[LandingOutcome] = _gather(futures, "landing", label=lambda outcome: outcome.label, run=run)
     stored = [o.stored for o in outcomes if o.stored is not None]
     run.count(landed=len(stored), quarantined=len(outcomes) - len(stored) + len(plan.quarantined_known))
     return stored
@@ -314,14 +315,17 @@ def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: Minin
 @flow(name="simsplat-generate-world")
 def generate_world_flow(store_root: str, seeds: list[int], config: WorldConfig) -> list[StoredLog]:
     """Generate one synthetic sequence per seed into the store, in parallel."""
-    return generate_logs(store_root, seeds, config)
+    with flow_resubmits_crashed_tasks():
+        return generate_logs(store_root, seeds, config, StageRecorder())
 
 
 @flow(name="simsplat-ingest")
 def ingest_flow(store_root: str, source: str, paths: list[str], image_scale: float = 1.0) -> list[StoredLog]:
     """Decode real driving logs (one task per file or log directory) into the store."""
-    futures = [ingest_real_log.submit(store_root, source, path, image_scale) for path in paths]
-    logs = _gather(futures, f"ingest {source}")
+    run = StageRecorder()
+    with flow_resubmits_crashed_tasks():
+        futures = [run.submit(ingest_real_log, "ingest", (), store_root, source, path, image_scale) for path in paths]
+        logs = _gather(futures, f"ingest {source}", run=run)
     _publish_logs_table(logs)
     return logs
 
@@ -419,7 +423,7 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
         MissingInputError: the store holds no log, ``seeds`` is empty and the landing location added none.
     """
     run_id = run_id or new_run_id("main")
-    with recorded_run(store_root, run_id) as run:
+    with recorded_run(store_root, run_id) as run, flow_resubmits_crashed_tasks():
         generated = generate_logs(store_root, seeds, config, run) if seeds else []
         generated += land_logs(store_root, landing, run) if landing else []
         logs, plans = store_logs(store_root, generated)
@@ -534,7 +538,7 @@ def align_flow(store_root: str, seq_ids: list[str] | None = None, alignment: Ali
     """
     plan = plan_alignment(store_root, seq_ids)
     _report_stages(plan.stages, ("reconstruct",))  # a log without a reconstruction is aligned from its tracks
-    with recorded_run(store_root, new_run_id("align")) as run:
+    with recorded_run(store_root, new_run_id("align")) as run, flow_resubmits_crashed_tasks():
         model, language = align_scenes(store_root, plan.targets, plan.training_seq_ids,
                                        alignment or AlignmentConfig(), aligner, run)
         run.count(language_scenes=len(language))
@@ -548,7 +552,7 @@ def reconstruct_flow(store_root: str, seq_ids: list[str], config: Reconstruction
     record: they cannot be reconstructed)."""
     plans = plan_stages(store_root, seq_ids)
     _report_stages(plans, ("reconstruct",))
-    with recorded_run(store_root, new_run_id("reconstruct")) as run:
+    with recorded_run(store_root, new_run_id("reconstruct")) as run, flow_resubmits_crashed_tasks():
         for plan in plans:
             if plan.skip_reconstruct:
                 run.skip("reconstruct", [plan.seq_id], plan.skip_reconstruct)

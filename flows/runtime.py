@@ -91,6 +91,17 @@ def make_task_runner(kind: RunnerKind, num_cpus: int | None = None):
     return RayTaskRunner(init_kwargs=init_kwargs)
 
 
+@contextlib.contextmanager
+def flow_resubmits_crashed_tasks() -> Iterator[None]:
+    """Ray does not re-run a task submitted in the block when its worker dies (its default: up to 3 times, at once
+    and unrecorded): the flow resubmits it with the stages' back-off and records the retry
+    (``tasks.retry_policy``, ``tasks.run_record.StageRecorder``). Only an option for the Ray task runner."""
+    from prefect_ray.context import remote_options
+
+    with remote_options(max_retries=0):
+        yield
+
+
 def shutdown_ray() -> None:
     """Stop the local Ray instance if this process started one."""
     try:

@@ -9,6 +9,10 @@ file), so the driver, its threads and Ray workers can record side by side and a 
 ``(sequence, stage)`` is its state. ``read_stage_matrix`` aggregates the events into a sequence x stage matrix; a
 garbled event file is reported in the matrix's ``problems`` (naming the file) and left out, never fatal.
 
+A running run rewrites its ``run.json`` every ``HEARTBEAT_S`` seconds (``heartbeat_at``). A run whose process died
+(SIGKILL, the OOM killer, a lost machine) cannot write ``failed``, so its file says ``running`` for ever: a reader
+asks ``RunRecord.observed_status`` instead, which says ``interrupted`` once no heartbeat came for ``STALE_AFTER_S``.
+
 Times are ISO 8601 UTC strings with microseconds; durations are seconds.
 """
 
@@ -36,6 +40,12 @@ RECORD_VERSION = 1
 #: The stages of the pipeline, in the order a sequence goes through them (columns of the matrix).
 PIPELINE_STAGES: tuple[str, ...] = ("ingest", "reconstruct", "align", "mine", "evaluate", "export")
 RUN_STATUSES: tuple[str, ...] = ("running", "completed", "failed")
+#: What a reader calls a ``running`` record whose heartbeat stopped (never written to a file).
+INTERRUPTED = "interrupted"
+#: Seconds between two heartbeats of a running run, s.
+HEARTBEAT_S = 30.0
+#: Seconds without a heartbeat after which a running run reads as ``interrupted``, s.
+STALE_AFTER_S = 3 * HEARTBEAT_S
 STAGE_STATUSES: tuple[str, ...] = ("queued", "running", "completed", "skipped", "failed")
 #: Among events recorded at the same instant, the later status in this order wins.
 _STATUS_RANK = {"queued": 0, "running": 1, "completed": 2, "skipped": 2, "failed": 2}
@@ -106,6 +116,7 @@ class RunRecord:
         counts: what the run produced so far (``logs``, ``scenes``, ``language_scenes``, ``accepted_scenarios``,
             ``exported``).
         error: why a failed run failed (``"<ExceptionType>: <message>"``).
+        heartbeat_at: the last time the running run's process rewrote the record (ISO 8601 UTC; ``None``: never).
     """
 
     run_id: str
@@ -117,18 +128,37 @@ class RunRecord:
     parameters: Mapping[str, Any] = field(default_factory=dict)
     counts: Mapping[str, int] = field(default_factory=dict)
     error: str = ""
+    heartbeat_at: str | None = None
 
     def __post_init__(self) -> None:
         _check_name("run id", self.run_id)
         _choice("run status", self.status, RUN_STATUSES)
         parse_time(self.started_at)
         parse_time(self.finished_at)
+        parse_time(self.heartbeat_at)
+
+    @property
+    def last_sign_of_life(self) -> datetime.datetime | None:
+        """The newest heartbeat (the start when none was written yet)."""
+        return parse_time(self.heartbeat_at or self.started_at)
+
+    def observed_status(self, now: datetime.datetime | None = None) -> str:
+        """``status``, except ``interrupted`` for a ``running`` record without a heartbeat for ``STALE_AFTER_S`` at
+        ``now`` (default: the current time): its process died without recording the end."""
+        last = self.last_sign_of_life
+        now = now or datetime.datetime.now(datetime.UTC)
+        if self.status == "running" and last is not None and (now - last).total_seconds() > STALE_AFTER_S:
+            return INTERRUPTED
+        return self.status
 
     def seconds(self, now: datetime.datetime | None = None) -> float | None:
-        """The run's duration so far (to ``now``, default the current time, while it runs), s."""
+        """The run's duration so far (to ``now``, default the current time, while it runs; to the last heartbeat
+        when it was interrupted), s."""
         start = parse_time(self.started_at)
-        end = parse_time(self.finished_at) or (now or datetime.datetime.now(datetime.UTC))
-        return None if start is None else max(0.0, (end - start).total_seconds())
+        now = now or datetime.datetime.now(datetime.UTC)
+        end = parse_time(self.finished_at) or (self.last_sign_of_life if self.observed_status(now) == INTERRUPTED
+                                               else now)
+        return None if start is None or end is None else max(0.0, (end - start).total_seconds())
 
 
 @dataclass(frozen=True)

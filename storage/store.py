@@ -19,6 +19,10 @@ Atomicity (``DESIGN.md``: every write is atomic):
   is removed from the old version first and copied last — so readers that require the marker never
   see a mixed group; a crash during that copy leaves the group without its marker (incomplete), and
   the previous version is not kept.
+* **Concurrent writers** (two runs on one store). Locally the commit of a group (undoing an interrupted swap, the
+  two renames) holds an exclusive ``flock`` on a lock file named after the group under ``.locks/``, so two runs
+  committing the same content-keyed group one after the other each leave a complete version (the later one wins)
+  and never undo each other's swap. Object stores have no lock: there, one run per store at a time.
 
 **Object stores in detail** (an object store has no rename, so nothing is ever "moved into place"):
 
@@ -49,6 +53,7 @@ with SIGKILL can leave a hidden ``.tmp-`` directory behind; it is never read and
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import logging
 import os
@@ -72,6 +77,8 @@ TMP_TAG = ".tmp-"
 OLD_TAG = ".old-"
 #: Files whose base name starts with this prefix are commit markers (written last on object stores).
 MARKER_PREFIX = "_"
+#: Hidden folder of the lock files that serialise commits of one group (local stores).
+LOCKS_DIR = ".locks"
 
 
 def normalize_relpath(relpath: str, *, allow_root: bool = False) -> str:
@@ -324,18 +331,25 @@ class ArtifactStore:
         tag = uuid.uuid4().hex
         tmp_rel = join_relpath(parent, f".{name}{TMP_TAG}{tag}")
         if self._renames_atomically:
-            self._recover_interrupted_swap(parent, name)
+            with self._commit_lock(rel):
+                self._recover_interrupted_swap(parent, name)
         self._fs.create_dir(self._path(tmp_rel), recursive=True)
         try:
             yield tmp_rel
             if self._renames_atomically:
-                self._swap_into_place(tmp_rel, rel, join_relpath(parent, f".{name}{OLD_TAG}{tag}"))
+                with self._commit_lock(rel):
+                    self._recover_interrupted_swap(parent, name)
+                    self._swap_into_place(tmp_rel, rel, join_relpath(parent, f".{name}{OLD_TAG}{tag}"))
             else:
                 self._copy_into_place(tmp_rel, rel)
         except BaseException:
             self._delete_quietly(tmp_rel)
             raise
         logger.debug("committed %s", self.uri(rel))
+
+    def _commit_lock(self, rel: str) -> Any:
+        """The exclusive lock of group ``rel``'s commits: ``.locks/<hash of rel>`` (one file per group, kept)."""
+        return self.exclusive(join_relpath(LOCKS_DIR, hashlib.sha256(rel.encode("utf-8")).hexdigest()[:32]))
 
     def _swap_into_place(self, tmp_rel: str, rel: str, old_rel: str) -> None:
         """Local commit: rename the old version aside, rename the new one in, delete the old one."""

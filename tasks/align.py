@@ -32,6 +32,7 @@ from storage import (
 )
 from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
 from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
+from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
 
@@ -86,7 +87,7 @@ def reusable_aligner(store: ArtifactStore, seq_ids: list[str], config: MotionAli
     return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
 
 
-@task(name="train-motion-aligner", retries=0, cache_policy=NO_CACHE)
+@task(name="train-motion-aligner", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None
                          ) -> StoredAligner:
     """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories).
@@ -189,7 +190,7 @@ def reusable_language_scene(store: ArtifactStore, seq_id: str, scene_hash: str |
                                dict(existing.get("metrics", {})), 0.0, True)
 
 
-@task(name="align-scene", retries=0, cache_policy=NO_CACHE)
+@task(name="align-scene", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash: str,
                 config: AlignmentConfig | None = None, threads: int = 0) -> StoredLanguageScene:
     """Build and store the language scene of ``scenes/<seq_id>/<scene_hash>`` with aligner ``model_hash``.

@@ -36,6 +36,7 @@ from storage.inventory import SCENE, require_sequences, sequences_with
 from storage.language_scenes import list_language_scenes, read_language_manifest, read_language_scene
 from storage.pictures import write_png
 from tasks.progress import StepProgress
+from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
 
@@ -130,7 +131,7 @@ def _stored(store: ArtifactStore, key: str, manifest: dict) -> BuiltBank:
                      sheet_uri=store.uri(f"{bank_dir(key)}/{SHEET_FILE}") if SHEET_FILE in files else "")
 
 
-@task(name="build-asset-bank", retries=0, cache_policy=NO_CACHE)
+@task(name="build-asset-bank", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def build_asset_bank(store_root: str, seq_ids: list[str] | None = None, config: CutoutConfig | None = None,
                      sheet: bool = True) -> BuiltBank:
     """Build (or find) the asset bank of ``<store>``'s reconstructed scenes under ``<store>/assets/<bank_hash>``.

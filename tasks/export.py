@@ -45,6 +45,7 @@ from storage.edits import edit_dir
 from tasks.code_version import code_version
 from tasks.export_inputs import ExportFilters, ExportInput, LogCache, group_by_sequence, scenario_source, select_inputs
 from tasks.progress import StepProgress, publish_rows
+from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
 
@@ -303,7 +304,7 @@ def export_rows(result: ExportResult) -> list[dict[str, Any]]:
             for k, (split, total) in enumerate(sorted(result.counts.get("by_split", {}).items()))]
 
 
-@task(name="export-dataset", retries=0, cache_policy=NO_CACHE)
+@task(name="export-dataset", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def export_dataset_task(store_root: str, out: str | None, config: ExportConfig) -> ExportResult:
     """``export_dataset`` as a Prefect task: step progress over the inputs, the splits as a table artifact."""
     result = export_dataset(store_root, out, config, progress=StepProgress(f"export {config.name}", headline=""))

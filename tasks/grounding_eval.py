@@ -32,6 +32,7 @@ from simsplat_core.language.text import default_text_encoder
 from storage import ArtifactStore, read_scene_log
 from storage.language_scenes import read_language_scene
 from storage.runs import run_table, write_run_tables
+from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
 
@@ -55,7 +56,7 @@ class GroundingEvaluation:
     seconds: float
 
 
-@task(name="evaluate-grounding", retries=0, cache_policy=NO_CACHE)
+@task(name="evaluate-grounding", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def evaluate_grounding_run(store_root: str, seq_ids: list[str], out_root: str, out_relpath: str = "",
                            benchmark: BenchmarkConfig | None = None) -> GroundingEvaluation:
     """Evaluate grounding on the newest language scene of each of ``seq_ids`` and write the run's tables.

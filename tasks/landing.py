@@ -49,6 +49,7 @@ from storage.remote_folder import default_mirror_dir, fetched, is_remote, list_r
 from storage.run_records import utc_now
 from storage.uris import join_uri, split_query
 from tasks.logs import DecodedLog, StoredLog, decode_real_log, store_real_log
+from tasks.retry_policy import STAGE_RETRIES
 from tasks.run_record import error_text
 
 logger = logging.getLogger(__name__)
@@ -238,7 +239,7 @@ def _decode_landed(landed: LandingLog, image_scale: float) -> DecodedLog:
     return dataclasses.replace(decoded, path=landed.path)
 
 
-@task(name="land-log", retries=0, cache_policy=NO_CACHE)
+@task(name="land-log", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def land_log(store_root: str, landed: LandingLog, image_scale: float = 1.0) -> LandingOutcome:
     """``ingest_landing_log`` as a task of the run's ingest fan-out."""
     return ingest_landing_log(store_root, landed, image_scale)

@@ -29,6 +29,7 @@ from storage import (
     require_log_manifest,
     write_scene_log,
 )
+from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
 
@@ -111,7 +112,7 @@ def reusable_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> S
     return _produced_before(ArtifactStore(store_root), default_seq_id(seed), _synthetic_key(seed, config))
 
 
-@task(name="generate-synthetic-log", retries=1, retry_delay_seconds=2, cache_policy=NO_CACHE)
+@task(name="generate-synthetic-log", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> StoredLog:
     """Generate the synthetic sequence of ``seed`` into ``<store>/logs/<seq_id>``."""
     seq_id = default_seq_id(seed)
@@ -121,7 +122,7 @@ def generate_synthetic_log(store_root: str, seed: int, config: WorldConfig) -> S
     )
 
 
-@task(name="ingest-real-log", retries=0, cache_policy=NO_CACHE)
+@task(name="ingest-real-log", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def ingest_real_log(store_root: str, source: str, path: str, image_scale: float = 1.0) -> StoredLog:
     """Decode a real driving log with the loader ``source`` names in ``simsplat_core.data.registry`` (``"auto"``:
     the source that recognises ``path``) and store it.

@@ -41,6 +41,7 @@ from storage.inventory import require_asset_bank
 from storage.schemas.edits import EDITS_MINING_COLUMNS
 from tasks.mining_ledger import LedgerSettings, MinedSequence, record_mined
 from tasks.progress import StepProgress, publish_rows
+from tasks.retry_policy import STAGE_RETRIES
 from tasks.stored_edits import LoadedEdit, edit_key, load_edit_context, write_edit
 
 logger = logging.getLogger(__name__)
@@ -147,7 +148,7 @@ def _artifact_key(seq_id: str) -> str:
     return "mining-" + (re.sub(r"[^a-z0-9-]+", "-", seq_id.lower()).strip("-") or "sequence")
 
 
-@task(name="mine-sequence", retries=0, cache_policy=NO_CACHE)
+@task(name="mine-sequence", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,  # noqa: PLR0913 -- Prefect task: its parameters are the run's inputs (options keyword-only)
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str | Proposal] = (),
                        client: VLMClient | None = None, category_offset: int | None = None,

@@ -27,6 +27,7 @@ from storage.scenes import (
     write_scene,
 )
 from tasks.progress import StepProgress
+from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
 
@@ -81,7 +82,7 @@ def reusable_scene(store: ArtifactStore, seq_id: str, config: ReconstructionConf
     return StoredScene(seq_id, key, scene_dir(seq_id, key), metrics_from_json(existing.get("metrics", {})), 0.0, True)
 
 
-@task(name="reconstruct-scene", retries=0, cache_policy=NO_CACHE)
+@task(name="reconstruct-scene", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
 def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig) -> StoredScene:
     """Reconstruct ``<store>/logs/<seq_id>`` into ``<store>/scenes/<seq_id>/<scene_hash>``.
 

@@ -145,8 +145,8 @@ def _summary(store: ArtifactStore, run_id: str, record: Section[RunRecord | None
     problem = "; ".join(s.error for s in (record, manifest) if not s.ok)
     rec = record.value
     if rec is not None:
-        return RunSummary(run_id, rec.flow, rec.status, rec.started_at, rec.seconds(now), rec.code_version,
-                          dict(rec.counts), tables, rec.error, problem)
+        return RunSummary(run_id, rec.flow, rec.observed_status(now), rec.started_at, rec.seconds(now),
+                          rec.code_version, dict(rec.counts), tables, rec.error, problem)
     man = manifest.value or {}
     written = man.get("written_at")
     status = "unreadable" if not record.ok else TABLES_ONLY

@@ -3,12 +3,17 @@ half-written file is reported by name and left out instead of failing the reader
 
 from __future__ import annotations
 
+import dataclasses
+import datetime
+
 import pytest
 
 from storage import ArtifactStore
 from storage.errors import CorruptArtifactError
 from storage.run_records import (
+    INTERRUPTED,
     PIPELINE_STAGES,
+    STALE_AFTER_S,
     RunRecord,
     StageRecord,
     json_safe,
@@ -111,3 +116,15 @@ def test_json_safe_turns_configs_into_plain_json():
                       "path": PurePosixPath("/data/store")})
     assert safe["config"]["num_frames"] == 6 and safe["seeds"] == [1, 2] and safe["nan"] is None
     assert safe["path"] == "/data/store"
+
+
+def test_a_running_record_whose_heartbeat_stopped_reads_as_interrupted():
+    beat = datetime.datetime(2026, 1, 1, 12, 0, tzinfo=datetime.UTC)
+    record = RunRecord("run-1", "simsplat-main", "running", (beat - datetime.timedelta(minutes=5)).isoformat(),
+                       heartbeat_at=beat.isoformat())
+    fresh, stale = (beat + datetime.timedelta(seconds=STALE_AFTER_S * f) for f in (0.5, 1.5))
+    assert record.observed_status(fresh) == "running" and record.seconds(fresh) == 300 + STALE_AFTER_S * 0.5
+    assert record.observed_status(stale) == INTERRUPTED and record.seconds(stale) == 300  # up to the last heartbeat
+    done = dataclasses.replace(record, status="completed", finished_at=beat.isoformat())
+    assert done.observed_status(stale) == "completed"
+

@@ -68,7 +68,7 @@ def test_staged_directory_commits_and_replaces(store: ArtifactStore) -> None:
         assert store.read_bytes("group/a.txt") == b"v1"  # old version visible until commit
     assert store.walk("group") == ["a.txt"]
     assert store.read_bytes("group/a.txt") == b"v2"
-    assert store.listdir("") == ["group"]  # no temporaries or old versions left
+    assert store.listdir("") == [".locks", "group"]  # no temporaries or old versions left (the commit lock stays)
 
 
 def test_staged_directory_failure_keeps_previous_version(store: ArtifactStore, snapshot, tmp_path: Path) -> None:

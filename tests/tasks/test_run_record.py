@@ -4,6 +4,7 @@ when the future is seen, the retries and start the task run's own running hook w
 from __future__ import annotations
 
 import datetime
+import time
 from dataclasses import dataclass, field
 from types import SimpleNamespace
 from typing import Any
@@ -12,7 +13,7 @@ import pytest
 
 from storage import ArtifactStore
 from storage.run_records import read_run_record, read_stage_matrix
-from tasks.run_record import RunningHook, recorded_run
+from tasks.run_record import RunningHook, RunRecorder, recorded_run
 
 T0 = datetime.datetime(2026, 1, 1, 12, 0, 0, tzinfo=datetime.UTC)
 
@@ -27,6 +28,9 @@ class FakeFuture:
         if isinstance(self.outcome, BaseException):
             raise self.outcome
         return self.outcome
+
+    def wait(self) -> None:
+        """Done at once."""
 
 
 @dataclass
@@ -45,7 +49,7 @@ class FakeTask:
         task_run = SimpleNamespace(start_time=T0, run_count=self.run_count, name=f"{self.name}-0")
         for hook in self.hooks:
             hook(self, task_run, SimpleNamespace(timestamp=T0))
-        done = SimpleNamespace(timestamp=T0 + datetime.timedelta(seconds=4))
+        done = SimpleNamespace(timestamp=T0 + datetime.timedelta(seconds=4), is_crashed=lambda: False)
         return FakeFuture(f"tr-{args}", self.outcome, done)
 
 
@@ -85,3 +89,18 @@ def test_the_running_hook_survives_an_unwritable_store(tmp_path):
     (tmp_path / "runs").write_text("a file where the runs folder should be")
     hook = RunningHook(str(tmp_path), "run-3", "align", ("synth-000001",))
     hook(None, SimpleNamespace(start_time=T0, run_count=1, name="t"), None)  # logged, not raised
+
+
+def test_the_recorder_beats_while_the_run_runs_and_stops_when_it_ends(tmp_path):
+    store = ArtifactStore(tmp_path)
+    recorder = RunRecorder(str(tmp_path), "run-1", "simsplat-main", heartbeat_s=0.05)
+    recorder.start({})
+    first = read_run_record(store, "run-1").heartbeat_at
+    deadline = time.monotonic() + 30
+    while read_run_record(store, "run-1").heartbeat_at == first and time.monotonic() < deadline:
+        time.sleep(0.02)
+    assert read_run_record(store, "run-1").heartbeat_at > first
+    recorder.complete()
+    ended = read_run_record(store, "run-1")
+    time.sleep(0.2)
+    assert read_run_record(store, "run-1") == ended and ended.status == "completed"

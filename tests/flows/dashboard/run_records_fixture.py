@@ -41,8 +41,10 @@ def add_run_records(root: str, mining: MiningSummary, seq_id: str) -> None:
     write_stage_record(store, run, StageRecord(seq_id, "export", "completed", _at(clock + 1), _at(clock), 1.0, 0))
 
     now = datetime.datetime.now(datetime.UTC).isoformat(timespec="microseconds")
+    # a live run's process beats every 30 s; this one stands for a run alive for the whole test session
+    beating = (datetime.datetime.now(datetime.UTC) + datetime.timedelta(days=1)).isoformat(timespec="microseconds")
     write_run_record(store, RunRecord(LIVE_RUN, "simsplat-main", "running", now, code_version="v0.1-test",
-                                      parameters={"seeds": [0, 9]}, counts={"logs": 2}))
+                                      parameters={"seeds": [0, 9]}, counts={"logs": 2}, heartbeat_at=beating))
     write_stage_record(store, LIVE_RUN, StageRecord(seq_id, "ingest", "completed", now, now, 0.5, 0))
     write_stage_record(store, LIVE_RUN, StageRecord(seq_id, "reconstruct", "running", now, now, retries=0))
     write_stage_record(store, LIVE_RUN, StageRecord(FAILED_SEQ, "ingest", "failed", now, now, 0.2, 1, error=FAILURE))
