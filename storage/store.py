@@ -167,13 +167,19 @@ class ArtifactStore:
 
     def walk(self, relpath: str = "") -> list[str]:
         """Sorted paths, relative to ``relpath``, of every file below directory ``relpath``."""
+        return list(self.file_sizes(relpath))
+
+    def file_sizes(self, relpath: str = "") -> dict[str, int]:
+        """``{path relative to relpath: bytes}`` of every file below directory ``relpath``, sorted by path, from one
+        recursive listing (``{}`` when it is absent)."""
         rel = normalize_relpath(relpath, allow_root=True)
         if self._info(rel).type != pafs.FileType.Directory:
-            return []
+            return {}
         prefix = self._path(rel).rstrip("/") + "/" if self._path(rel) else ""
         selector = pafs.FileSelector(self._path(rel), recursive=True, allow_not_found=True)
-        files = [i.path for i in self._fs.get_file_info(selector) if i.type == pafs.FileType.File]
-        return sorted(p[len(prefix):] if p.startswith(prefix) else p for p in files)
+        files = {(i.path[len(prefix):] if i.path.startswith(prefix) else i.path): int(i.size or 0)
+                 for i in self._fs.get_file_info(selector) if i.type == pafs.FileType.File}
+        return dict(sorted(files.items()))
 
     # ----------------------------------------------------------------- bytes
     def open_input(self, relpath: str) -> pa.NativeFile:

@@ -26,12 +26,13 @@ from storage import (
     canonical,
     config_settings,
     content_key,
+    intact_marker,
     read_scene,
     read_scene_log,
     require_log_manifest,
 )
-from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
-from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
+from storage.alignment import model_dir, read_aligner_state, write_aligner_model
+from storage.language_scenes import language_dir, write_language_scene
 
 logger = logging.getLogger(__name__)
 
@@ -85,7 +86,7 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
         keys.append(require_log_manifest(store, seq_id, "to train the aligner on")["key"])
     encoder = default_text_encoder()
     key = aligner_hash(keys, config, encoder.name)
-    existing = read_aligner_manifest(store, key)
+    existing = intact_marker(store, model_dir(key), key)
     if existing is not None:
         logger.info("motion aligner %s already stored, skipping", key[:12])
         return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
@@ -171,7 +172,7 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash
     key = language_hash(model_hash, scene_hash if scene_hash is not None else f"log-{log_key}", config, encoder.name,
                         embedder.name)
     relpath = language_dir(model_hash, seq_id, key)
-    existing = read_language_manifest(store, model_hash, seq_id, key)
+    existing = intact_marker(store, relpath, key)
     if existing is not None:
         logger.info("%s: language scene %s already stored, skipping", seq_id, key[:12])
         return StoredLanguageScene(seq_id, scene_hash or "", model_hash, key, relpath,

@@ -23,6 +23,7 @@ from simsplat_core.world import WORLD_VERSION, WorldConfig, default_seq_id, gene
 from storage import (
     ArtifactStore,
     content_key,
+    intact_marker,
     manifest_bytes,
     read_log_manifest,
     read_scene_log,
@@ -55,6 +56,8 @@ class StoredLog:
 def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[], SceneLog]) -> StoredLog:
     relpath = f"logs/{seq_id}"
     manifest = read_log_manifest(store, seq_id)
+    if manifest is not None:
+        manifest = intact_marker(store, relpath, manifest["key"])
     provenance = (manifest or {}).get("provenance", {})
     if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
         logger.info("%s: already stored for producer key %s, skipping", seq_id, key[:12])

@@ -17,11 +17,18 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.scene import ReconstructionConfig, reconstruct
-from storage import ArtifactStore, canonical, config_settings, content_key, read_scene_log, require_log_manifest
+from storage import (
+    ArtifactStore,
+    canonical,
+    config_settings,
+    content_key,
+    intact_marker,
+    read_scene_log,
+    require_log_manifest,
+)
 from storage.scenes import (
     SCENE_FORMAT_VERSION,
     metrics_from_json,
-    read_scene_manifest,
     scene_dir,
     scene_id_for,
     write_scene,
@@ -78,7 +85,7 @@ def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig
     log_manifest = require_log_manifest(store, seq_id, "to reconstruct")
     key = scene_hash(log_manifest["key"], config)
     relpath = scene_dir(seq_id, key)
-    existing = read_scene_manifest(store, seq_id, key)
+    existing = intact_marker(store, relpath, key)
     if existing is not None:
         logger.info("%s: scene %s already stored, skipping", seq_id, key[:12])
         return StoredScene(seq_id, key, relpath, metrics_from_json(existing.get("metrics", {})), 0.0, True)
