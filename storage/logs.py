@@ -34,8 +34,8 @@ import pyarrow as pa
 
 from simsplat_core.types import CameraImage, MapFeature, ObjectInfo, SceneLog, Track
 from storage.exr import read_exr, render_channels, write_exr
-from storage.keys import content_key
 from storage.integrity import require_intact
+from storage.keys import content_key
 from storage.markers import MARKER_NAME, is_done, mark_done, read_marker
 from storage.schemas.base import arrow_to_vectors, schema_name, schema_version, vectors_to_arrow
 from storage.schemas.logs import EGO_POSES_SCHEMA, FRAMES_SCHEMA, MAP_FEATURES_SCHEMA, OBJECTS_SCHEMA, TRACKS_SCHEMA
