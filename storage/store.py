@@ -20,12 +20,18 @@ Atomicity (``DESIGN.md``: every write is atomic):
   see a mixed group; a crash during that copy leaves the group without its marker (incomplete), and
   the previous version is not kept.
 
+A write that fails because the store cannot be written (disk full, read-only filesystem, permission denied, a file
+where a directory should be) raises ``StoreNotWritableError`` naming the file, the store and the reason, after the
+same cleanup: no partial artifact and the previous version intact. ``check_writable`` probes a store before a run
+does any work.
+
 Temporary names start with ``.`` so listings of artifact groups can ignore them. A writer killed
 with SIGKILL can leave a hidden ``.tmp-`` directory behind; it is never read and can be deleted.
 """
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
 import logging
@@ -40,7 +46,7 @@ import pyarrow as pa
 import pyarrow.fs as pafs
 
 from storage import parquet_io
-from storage.errors import CorruptArtifactError, UnsafePathError
+from storage.errors import CorruptArtifactError, StoreNotWritableError, UnsafePathError
 
 logger = logging.getLogger(__name__)
 
@@ -48,6 +54,16 @@ TMP_TAG = ".tmp-"
 OLD_TAG = ".old-"
 #: Files whose base name starts with this prefix are commit markers (written last on object stores).
 MARKER_PREFIX = "_"
+#: Write failures that mean the store cannot be written, by ``errno``, and how a message says it.
+UNWRITABLE_REASONS: dict[int, str] = {
+    errno.ENOSPC: "the disk is full",
+    errno.EDQUOT: "the disk quota is exceeded",
+    errno.EROFS: "the filesystem is read-only",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "permission denied",
+    errno.ENOTDIR: "a path on the way is a file, not a directory",
+    errno.EEXIST: "a path on the way is a file, not a directory",
+}
 
 
 def normalize_relpath(relpath: str, *, allow_root: bool = False) -> str:
@@ -212,8 +228,9 @@ class ArtifactStore:
                 with self._fs.open_output_stream(tmp, compression=None) as out:
                     yield out
                 self._fs.move(tmp, path)
-            except BaseException:
+            except BaseException as exc:
                 _delete_file_quietly(self._fs, tmp)
+                self._raise_if_unwritable(exc, rel)
                 raise
         else:
             buffer = pa.BufferOutputStream()
@@ -313,8 +330,9 @@ class ArtifactStore:
                 self._swap_into_place(tmp_rel, rel, join_relpath(parent, f".{name}{OLD_TAG}{tag}"))
             else:
                 self._copy_into_place(tmp_rel, rel)
-        except BaseException:
+        except BaseException as exc:
             self._delete_quietly(tmp_rel)
+            self._raise_if_unwritable(exc, rel)
             raise
         logger.debug("committed %s", self.uri(rel))
 
@@ -360,6 +378,33 @@ class ArtifactStore:
             if not _is_marker(f):
                 self._fs.delete_file(self._path(join_relpath(rel, f)))
         self._delete_quietly(tmp_rel)
+
+    # ----------------------------------------------------------------- writability
+    def _raise_if_unwritable(self, exc: BaseException, rel: str) -> None:
+        """Raise ``StoreNotWritableError`` (from ``exc``) naming ``rel`` and the store when ``exc`` is an ``OSError``
+        whose ``errno`` says the store cannot be written (``UNWRITABLE_REASONS``); else return."""
+        if isinstance(exc, StoreNotWritableError) or not isinstance(exc, OSError):
+            return
+        reason = UNWRITABLE_REASONS.get(exc.errno or -1)
+        if reason is not None:
+            raise StoreNotWritableError(f"{self.uri(rel)}: cannot write to the store {self.root}: {reason} "
+                                        f"({exc.strerror or exc})") from exc
+
+    def check_writable(self) -> None:
+        """Write and delete a small hidden probe file at the root (creating the root when it is missing).
+
+        Raises:
+            StoreNotWritableError: the store cannot be written, naming it and why (disk full, read-only, permission
+                denied, the root or a parent is a file).
+        """
+        probe = f".write-probe{TMP_TAG}{uuid.uuid4().hex}"
+        try:
+            self._fs.create_dir(self._path(""), recursive=True)
+            self.write_bytes(probe, b"probe\n")
+        except OSError as exc:
+            self._raise_if_unwritable(exc, probe)
+            raise
+        self._delete_quietly(probe)
 
     # ----------------------------------------------------------------- read-modify-write
     @contextmanager
@@ -408,8 +453,9 @@ class ArtifactStore:
         try:
             yield os_path + suffix
             self._fs.move(self._path(rel) + suffix, self._path(rel))
-        except BaseException:
+        except BaseException as exc:
             _delete_file_quietly(self._fs, self._path(rel) + suffix)
+            self._raise_if_unwritable(exc, rel)
             raise
         logger.debug("wrote %s", self.uri(rel))
 

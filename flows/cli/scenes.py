@@ -17,6 +17,7 @@ from flows.cli.common import (
     run_flow,
     stored_sequences,
     world_config,
+    writable_store,
 )
 from flows.cli.printers import (
     print_artifacts,
@@ -82,6 +83,7 @@ def run(
     if export is not None and not mine:
         raise typer.BadParameter("--export exports mined scenarios: give --mine K too (or run `simsplat export`)",
                                  param_hint="--export")
+    writable_store(store)
     if landing is not None:
         check_landing(landing)
     elif sequences == 0:

@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 
 from storage import ArtifactStore
+from storage.errors import StoreNotWritableError
 from storage.run_records import read_run_record, read_stage_matrix
 from tasks.run_record import RunningHook, recorded_run
 
@@ -85,3 +86,13 @@ def test_the_running_hook_survives_an_unwritable_store(tmp_path):
     (tmp_path / "runs").write_text("a file where the runs folder should be")
     hook = RunningHook(str(tmp_path), "run-3", "align", ("synth-000001",))
     hook(None, SimpleNamespace(start_time=T0, run_count=1, name="t"), None)  # logged, not raised
+
+
+def test_a_run_on_a_store_that_cannot_be_written_fails_on_entry(tmp_path) -> None:
+    root = tmp_path / "store"
+    root.write_text("a file, not a directory")
+    entered = []
+    with pytest.raises(StoreNotWritableError, match="cannot write to the store"):
+        with recorded_run(str(root), "run-3", "simsplat-main", {}):
+            entered.append(True)
+    assert not entered and root.read_text() == "a file, not a directory"
