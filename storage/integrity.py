@@ -7,7 +7,7 @@
         "manifest_sha256": "...",      # SHA-256 of the manifest itself, this field left out
     }
 
-Every file of the directory but the marker is listed with its size; files up to ``CHECKSUM_MAX_BYTES`` also get a
+Every file of the directory but the marker (and hidden temporaries) is listed with its size; files up to ``CHECKSUM_MAX_BYTES`` also get a
 SHA-256 (hashed once, right after they were written). ``check`` compares a stored directory with its manifest and
 returns one line per disagreement, each naming the file:
 
@@ -77,13 +77,14 @@ def seal(store: ArtifactStore, directory: str, manifest: Mapping[str, Any], excl
         raise ValueError(f"manifest key {INTEGRITY_KEY!r} is reserved for storage.integrity")
     files: dict[str, dict[str, Any]] = {}
     for name, size in store.file_sizes(directory).items():
-        if name in exclude:
+        if name in exclude or name.rpartition("/")[2].startswith("."):  # hidden: temporaries, lock files
             continue
         record: dict[str, Any] = {"bytes": size}
         if size <= CHECKSUM_MAX_BYTES:
             record["sha256"] = file_sha256(store, join_relpath(directory, name))
         files[name] = record
-    sealed = {**manifest, INTEGRITY_KEY: {"files": files}}
+    # as it will read back (JSON: int keys become strings, tuples lists), so the digest matches the stored manifest
+    sealed = json.loads(json.dumps({**manifest, INTEGRITY_KEY: {"files": files}}, allow_nan=True))
     sealed[INTEGRITY_KEY]["manifest_sha256"] = manifest_sha256(sealed)
     return sealed
 

@@ -12,11 +12,13 @@ from pathlib import Path
 
 import pytest
 
+from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.world import WorldConfig
 from storage import ArtifactStore, CorruptArtifactError, read_exr, read_scene, read_scene_log
 from storage.integrity import INTEGRITY_KEY
 from storage.markers import MARKER_NAME
+from tasks.align import train_motion_aligner
 from tasks.logs import generate_synthetic_log
 from tasks.reconstruct import StoredScene, reconstruct_scene
 
@@ -136,3 +138,16 @@ def test_a_truncated_log_table_is_named_on_read_and_regenerated(store: ArtifactS
     log = read_scene_log(store, seq_id)
     assert log.tracks and log.num_frames == again.summary.num_frames
     assert generate_synthetic_log.fn(store.root, SEED, WORLD).skipped
+
+
+def test_a_damaged_aligner_model_is_retrained(store: ArtifactStore, seq_id: str,
+                                              caplog: pytest.LogCaptureFixture) -> None:
+    config = MotionAlignerConfig(epochs=1)
+    first = train_motion_aligner.fn(store.root, [seq_id], config)
+    (model_file,) = [f for f in store.walk(first.relpath) if f != MARKER_NAME]
+    _overwrite_middle(Path(store.uri(f"{first.relpath}/{model_file}")))
+    with caplog.at_level(logging.WARNING, logger="storage.integrity"):
+        again = train_motion_aligner.fn(store.root, [seq_id], config)
+    assert not again.skipped and again.model_hash == first.model_hash
+    assert any(f"{model_file}: sha256" in r.getMessage() for r in caplog.records)
+    assert train_motion_aligner.fn(store.root, [seq_id], config).skipped
