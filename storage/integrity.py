@@ -7,9 +7,9 @@
         "manifest_sha256": "...",      # SHA-256 of the manifest itself, this field left out
     }
 
-Every file of the directory but the marker (and hidden temporaries) is listed with its size; files up to ``CHECKSUM_MAX_BYTES`` also get a
-SHA-256 (hashed once, right after they were written). ``check`` compares a stored directory with its manifest and
-returns one line per disagreement, each naming the file:
+Every file of the directory but the marker (and hidden temporaries) is listed with its size; files up to
+``CHECKSUM_MAX_BYTES`` also get a SHA-256 (hashed once, right after they were written). ``check`` compares a stored
+directory with its manifest and returns one line per disagreement, each naming the file:
 
 * the manifest's own digest (an edited or damaged manifest: a count or checksum changed by hand);
 * every recorded file present with its recorded size (one recursive listing: truncated or missing files);
