@@ -83,11 +83,11 @@ def run(
     if export is not None and not mine:
         raise typer.BadParameter("--export exports mined scenarios: give --mine K too (or run `simsplat export`)",
                                  param_hint="--export")
-    writable_store(store)
     if landing is not None:
         check_landing(landing)
     elif sequences == 0:
         stored_sequences(store, param_hint="--sequences")
+    writable_store(store)  # last: a refused parameter leaves no store behind
     result = run_flow(main_flow, runner, workers, store_root=store, seeds=list(range(seed, seed + sequences)),
                       config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
                       alignment=alignment, align=align, mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
