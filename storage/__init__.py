@@ -6,7 +6,8 @@
 * ``schemas``: every Parquet table's ``pyarrow.schema`` with its version, validated on read.
 * ``parquet_io``, ``exr``, ``pictures``: table, EXR (OpenImageIO, zip) and PNG / MP4 I/O.
 * ``keys``, ``markers``: content keys of stage inputs/configs and the ``_SUCCESS.json`` manifests that
-  mark finished work (a re-run skips it).
+  mark finished work (a re-run skips it); ``integrity``: the file sizes and checksums a manifest records,
+  checked before reuse (a corrupt artifact is reported and recomputed).
 * ``logs``, ``scenes``: scene logs (``logs/<seq_id>``) and reconstructed scenes (``scenes/<seq_id>/<hash>``).
 * ``alignment``, ``language_scenes``: the motion aligner models and language scenes (``alignment/``).
 * ``runs``: run directories and evaluation tables (``runs/<run_id>/tables``).
@@ -45,7 +46,7 @@ from storage.logs import (
     scene_log_key,
     write_scene_log,
 )
-from storage.markers import MARKER_NAME, is_done, mark_done, read_marker
+from storage.markers import MARKER_NAME, intact_marker, is_done, mark_done, read_marker
 from storage.scenes import (
     LoadedScene,
     WrittenScene,
@@ -100,6 +101,7 @@ __all__ = [
     "feature_channel",
     "gaussians_schema",
     "image_uri",
+    "intact_marker",
     "is_done",
     "join_relpath",
     "json_schema",

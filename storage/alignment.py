@@ -18,7 +18,7 @@ import logging
 from collections.abc import Mapping
 from typing import Any, Protocol
 
-from storage.markers import mark_done, read_marker
+from storage.markers import intact_marker, mark_done, read_marker
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)
@@ -60,8 +60,8 @@ def write_aligner_model(
     """Store a trained motion aligner atomically; returns its manifest (the stored one when it exists
     and ``overwrite`` is False)."""
     rel = model_dir(model_hash)
-    existing = read_aligner_manifest(store, model_hash)
-    if existing is not None and not overwrite:
+    existing = None if overwrite else intact_marker(store, rel, model_hash)
+    if existing is not None:
         logger.info("alignment model %s already stored, skipping write", store.uri(rel))
         return existing
     with store.staged_directory(rel) as tmp:

@@ -26,7 +26,7 @@ import numpy as np
 import pyarrow as pa
 
 from storage.errors import CorruptArtifactError
-from storage.markers import mark_done, read_marker
+from storage.markers import is_done, mark_done, read_marker
 from storage.scenes import deformation_table, gaussian_columns, gaussians_table, read_deformation_table
 from storage.schemas.base import arrow_to_vectors, schema_version, vectors_to_arrow
 from storage.schemas.edits import ASSETS_SCHEMA
@@ -153,7 +153,7 @@ def write_asset_bank(store: ArtifactStore, bank: Any, *, provenance: Mapping[str
         SchemaError: a table does not match its schema (naming the file and the column).
     """
     rel = bank_dir(bank.bank_hash)
-    if not overwrite and bank_exists(store, bank.bank_hash):
+    if not overwrite and is_done(store, rel, bank.bank_hash):
         logger.info("asset bank %s already complete, skipping write", store.uri(rel))
         return bank.bank_hash
     with_features = [a.asset_id for a in bank.assets if a.gaussians.features is not None]

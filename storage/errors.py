@@ -22,6 +22,11 @@ class CorruptArtifactError(StorageError, ValueError):
     """A file exists but cannot be decoded (truncated Parquet, broken EXR, invalid JSON)."""
 
 
+class StoreNotWritableError(StorageError, OSError):
+    """The store cannot be written: the disk is full, the filesystem is read-only, permission is denied, or the root
+    is not a directory. The message names the file, the store root and which of these it is."""
+
+
 class MissingInputError(StorageError, FileNotFoundError, ValueError):
     """A stage's input is not in the store; the message names what is missing and the command that makes it.
 

@@ -38,7 +38,7 @@ from simsplat_core.types import node_type_for_category
 from storage.alignment import ALIGNMENT_DIR, model_dir
 from storage.errors import CorruptArtifactError
 from storage.exr import read_exr, render_channels, write_exr
-from storage.markers import mark_done, read_marker
+from storage.markers import intact_marker, mark_done, read_marker
 from storage.scenes import gaussian_columns, gaussians_table, nodes_table, read_scene
 from storage.schemas.base import arrow_to_vectors
 from storage.schemas.language import NODE_LANGUAGE_SCHEMA
@@ -164,8 +164,8 @@ def write_language_scene(
         autoencoder_state: the scene autoencoder's ``AutoencoderState`` (``to_arrays``), if any.
     """
     rel = language_dir(model_hash, scene.seq_id, language_hash)
-    existing = read_language_manifest(store, model_hash, scene.seq_id, language_hash)
-    if existing is not None and not overwrite:
+    existing = None if overwrite else intact_marker(store, rel, language_hash)
+    if existing is not None:
         logger.info("language scene %s already stored, skipping write", store.uri(rel))
         return existing
     dim = len(next((n.f_app for n in scene.nodes if n.f_app is not None),

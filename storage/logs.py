@@ -34,8 +34,9 @@ import pyarrow as pa
 
 from simsplat_core.types import CameraImage, MapFeature, ObjectInfo, SceneLog, Track
 from storage.exr import read_exr, render_channels, write_exr
+from storage.integrity import require_intact
 from storage.keys import content_key
-from storage.markers import is_done, mark_done, read_marker
+from storage.markers import MARKER_NAME, is_done, mark_done, read_marker
 from storage.schemas.base import arrow_to_vectors, schema_name, schema_version, vectors_to_arrow
 from storage.schemas.logs import EGO_POSES_SCHEMA, FRAMES_SCHEMA, MAP_FEATURES_SCHEMA, OBJECTS_SCHEMA, TRACKS_SCHEMA
 from storage.store import ArtifactStore, join_relpath
@@ -312,7 +313,8 @@ def read_scene_log(store: ArtifactStore, seq_id: str, load_images: bool = True) 
 
     Raises:
         FileNotFoundError: no complete log (missing manifest) for ``seq_id``.
-        SchemaError, CorruptArtifactError: a table or image does not decode, naming the file.
+        SchemaError, CorruptArtifactError: a table or image does not decode, or a file disagrees with the
+            manifest (size, row count; ``storage.integrity``), naming the file.
     """
     rel = log_dir(seq_id)
     manifest = read_marker(store, rel)
@@ -331,6 +333,7 @@ def read_scene_log(store: ArtifactStore, seq_id: str, load_images: bool = True) 
         map_features=_read_map_features(tables["map_features"]),
         metadata={str(k): str(v) for k, v in manifest.get("metadata", {}).items()},
     )
+    require_intact(store, rel, manifest, MARKER_NAME)  # after decoding: a file's own error names it more precisely
     return log.validate()
 
 

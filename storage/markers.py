@@ -1,8 +1,12 @@
-"""Completion markers: a stage's output directory is *done* when its marker carries the input key.
+"""Completion markers: a stage's output directory is *done* when its marker carries the input key and the
+directory still agrees with what the marker recorded.
 
-The marker is ``<relpath>/_SUCCESS.json`` = ``{"key": <content key>, ...info}``. Its name starts
-with ``_``, so ``ArtifactStore.staged_directory`` commits it last on object stores; write it inside
-the staged directory so that output group and marker appear together.
+The marker is ``<relpath>/_SUCCESS.json`` = ``{"key": <content key>, ...info, "integrity": {...}}``. Its name
+starts with ``_``, so ``ArtifactStore.staged_directory`` commits it last on object stores; write it inside
+the staged directory, after every other file of the group, so that output group and marker appear together.
+``mark_done`` records the size (and checksum) of every file already in the directory (``storage.integrity``);
+``is_done`` and ``intact_marker`` check them before a stage reuses the output, so a corrupt artifact is reported
+and recomputed rather than reused.
 
 Usage in a stage::
 
@@ -19,6 +23,7 @@ import logging
 from typing import Any
 
 from storage.errors import CorruptArtifactError
+from storage.integrity import intact, seal
 from storage.store import ArtifactStore, join_relpath
 
 logger = logging.getLogger(__name__)
@@ -46,15 +51,25 @@ def read_marker(store: ArtifactStore, relpath: str) -> dict[str, Any] | None:
     return marker
 
 
-def is_done(store: ArtifactStore, relpath: str, key: str) -> bool:
-    """Whether ``relpath`` holds a complete output produced from inputs with content key ``key``."""
+def intact_marker(store: ArtifactStore, relpath: str, key: str) -> dict[str, Any] | None:
+    """The marker of ``relpath`` when it holds a complete output of inputs with content key ``key`` that still agrees
+    with its manifest (``storage.integrity.check``, checksums included), else ``None``: absent, another key, or
+    corrupt (then a warning names each disagreeing file and the stage recomputes it)."""
     marker = read_marker(store, relpath)
-    return marker is not None and marker["key"] == key
+    if marker is None or marker["key"] != key:
+        return None
+    return marker if intact(store, relpath, marker, MARKER_NAME) else None
+
+
+def is_done(store: ArtifactStore, relpath: str, key: str) -> bool:
+    """Whether ``relpath`` holds a complete, intact output produced from inputs with content key ``key``."""
+    return intact_marker(store, relpath, key) is not None
 
 
 def mark_done(store: ArtifactStore, relpath: str, key: str, info: dict[str, Any] | None = None) -> None:
-    """Write the marker of ``relpath`` (atomically): ``{"key": key, **info}``."""
+    """Write the marker of ``relpath`` (atomically): ``{"key": key, **info}`` sealed with the size and checksum of
+    every file already under ``relpath`` (``storage.integrity.seal``), so write it last."""
     info = dict(info or {})
     if "key" in info:
         raise ValueError("mark_done: 'key' is reserved in info")
-    store.write_json(marker_path(relpath), {"key": key, **info})
+    store.write_json(marker_path(relpath), seal(store, relpath, {"key": key, **info}, exclude=(MARKER_NAME,)))

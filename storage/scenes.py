@@ -42,7 +42,8 @@ import pyarrow as pa
 
 from storage.errors import CorruptArtifactError
 from storage.exr import read_exr, render_channels, write_exr
-from storage.markers import is_done, mark_done, read_marker
+from storage.integrity import require_intact
+from storage.markers import MARKER_NAME, is_done, mark_done, read_marker
 from storage.schemas.base import arrow_to_vectors, schema_version, vectors_to_arrow
 from storage.schemas.runs import METRICS_SCHEMA
 from storage.schemas.scenes import DEFORMATIONS_SCHEMA, NODE_POSES_SCHEMA, gaussians_schema, nodes_schema
@@ -473,7 +474,8 @@ def read_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None = None)
 
     Raises:
         FileNotFoundError: no complete scene (or a file of it is missing), naming the path.
-        SchemaError, CorruptArtifactError: a table does not decode or validate, naming file and column.
+        SchemaError, CorruptArtifactError: a table does not decode or validate, or a file disagrees with the
+            manifest (size, row count; ``storage.integrity``), naming file and column.
     """
     full_hash = resolve_scene_hash(store, seq_id, scene_hash)
     rel = scene_dir(seq_id, full_hash)
@@ -484,6 +486,7 @@ def read_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None = None)
     metrics = store.read_table(join_relpath(rel, "metrics.parquet"), METRICS_SCHEMA)
     listed = manifest.get("deformations", {}).get("nodes", [])
     deformations, deformation_frames = _read_deformations(store, rel, poses, listed)
+    require_intact(store, rel, manifest, MARKER_NAME)  # after decoding: a file's own error names it more precisely
     records = _records_class()(
         scene_id=str(manifest.get("scene_id", "")),
         frame_indices=np.asarray(manifest.get("frame_indices", []), dtype=np.int64),

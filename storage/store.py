@@ -46,12 +46,18 @@ Atomicity (``DESIGN.md``: every write is atomic):
   other appended in that moment are missing from the table, while their edit folders stay complete. Threads of
   one process take turns (a process lock), and locally ``flock`` serialises every process.
 
+A write that fails because the store cannot be written (disk full, read-only filesystem, permission denied, a file
+where a directory should be) raises ``StoreNotWritableError`` naming the file, the store and the reason, after the
+same cleanup: no partial artifact and the previous version intact. ``check_writable`` probes a store before a run
+does any work.
+
 Temporary names start with ``.`` so listings of artifact groups can ignore them. A writer killed
 with SIGKILL can leave a hidden ``.tmp-`` directory behind; it is never read and can be deleted.
 """
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import hashlib
 import json
@@ -68,7 +74,7 @@ import pyarrow as pa
 import pyarrow.fs as pafs
 
 from storage import parquet_io
-from storage.errors import CorruptArtifactError, UnsafePathError
+from storage.errors import CorruptArtifactError, StoreNotWritableError, UnsafePathError
 from storage.uris import is_uri, join_uri, reject_credentials, split_query
 
 logger = logging.getLogger(__name__)
@@ -79,6 +85,16 @@ OLD_TAG = ".old-"
 MARKER_PREFIX = "_"
 #: Hidden folder of the lock files that serialise commits of one group (local stores).
 LOCKS_DIR = ".locks"
+#: Write failures that mean the store cannot be written, by ``errno``, and how a message says it.
+UNWRITABLE_REASONS: dict[int, str] = {
+    errno.ENOSPC: "the disk is full",
+    errno.EDQUOT: "the disk quota is exceeded",
+    errno.EROFS: "the filesystem is read-only",
+    errno.EACCES: "permission denied",
+    errno.EPERM: "permission denied",
+    errno.ENOTDIR: "a path on the way is a file, not a directory",
+    errno.EEXIST: "a path on the way is a file, not a directory",
+}
 
 
 def normalize_relpath(relpath: str, *, allow_root: bool = False) -> str:
@@ -199,13 +215,19 @@ class ArtifactStore:
 
     def walk(self, relpath: str = "") -> list[str]:
         """Sorted paths, relative to ``relpath``, of every file below directory ``relpath``."""
+        return list(self.file_sizes(relpath))
+
+    def file_sizes(self, relpath: str = "") -> dict[str, int]:
+        """``{path relative to relpath: bytes}`` of every file below directory ``relpath``, sorted by path, from one
+        recursive listing (``{}`` when it is absent)."""
         rel = normalize_relpath(relpath, allow_root=True)
         if self._info(rel).type != pafs.FileType.Directory:
-            return []
+            return {}
         prefix = self._path(rel).rstrip("/") + "/" if self._path(rel) else ""
         selector = pafs.FileSelector(self._path(rel), recursive=True, allow_not_found=True)
-        files = [i.path for i in self._fs.get_file_info(selector) if i.type == pafs.FileType.File]
-        return sorted(p[len(prefix):] if p.startswith(prefix) else p for p in files)
+        files = {(i.path[len(prefix):] if i.path.startswith(prefix) else i.path): int(i.size or 0)
+                 for i in self._fs.get_file_info(selector) if i.type == pafs.FileType.File}
+        return dict(sorted(files.items()))
 
     # ----------------------------------------------------------------- bytes
     def open_input(self, relpath: str) -> pa.NativeFile:
@@ -238,8 +260,9 @@ class ArtifactStore:
                 with self._fs.open_output_stream(tmp, compression=None) as out:
                     yield out
                 self._fs.move(tmp, path)
-            except BaseException:
+            except BaseException as exc:
                 _delete_file_quietly(self._fs, tmp)
+                self._raise_if_unwritable(exc, rel)
                 raise
         else:
             buffer = pa.BufferOutputStream()
@@ -342,8 +365,9 @@ class ArtifactStore:
                     self._swap_into_place(tmp_rel, rel, join_relpath(parent, f".{name}{OLD_TAG}{tag}"))
             else:
                 self._copy_into_place(tmp_rel, rel)
-        except BaseException:
+        except BaseException as exc:
             self._delete_quietly(tmp_rel)
+            self._raise_if_unwritable(exc, rel)
             raise
         logger.debug("committed %s", self.uri(rel))
 
@@ -394,6 +418,33 @@ class ArtifactStore:
                 self._fs.delete_file(self._path(join_relpath(rel, f)))
         self._delete_quietly(tmp_rel)
 
+    # ----------------------------------------------------------------- writability
+    def _raise_if_unwritable(self, exc: BaseException, rel: str) -> None:
+        """Raise ``StoreNotWritableError`` (from ``exc``) naming ``rel`` and the store when ``exc`` is an ``OSError``
+        whose ``errno`` says the store cannot be written (``UNWRITABLE_REASONS``); else return."""
+        if isinstance(exc, StoreNotWritableError) or not isinstance(exc, OSError):
+            return
+        reason = UNWRITABLE_REASONS.get(exc.errno or -1)
+        if reason is not None:
+            raise StoreNotWritableError(f"{self.uri(rel)}: cannot write to the store {self.root}: {reason} "
+                                        f"({exc.strerror or exc})") from exc
+
+    def check_writable(self) -> None:
+        """Write and delete a small hidden probe file at the root (creating the root when it is missing).
+
+        Raises:
+            StoreNotWritableError: the store cannot be written, naming it and why (disk full, read-only, permission
+                denied, the root or a parent is a file).
+        """
+        probe = f".write-probe{TMP_TAG}{uuid.uuid4().hex}"
+        try:
+            self._fs.create_dir(self._path(""), recursive=True)
+            self.write_bytes(probe, b"probe\n")
+        except OSError as exc:
+            self._raise_if_unwritable(exc, probe)
+            raise
+        self._delete_quietly(probe)
+
     # ----------------------------------------------------------------- read-modify-write
     @contextmanager
     def exclusive(self, relpath: str) -> Iterator[None]:
@@ -443,8 +494,9 @@ class ArtifactStore:
         try:
             yield os_path + suffix
             self._fs.move(self._path(rel) + suffix, self._path(rel))
-        except BaseException:
+        except BaseException as exc:
             _delete_file_quietly(self._fs, self._path(rel) + suffix)
+            self._raise_if_unwritable(exc, rel)
             raise
         logger.debug("wrote %s", self.uri(rel))
 

@@ -26,12 +26,13 @@ from storage import (
     canonical,
     config_settings,
     content_key,
+    intact_marker,
     read_scene,
     read_scene_log,
     require_log_manifest,
 )
-from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
-from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
+from storage.alignment import model_dir, read_aligner_state, write_aligner_model
+from storage.language_scenes import language_dir, write_language_scene
 from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
@@ -75,13 +76,14 @@ def _training_log_keys(store: ArtifactStore, seq_ids: list[str]) -> list[str]:
 def reusable_aligner(store: ArtifactStore, seq_ids: list[str], config: MotionAlignerConfig,
                      encoder_name: str) -> StoredAligner | None:
     """The stored aligner that ``train_motion_aligner`` would reuse for ``seq_ids`` (keyed by ``aligner_hash``),
-    ``None`` when it has to train one. Reads manifests only: the run planner asks it too.
+    ``None`` when it has to train one. The stored files are checked against their manifest
+    (``storage.markers.intact_marker``: a corrupt one is recomputed); the run planner asks it too.
 
     Raises:
         FileNotFoundError: a log is missing from the store (named).
     """
     key = aligner_hash(_training_log_keys(store, seq_ids), config, encoder_name)
-    existing = read_aligner_manifest(store, key)
+    existing = intact_marker(store, model_dir(key), key)
     if existing is None:
         return None
     return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
@@ -177,13 +179,14 @@ def reusable_language_scene(store: ArtifactStore, seq_id: str, scene_hash: str |
                             config: AlignmentConfig, encoder_name: str, embedder_name: str
                             ) -> StoredLanguageScene | None:
     """The stored language scene that ``align_scene`` would reuse (``scene_hash`` ``None``: a log without images),
-    ``None`` when it has to align. Reads manifests only: the run planner asks it too.
+    ``None`` when it has to align. The stored files are checked against their manifest
+    (``storage.markers.intact_marker``: a corrupt one is recomputed); the run planner asks it too.
 
     Raises:
         FileNotFoundError: the log is missing from the store (named).
     """
     key = _scene_language_hash(_log_key(store, seq_id), scene_hash, model_hash, config, encoder_name, embedder_name)
-    existing = read_language_manifest(store, model_hash, seq_id, key)
+    existing = intact_marker(store, language_dir(model_hash, seq_id, key), key)
     if existing is None:
         return None
     return StoredLanguageScene(seq_id, scene_hash or "", model_hash, key, language_dir(model_hash, seq_id, key),

@@ -22,7 +22,7 @@ from simsplat_core.editing.assets.procedural import STATIC_KINDS, procedural_ass
 from simsplat_core.scene import SceneGraph
 from simsplat_core.viz.asset_sheet import asset_contact_sheet
 from simsplat_core.viz.images import encode_png
-from storage import ArtifactStore, config_settings, content_key, list_scenes, read_scene, read_scene_log
+from storage import ArtifactStore, config_settings, content_key, intact_marker, list_scenes, read_scene, read_scene_log
 from storage.assets import (
     ASSET_BANK_FORMAT_VERSION,
     bank_dir,
@@ -150,7 +150,7 @@ def build_asset_bank(store_root: str, seq_ids: list[str] | None = None, config: 
     config = config or CutoutConfig()
     sources = asset_sources(store, seq_ids)
     key = bank_key(sources, config)
-    manifest = read_bank_manifest(store, key)
+    manifest = intact_marker(store, bank_dir(key), key)
     if manifest is not None:
         logger.info("asset bank %s already built, skipping", key[:12])
         return _stored(store, key, manifest)

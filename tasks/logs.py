@@ -23,6 +23,7 @@ from simsplat_core.world import WORLD_VERSION, WorldConfig, default_seq_id, gene
 from storage import (
     ArtifactStore,
     content_key,
+    intact_marker,
     manifest_bytes,
     read_log_manifest,
     read_scene_log,
@@ -56,6 +57,8 @@ class StoredLog:
 def _produced_before(store: ArtifactStore, seq_id: str, key: str) -> StoredLog | None:
     """The complete log ``seq_id`` when its producer stored it under ``key``, else ``None``."""
     manifest = read_log_manifest(store, seq_id)
+    if manifest is not None:
+        manifest = intact_marker(store, relpath, manifest["key"])
     provenance = (manifest or {}).get("provenance", {})
     if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
         return _already_stored(store, seq_id, manifest)

@@ -35,8 +35,8 @@ from simsplat_core.mining.attempts import EDITS_COLUMNS, AttemptRecord, attempt_
 from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequence
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.vlm_protocol import VLMClient
-from storage import ArtifactStore
-from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath, read_edit_manifest
+from storage import ArtifactStore, intact_marker
+from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath
 from storage.inventory import require_asset_bank
 from storage.schemas.edits import EDITS_MINING_COLUMNS
 from tasks.mining_ledger import LedgerSettings, MinedSequence, record_mined
@@ -133,8 +133,7 @@ def _store_accepted(store: ArtifactStore, loaded: LoadedEdit, config: MiningConf
     program = program_from_json(attempt.program_json, source=f"mined scenario {attempt.edit_id}")
     key = edit_key(loaded, attempt.prompt, program, config.options)
     rel = edit_dir(record.run_id, record.seq_id, record.edit_id)
-    manifest = read_edit_manifest(store, record.run_id, record.seq_id, record.edit_id)
-    if manifest is not None and manifest.get("key") == key:
+    if intact_marker(store, rel, key) is not None:
         logger.info("%s: scenario %s already stored, skipping", record.seq_id, record.edit_id)
         return store.uri(rel)
     timing: dict[str, float] = {}

@@ -17,11 +17,18 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.scene import ReconstructionConfig, reconstruct
-from storage import ArtifactStore, canonical, config_settings, content_key, read_scene_log, require_log_manifest
+from storage import (
+    ArtifactStore,
+    canonical,
+    config_settings,
+    content_key,
+    intact_marker,
+    read_scene_log,
+    require_log_manifest,
+)
 from storage.scenes import (
     SCENE_FORMAT_VERSION,
     metrics_from_json,
-    read_scene_manifest,
     scene_dir,
     scene_id_for,
     write_scene,
@@ -70,13 +77,14 @@ def scene_hash(log_key: str, config: ReconstructionConfig) -> str:
 
 def reusable_scene(store: ArtifactStore, seq_id: str, config: ReconstructionConfig) -> StoredScene | None:
     """The complete stored scene of ``seq_id`` under ``config`` (keyed by ``scene_hash``), ``None`` when
-    ``reconstruct_scene`` has to reconstruct it. Reads two manifests: the run planner asks it too.
+    ``reconstruct_scene`` has to reconstruct it. The stored files are checked against
+    their manifest (``storage.markers.intact_marker``: a corrupt scene is recomputed); the run planner asks it too.
 
     Raises:
         FileNotFoundError: the store holds no complete log ``seq_id``.
     """
     key = scene_hash(require_log_manifest(store, seq_id, "to reconstruct")["key"], config)
-    existing = read_scene_manifest(store, seq_id, key)
+    existing = intact_marker(store, scene_dir(seq_id, key), key)
     if existing is None:
         return None
     return StoredScene(seq_id, key, scene_dir(seq_id, key), metrics_from_json(existing.get("metrics", {})), 0.0, True)

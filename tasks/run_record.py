@@ -319,8 +319,13 @@ def _flow_run_facts() -> tuple[str, Mapping[str, Any]]:
 def recorded_run(store_root: str, run_id: str, flow: str | None = None,
                  parameters: Mapping[str, Any] | None = None) -> Iterator[RunRecorder]:
     """Record run ``run_id``: ``running`` on entry, ``completed`` on a normal exit, ``failed`` with the error when
-    the block raises (the error re-raised). ``flow`` and ``parameters`` default to the current Prefect flow run's."""
+    the block raises (the error re-raised). ``flow`` and ``parameters`` default to the current Prefect flow run's.
+
+    Raises:
+        StoreNotWritableError: on entry, when the store cannot be written (``ArtifactStore.check_writable``).
+    """
     name, given = _flow_run_facts() if flow is None or parameters is None else ("", {})
+    ArtifactStore(store_root).check_writable()  # an unwritable store fails here, before any stage runs
     recorder = RunRecorder(store_root, run_id, flow or name)
     recorder.start(given if parameters is None else parameters)
     try:

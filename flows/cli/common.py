@@ -81,6 +81,18 @@ def check_vlm(vlm: str) -> None:
             raise typer.BadParameter(str(exc), param_hint="--vlm") from exc
 
 
+def writable_store(store: str) -> None:
+    """The store at ``store`` can be written (a probe file written and deleted at its root), else a bad parameter
+    naming it and why: the disk is full, the filesystem is read-only, permission is denied, the root is a file."""
+    from storage import ArtifactStore
+    from storage.errors import StoreNotWritableError
+
+    try:
+        ArtifactStore(store).check_writable()
+    except StoreNotWritableError as exc:
+        raise typer.BadParameter(str(exc), param_hint="--store") from exc
+
+
 def stored_sequences(store: str, seq: list[str] | None = None, needs: str = "log",
                      param_hint: str = "--seq") -> list[str]:
     """``seq`` (default: every sequence of ``store`` that has what ``needs`` names: ``"log"``, ``"scene"``,

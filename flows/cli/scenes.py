@@ -17,6 +17,7 @@ from flows.cli.common import (
     run_flow,
     stored_sequences,
     world_config,
+    writable_store,
 )
 from flows.cli.printers import (
     print_artifacts,
@@ -95,6 +96,7 @@ def run(
                   alignment=alignment, align=align,
                   mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
                   export=ExportPlan(out=export) if export is not None else None, landing=landing)
+    writable_store(store)  # last: a refused parameter leaves no store behind
     idle = idle_main_run(params)  # nothing new: recorded without starting Prefect or Ray
     if idle is not None:
         print_nothing_new(idle)

@@ -26,6 +26,11 @@ without repeats), until ``config.scenarios`` are accepted or the proposals run o
    (``Pending.target_id``, ``adjust.retarget``; proposers that do not say which object they meant are not
    retried). When nothing can be adjusted the loop moves on.
 
+An endpoint that is down stops the sequence early: after :data:`MAX_UNREACHABLE_IN_A_ROW` attempts in a row whose
+client call could not reach it (``VLMUnreachableError``, each already retried by the client), the remaining proposals
+are not attempted (they get no row; the log says why), so a run with the VLM down spends a few bounded calls per
+sequence, records each as ``"failed"`` with its reason, and goes on.
+
 Decisions depend only on the scene, the client's answers and the config (timings are recorded, never read), so
 the rule-based client gives the same records for the same seed. Every attempt is an
 :class:`~simsplat_core.mining.attempts.AttemptRecord`.
@@ -58,12 +63,14 @@ from simsplat_core.mining.rule_client import RuleBasedVLMClient
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.scene_facts import scene_facts, summary
 from simsplat_core.mining.vlm_protocol import PLAUSIBILITY_MAX, PLAUSIBILITY_MIN, Judgement, SceneSummary, VLMClient
-from simsplat_core.vlm.openai_chat import VLMError
+from simsplat_core.vlm.openai_chat import VLMError, VLMUnreachableError
 
 logger = logging.getLogger(__name__)
 
 #: ``progress(accepted, wanted)`` after each attempt.
 MiningProgress = Callable[[int, int], None]
+#: Attempts in a row that could not reach the VLM endpoint before a sequence stops (module docstring).
+MAX_UNREACHABLE_IN_A_ROW = 3
 
 
 @dataclass(frozen=True)
@@ -190,6 +197,14 @@ class _Miner:
         self.client = client
         self.config = config
         self.scene = scene
+        #: Client calls in a row that could not reach the endpoint (reset by any answer).
+        self.unreachable_in_a_row = 0
+
+    def _answered(self) -> None:
+        self.unreachable_in_a_row = 0
+
+    def _failed_call(self, exc: Exception) -> None:
+        self.unreachable_in_a_row = self.unreachable_in_a_row + 1 if isinstance(exc, VLMUnreachableError) else 0
 
     def _record(self, s: _Scenario, attempt: int, status: AttemptStatus, reason: str, seconds: dict[str, float], *,
                 program: EditProgram | None = None, category: str = "", verdict: Judgement | None = None,
@@ -225,8 +240,10 @@ class _Miner:
             return
         except (VLMError, ValueError) as exc:
             seconds["command"] = time.perf_counter() - started
+            self._failed_call(exc)
             progress(self._record(s, 1, "failed", f"vlm_error: command: {_error(exc)}", seconds))
             return
+        self._answered()
         seconds["command"] = time.perf_counter() - started
         program = program if program.prompt else program.model_copy(update={"prompt": pending.prompt})
         adjustment = ""
@@ -272,10 +289,12 @@ class _Miner:
             verdict = self.client.judge(request)
         except (VLMError, ValueError) as exc:
             seconds["judge"] = time.perf_counter() - started
+            self._failed_call(exc)
             record = self._record(s, attempt, "failed", f"vlm_error: judge: {_error(exc)}", seconds, program=program,
                                   category=category, adjustment=adjustment)
             return record, None
         seconds["judge"] = time.perf_counter() - started
+        self._answered()
 
         if edited.validation.ok and verdict.follows_prompt and verdict.plausibility >= config.min_plausibility:
             return self._record(s, attempt, "accepted", "", seconds, program=program, category=category,
@@ -325,6 +344,10 @@ def mine_sequence(ctx: EditContext, client: VLMClient, config: MiningConfig | No
 
     index = 0
     while sum(r.status == "accepted" for r in records) < config.scenarios:
+        if miner.unreachable_in_a_row >= MAX_UNREACHABLE_IN_A_ROW:
+            logger.warning("%s: the VLM endpoint could not be reached %d times in a row; the remaining proposals are "
+                           "not attempted", seq_id, miner.unreachable_in_a_row)
+            break
         pending = feed.take()
         if pending is None:
             break
@@ -345,5 +368,5 @@ def mine_sequence(ctx: EditContext, client: VLMClient, config: MiningConfig | No
     return result
 
 
-__all__ = ["MiningConfig", "MiningProgress", "asset_alternatives", "default_client", "failure_classes",
-           "mine_sequence", "program_json", "rejection_reason"]
+__all__ = ["MAX_UNREACHABLE_IN_A_ROW", "MiningConfig", "MiningProgress", "asset_alternatives", "default_client",
+           "failure_classes", "mine_sequence", "program_json", "rejection_reason"]

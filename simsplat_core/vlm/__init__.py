@@ -8,6 +8,7 @@ from simsplat_core.vlm.openai_chat import (
     OpenAIChatClient,
     OpenAIChatConfig,
     VLMError,
+    VLMUnreachableError,
     png_data_uri,
     user_message,
 )
@@ -22,6 +23,7 @@ __all__ = [
     "OpenAIChatConfig",
     "ToolAnswerError",
     "VLMError",
+    "VLMUnreachableError",
     "png_data_uri",
     "tool_arguments",
     "tool_request_fields",

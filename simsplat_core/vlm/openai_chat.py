@@ -23,7 +23,10 @@ time (never stored in the config, never logged, never part of an error message: 
 gets it masked); servers that need no key get no ``Authorization`` header. Transport errors (timeouts
 included), 408, 429 and 5xx answers are retried with exponential back-off (at least a 429's
 ``Retry-After``, capped at :data:`MAX_RETRY_AFTER_S`); any other failure raises :class:`VLMError` naming
-the URL, the HTTP status and the server's message. At most ``max_concurrency`` requests of one client are
+the URL, the HTTP status and the server's message. A server that cannot be reached at all fails each call
+after ``max_retries + 1`` connection attempts of at most ``connect_timeout_s`` each (plus the back-off: about
+1.5 s with the defaults when the port is closed) with :class:`VLMUnreachableError`, so a caller can tell an
+endpoint that is down from one that answers badly. At most ``max_concurrency`` requests of one client are
 in flight at once, whichever threads send them.
 """
 
@@ -64,6 +67,10 @@ class VLMError(RuntimeError):
     """A chat-completion request failed; the message names the URL and what went wrong (never the key)."""
 
 
+class VLMUnreachableError(VLMError):
+    """No answer at all: every attempt of a request failed in transport (refused, reset, timed out)."""
+
+
 @dataclass(frozen=True)
 class OpenAIChatConfig:
     """Where and how to ask.
@@ -72,7 +79,9 @@ class OpenAIChatConfig:
         base_url: the API root, e.g. ``"http://127.0.0.1:8000/v1"`` (``/chat/completions`` is appended).
         model: the ``model`` field of every request.
         api_key_env: name of the environment variable holding the API key (unset: no key is sent).
-        timeout_s: per-request timeout in seconds.
+        timeout_s: per-request timeout in seconds (reading, writing).
+        connect_timeout_s: how long to wait for a connection (a host that drops packets fails after this, not
+            after ``timeout_s``).
         max_retries: extra attempts after a transport error or a 408/429/5xx answer; ``call_tool`` also makes
             up to this many extra attempts after a malformed or invalid answer.
         backoff_s: first back-off delay; doubles per retry.
@@ -83,6 +92,7 @@ class OpenAIChatConfig:
     model: str
     api_key_env: str = ENV_API_KEY
     timeout_s: float = 60.0
+    connect_timeout_s: float = 10.0
     max_retries: int = 2
     backoff_s: float = 0.5
     max_concurrency: int = 4
@@ -92,8 +102,9 @@ class OpenAIChatConfig:
             raise ValueError(f"OpenAIChatConfig.base_url must start with http:// or https://, got {self.base_url!r}")
         if not self.model:
             raise ValueError("OpenAIChatConfig.model must name a model")
-        if self.timeout_s <= 0:
-            raise ValueError(f"OpenAIChatConfig.timeout_s must be > 0, got {self.timeout_s}")
+        if self.timeout_s <= 0 or self.connect_timeout_s <= 0:
+            raise ValueError(f"OpenAIChatConfig.timeout_s and connect_timeout_s must be > 0, got {self.timeout_s} "
+                             f"and {self.connect_timeout_s}")
         if self.max_retries < 0 or self.backoff_s < 0:
             raise ValueError(f"OpenAIChatConfig.max_retries and backoff_s must be >= 0, got "
                              f"{self.max_retries} and {self.backoff_s}")
@@ -179,7 +190,8 @@ class OpenAIChatClient:
     def __init__(self, config: OpenAIChatConfig, transport: httpx.BaseTransport | None = None, *,
                  sleep: Callable[[float], None] = time.sleep) -> None:
         self.config = config
-        self._http = httpx.Client(timeout=config.timeout_s, transport=transport)
+        timeout = httpx.Timeout(config.timeout_s, connect=min(config.connect_timeout_s, config.timeout_s))
+        self._http = httpx.Client(timeout=timeout, transport=transport)
         self._slots = threading.BoundedSemaphore(config.max_concurrency)
         self._sleep = sleep
 
@@ -213,7 +225,8 @@ class OpenAIChatClient:
         back-off; each attempt holds one of the client's ``max_concurrency`` slots while it is in flight.
 
         Raises:
-            VLMError: retries ran out, another status came back, or the answer is not JSON.
+            VLMUnreachableError: every attempt failed in transport (the endpoint is down or unreachable).
+            VLMError: retries ran out on error statuses, another status came back, or the answer is not JSON.
         """
         url = self.config.url
         delay = self.config.backoff_s
@@ -225,8 +238,8 @@ class OpenAIChatClient:
                     response = self._http.post(url, json=body, headers=self._headers())
             except httpx.HTTPError as exc:
                 if last:
-                    raise VLMError(self._redact(f"{url}: request failed after {attempt + 1} attempt(s): "
-                                                f"{type(exc).__name__}: {exc}")) from exc
+                    raise VLMUnreachableError(self._redact(f"{url}: request failed after {attempt + 1} attempt(s): "
+                                                           f"{type(exc).__name__}: {exc}")) from exc
                 logger.warning("%s: %s, retrying in %.2f s", url, type(exc).__name__, wait)
             else:
                 if response.status_code == 200:
@@ -318,6 +331,7 @@ __all__ = [
     "OpenAIChatClient",
     "OpenAIChatConfig",
     "VLMError",
+    "VLMUnreachableError",
     "png_data_uri",
     "user_message",
 ]

@@ -252,3 +252,13 @@ def test_run_align_and_query_on_a_store_holding_only_the_av2_sample(prefect_api_
                                  "the vehicle changing lanes to the left"])
     assert result.exit_code == 0, result.output
     assert "(node " in _flat(result.output) and "yes" in result.output  # one chosen node, named in the message
+
+
+def test_run_on_a_store_that_cannot_be_written_fails_before_any_work(tmp_path):
+    root = tmp_path / "store"
+    root.write_text("a file, not a directory")
+    result = runner.invoke(app, ["run", "--store", str(root), "--sequences", "1"])
+    assert result.exit_code == 2  # a bad parameter, not a crash
+    said = _flat(result.output)
+    assert "--store" in said and "cannot write to the store" in said and "not a directory" in said
+    assert "Traceback" not in result.output and root.read_text() == "a file, not a directory"

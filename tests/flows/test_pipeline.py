@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import socket
 
 import pytest
 
@@ -35,7 +36,8 @@ ALIGN = dict(alignment=AlignmentConfig(fit_iterations=3, autoencoder_steps=50, e
              aligner=MotionAlignerConfig(epochs=3))
 
 
-def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_config_change(prefect_api_url, tmp_path):
+def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_config_change(prefect_api_url, tmp_path,
+                                                                                            monkeypatch):
     flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.ray, 2))
 
     first = flow(store_root=str(tmp_path), seeds=[1, 2], config=WORLD, reconstruction=RECON, **ALIGN)
@@ -105,6 +107,7 @@ def test_main_flow_on_ray_generates_and_reconstructs_then_skips_then_redoes_on_c
         assert store.exists("datasets/mined.json")
     _check_mined_record(store, mined)
     _check_mined_once(tmp_path, store, mined)
+    _mine_with_the_vlm_down(store, monkeypatch)
 
     changed_world = WorldConfig(num_frames=7, width=80, height=56, test_every=3)
     third = flow(store_root=str(tmp_path), seeds=[1], config=changed_world, reconstruction=reconstruction_config(20),
@@ -148,6 +151,30 @@ def _check_mined_once(tmp_path, store, mined) -> None:
         assert idle_main_run({**params, "mining": changed}) is None
     assert idle_main_run({**params, "config": dataclasses.replace(WORLD, num_frames=7)}) is None
     assert set(list_run_ids(store)) == runs  # a run with work to do is left to the flow, not recorded here
+
+
+def _mine_with_the_vlm_down(store, monkeypatch) -> None:
+    """A mining run with the VLM endpoint down (a closed port of 127.0.0.1; threads, so the tasks see this process's
+    environment): every attempt failed naming the connection error, nothing accepted or exported, the run
+    completes."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]  # closed when the block ends: nothing listens there
+    monkeypatch.setenv("SIMSPLAT_VLM_URL", f"http://127.0.0.1:{port}/v1")
+    monkeypatch.setenv("SIMSPLAT_VLM_MODEL", "test-vlm")
+    flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.threads, 2))
+    down = flow(store_root=store.root, seeds=[1, 2], config=WORLD, reconstruction=RECON, evaluate=False,
+                mining=MiningPlan(per_sequence=1, max_attempts=1, vlm="openai"), run_id="vlm-down",
+                export=ExportPlan(out=store.uri("exported")), **ALIGN)
+    assert [m.accepted for m in down.mining] == [0, 0] and down.export is None
+    rows = read_edit_records(store, "vlm-down")
+    assert {r.seq_id for r in rows} == {"synth-000001", "synth-000002"}
+    for row in rows:
+        assert row.mining["mining_status"] == "failed" and not row.export
+        assert "VLMUnreachableError" in row.failure_reason and f"127.0.0.1:{port}" in row.failure_reason
+    assert read_run_record(store, "vlm-down").status == "completed" and not store.exists("edits/vlm-down/synth-000001")
+    monkeypatch.delenv("SIMSPLAT_VLM_URL")
+    monkeypatch.delenv("SIMSPLAT_VLM_MODEL")
 
 
 def _artifact_digest(root) -> dict[str, str]:

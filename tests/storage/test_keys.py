@@ -69,7 +69,9 @@ def test_markers(store: ArtifactStore) -> None:
         mark_done(store, tmp, key, {"rows": 3})
     assert is_done(store, "scenes/s0/h", key)
     assert not is_done(store, "scenes/s0/h", content_key("inputs", Config(steps=101)))
-    assert read_marker(store, "scenes/s0/h") == {"key": key, "rows": 3}
+    marker = read_marker(store, "scenes/s0/h")
+    assert {k: v for k, v in marker.items() if k != "integrity"} == {"key": key, "rows": 3}
+    assert marker["integrity"]["files"]["out.bin"]["bytes"] == 1  # sealed: storage.integrity
     store.write_bytes("scenes/s0/h/_SUCCESS.json", b"{truncated")
     assert not is_done(store, "scenes/s0/h", key)  # unreadable marker = not done
     with pytest.raises(ValueError, match="reserved"):

@@ -1,16 +1,19 @@
 """``tasks.mine.mine_sequence_task`` as a plain function (``.fn``) on the small store of ``test_edit`` (a 6-frame
 log without pixels, its scene graph, a ground-truth language scene, a two-asset bank): one row per attempt with
 its status and reason, accepted scenarios stored as edits, determinism per seed, and an OpenAI-compatible server
-answering garbage (every attempt failed, nothing accepted, the run goes on)."""
+answering garbage (every attempt failed, nothing accepted, the run goes on), and one that is down (every attempt failed
+naming the connection error, the sequence stopped early)."""
 
 from __future__ import annotations
 
+import socket
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 from simsplat_core.language.text import default_text_encoder
+from simsplat_core.mining.loop import MAX_UNREACHABLE_IN_A_ROW
 from simsplat_core.mining.rule_client import RuleBasedVLMClient
 from simsplat_core.mining.rule_judge import JudgeConfig
 from storage import ArtifactStore
@@ -121,3 +124,29 @@ def test_an_accepted_scenario_that_cannot_be_stored_is_recorded_as_failed(store_
     rows = read_edit_records(ArtifactStore(store_root), "mine-broken")
     assert rows and not any(r.export for r in rows)  # every attempt still has its row, nothing exported
     assert rows[-1].failure_reason == "error: OSError: disk full" and rows[-1].mining["mining_status"] == "failed"
+
+
+@pytest.fixture()
+def closed_port(monkeypatch: pytest.MonkeyPatch) -> int:
+    """``SIMSPLAT_VLM_URL`` pointing at a port of 127.0.0.1 that nothing listens on."""
+    with socket.socket() as probe:  # bound, then closed without listening: the port is free and refuses
+        probe.bind(("127.0.0.1", 0))
+        port = int(probe.getsockname()[1])
+    monkeypatch.setenv("SIMSPLAT_VLM_URL", f"http://127.0.0.1:{port}/v1")
+    monkeypatch.setenv("SIMSPLAT_VLM_MODEL", "test-vlm")
+    return port
+
+
+def test_a_vlm_down_for_the_whole_run_fails_every_attempt_and_stops_the_sequence_early(
+        store_root: str, closed_port: int) -> None:  # noqa: F811
+    seeds = tuple(f"remove the white sedan {n}" for n in range(MAX_UNREACHABLE_IN_A_ROW + 2))
+    summary = _mine(store_root, "mine-down", vlm="openai", seed_prompts=seeds)
+    assert summary.accepted == 0 and summary.scenarios == () and summary.statuses == {"failed": summary.attempts}
+    rows = read_edit_records(ArtifactStore(store_root), "mine-down")
+    assert len(rows) == summary.attempts == MAX_UNREACHABLE_IN_A_ROW < len(seeds)  # the rest is not attempted
+    assert [r.prompt for r in rows] == list(seeds[:MAX_UNREACHABLE_IN_A_ROW])
+    for row in rows:
+        assert row.mining["mining_status"] == "failed" and not row.export
+        assert row.failure_reason.startswith("vlm_error: command: VLMUnreachableError: ")
+        assert f"127.0.0.1:{closed_port}" in row.failure_reason and "ConnectError" in row.failure_reason
+    assert not (Path(store_root) / "edits" / "mine-down" / SEQ).exists()

@@ -12,6 +12,7 @@ from typing import Any
 import pytest
 
 from storage import ArtifactStore
+from storage.errors import StoreNotWritableError
 from storage.run_records import read_run_record, read_stage_matrix
 from tasks.run_record import RunningHook, RunRecorder, recorded_run
 
@@ -104,3 +105,13 @@ def test_the_recorder_beats_while_the_run_runs_and_stops_when_it_ends(tmp_path):
     ended = read_run_record(store, "run-1")
     time.sleep(0.2)
     assert read_run_record(store, "run-1") == ended and ended.status == "completed"
+
+
+def test_a_run_on_a_store_that_cannot_be_written_fails_on_entry(tmp_path) -> None:
+    root = tmp_path / "store"
+    root.write_text("a file, not a directory")
+    entered = []
+    with pytest.raises(StoreNotWritableError, match="cannot write to the store"):
+        with recorded_run(str(root), "run-3", "simsplat-main", {}):
+            entered.append(True)
+    assert not entered and root.read_text() == "a file, not a directory"

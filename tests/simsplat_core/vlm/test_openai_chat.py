@@ -6,6 +6,7 @@ import logging
 import socket
 from collections.abc import Iterator
 
+import httpx
 import numpy as np
 import pytest
 
@@ -16,6 +17,7 @@ from simsplat_core.vlm import (
     OpenAIChatClient,
     OpenAIChatConfig,
     VLMError,
+    VLMUnreachableError,
     user_message,
 )
 from tests.simsplat_core.vlm.chat_server import ChatServer, images_of, text_reply
@@ -100,8 +102,25 @@ def test_unreachable_server_names_the_url() -> None:
         port = s.getsockname()[1]  # closed again when the block ends: nothing listens there
     client = OpenAIChatClient(OpenAIChatConfig(base_url=f"http://127.0.0.1:{port}/v1", model="m", max_retries=1,
                                                backoff_s=0.0, timeout_s=2.0))
-    with pytest.raises(VLMError, match=rf"127\.0\.0\.1:{port}/v1/chat/completions: request failed after 2"):
+    with pytest.raises(VLMUnreachableError, match=rf"127\.0\.0\.1:{port}/v1/chat/completions: request failed after 2"):
         client.complete([user_message("x")])
+
+
+def test_a_host_that_never_answers_fails_after_the_connect_timeout_per_attempt() -> None:
+    timeouts: list[object] = []
+    waits: list[float] = []
+
+    def never_connects(request: httpx.Request) -> httpx.Response:
+        timeouts.append(request.extensions["timeout"])
+        raise httpx.ConnectTimeout("timed out", request=request)
+
+    config = OpenAIChatConfig(base_url="http://10.255.255.1/v1", model="m", max_retries=2, backoff_s=0.5,
+                              timeout_s=60.0, connect_timeout_s=3.0)
+    client = OpenAIChatClient(config, httpx.MockTransport(never_connects), sleep=waits.append)
+    with pytest.raises(VLMUnreachableError, match="request failed after 3 attempt\\(s\\): ConnectTimeout"):
+        client.complete([user_message("x")])
+    assert len(timeouts) == 3 and waits == [0.5, 1.0]  # bounded: max_retries + 1 attempts, doubling back-off
+    assert all(t["connect"] == 3.0 and t["read"] == 60.0 for t in timeouts)  # type: ignore[index]
 
 
 @pytest.mark.parametrize("reply", [{"choices": []}, {"choices": [{"message": {"content": "   "}}]}, {"id": "x"}])
