@@ -58,7 +58,7 @@ def _produced_before(store: ArtifactStore, seq_id: str, key: str) -> StoredLog |
     """The complete log ``seq_id`` when its producer stored it under ``key``, else ``None``."""
     manifest = read_log_manifest(store, seq_id)
     if manifest is not None:
-        manifest = intact_marker(store, relpath, manifest["key"])
+        manifest = intact_marker(store, f"logs/{seq_id}", manifest["key"])
     provenance = (manifest or {}).get("provenance", {})
     if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
         return _already_stored(store, seq_id, manifest)
