@@ -1,6 +1,7 @@
 """Search every log of a store by language and draw each hit (what ``simsplat search`` runs).
 
-Not a Prefect task: interactive, like ``simsplat query``. Per log: read the log (tracks, map; no images),
+Not a Prefect task (interactive, like ``simsplat query``), except ``saved_search_seeds``: the saved searches of a
+mining configuration turned into seed proposals inside a scheduled run. Per log: read the log (tracks, map; no images),
 its newest language scene when it is aligned (captions for colours and subtypes, node-id maps for the
 picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
 the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
@@ -13,9 +14,12 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
+from prefect import task
+from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.mining.rule_proposals import Proposal
@@ -108,5 +112,28 @@ def search_seeds(store_root: str, text: str, *, seq_ids: list[str] | None = None
     sequence (``mining.search_seeds.hit_variants``: variants of what each hit's subject does)."""
     items = load_store(store_root, seq_ids)
     found = search_logs(items, text)
-    kinds = {i.log.seq_id: {o: f.kind for o, f in i.objects.items()} for i in items}
-    return found, hit_variants(found.hits, kinds, per_hit)
+    return found, hit_variants(found.hits, object_kinds(items), per_hit)
+
+
+def object_kinds(items: Sequence[SearchableLog]) -> dict[str, dict[str, str]]:
+    """Per sequence, ``object id -> kind`` (``vehicle`` / ``pedestrian`` / ...) of its objects."""
+    return {i.log.seq_id: {o: f.kind for o, f in i.objects.items()} for i in items}
+
+
+@task(name="saved-search-seeds", retries=0, cache_policy=NO_CACHE)
+def saved_search_seeds(store_root: str, queries: Sequence[str], *, sequences: list[str] | None = None,
+                       per_hit: int = 2) -> dict[str, list[Proposal]]:
+    """The seed proposals of every saved search in ``queries`` (:func:`search_seeds`, the store's logs read once),
+    per sequence of ``sequences`` (default: every log): the first query's first, a wording already seeded by an
+    earlier query left out. A Prefect task
+    (the scheduled run's mining seeds); ``saved_search_seeds.fn(...)`` is the plain function."""
+    items = load_store(store_root, sequences)
+    kinds = object_kinds(items)
+    merged: dict[str, list[Proposal]] = {}
+    for text in queries:
+        found = search_logs(items, text)
+        logger.info("saved search %r: %s", text, found.message)
+        for seq_id, proposals in hit_variants(found.hits, kinds, per_hit).items():
+            seeded = merged.setdefault(seq_id, [])
+            seeded += [p for p in proposals if p.prompt not in {s.prompt for s in seeded}]
+    return merged

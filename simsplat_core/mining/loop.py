@@ -121,8 +121,8 @@ class MiningConfig:
 
 
 def default_client(ctx: EditContext, config: MiningConfig) -> RuleBasedVLMClient:
-    """The rule-based client of ``config.seed``, ``config.category_offset`` and ``config.categories``, parsing with the context's text
-    encoder."""
+    """The rule-based client of ``config.seed``, ``config.category_offset`` and ``config.categories``, parsing with
+    the context's text encoder."""
     return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder, category_offset=config.category_offset,
                               categories=config.categories)
 
