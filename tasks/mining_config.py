@@ -43,6 +43,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
 from simsplat_core.mining.rule_proposals import selected_categories
+from simsplat_core.search.describe import parse_description
 from simsplat_core.vlm.openai_chat import ENV_API_KEY, OpenAIChatConfig
 from storage.dataset_formats import FORMATS
 from storage.datasets import check_dataset_name
@@ -87,9 +88,9 @@ class SavedSearches(_Section):
 
     @field_validator("queries")
     @classmethod
-    def _not_blank(cls, queries: tuple[str, ...]) -> tuple[str, ...]:
-        if any(not q.strip() for q in queries):
-            raise ValueError("a saved search is blank")
+    def _parses(cls, queries: tuple[str, ...]) -> tuple[str, ...]:
+        for query in queries:
+            parse_description(query)  # ValueError for a blank one
         return tuple(q.strip() for q in queries)
 
 
