@@ -324,14 +324,13 @@ def _publish_mining_table(summaries: list[MiningSummary], run_id: str) -> None:
 def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan,
                    run: StageRecorder = UNRECORDED, rendered: list[str] | None = None,
                    seeds: dict[str, list[Proposal]] | None = None) -> list[MiningSummary]:
-    """Build the asset bank of the ``rendered`` sequences (those with a reconstructed scene; ``None``: all of
-    ``seq_ids``) when the store has none for their scenes (one task; a stored bank is reused; none is built when no
-    sequence has renders: image-less logs insert boxes), recorded as the mine stage of ``seq_ids`` until their mining
-    starts; then fan out one mining task per sequence, each with its share of the cores and its ``seeds`` (seed
-    proposals, e.g. saved-search hits); publish the accepted scenarios' table."""
-    rendered = seq_ids if rendered is None else [s for s in rendered if s in seq_ids]
-    if rendered:
-        bank: BuiltBank = run.result(run.submit(build_asset_bank, "mine", seq_ids, store_root, rendered))
+    """Build the asset bank of the store's reconstructed scenes when the store has none for them (one task; a stored
+    bank is reused), recorded as the mine stage of ``seq_ids`` until their mining starts -- unless none of
+    ``seq_ids`` is among the ``rendered`` ones (those with a reconstructed scene; ``None``: all of them): logs without
+    camera images insert boxes and need no bank. Then fan out one mining task per sequence, each with its share of
+    the cores and its ``seeds`` (seed proposals, e.g. saved-search hits); publish the accepted scenarios' table."""
+    if rendered is None or set(rendered) & set(seq_ids):
+        bank: BuiltBank = run.result(run.submit(build_asset_bank, "mine", seq_ids, store_root))
         logger.info("asset bank %s: %d assets%s", bank.bank_hash[:12], bank.assets,
                     " (stored)" if bank.skipped else "")
     threads = task_cpu_share(len(seq_ids))

@@ -1,7 +1,8 @@
-"""The main flow mines as a mining configuration says, logs without camera images included: a store holding a tiny
-synthetic log and the public Waymo Open Motion scenario (no images) is mined per the file (saved search, edit
-categories, counts) on threads, the image-less log on its tracks, the accepted scenarios appended to the file's
-dataset, and the run record names the file, its version and its content key. Skipped when ../shared/data is absent."""
+"""The main flow mines as a mining configuration says, logs without camera images included: a store holding only the
+public Waymo Open Motion scenario (no images) is aligned and mined per the file (saved search, edit categories,
+counts) on threads, on the graph of its tracks with no asset bank built, its accepted scenario appended to the file's
+dataset like any other, and the run record names the file, its version and its content key. (Logs with images are
+mined in ``test_pipeline.py``.) Skipped when ../shared/data is absent."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from simsplat_core.language.alignment.scene_builder import AlignmentConfig
 from simsplat_core.mining.rule_proposals import EDIT_CATEGORIES
 from simsplat_core.world import WorldConfig
 from storage import ArtifactStore
+from storage.assets import list_asset_banks
 from storage.edits import read_edit_manifest, read_edit_records
 from storage.run_records import read_run_record, read_stage_matrix
 from tasks.logs import ingest_real_log
@@ -26,10 +28,9 @@ from tasks.mining_config import load_mining_config
 pytestmark = [pytest.mark.orchestration, pytest.mark.shared_data]
 
 SAMPLE = "waymo/motion_data_one_scenario.tfrecord"
-WORLD = WorldConfig(num_frames=6, width=80, height=56, test_every=3)
-ALIGN = dict(alignment=AlignmentConfig(fit_iterations=3, autoencoder_steps=50, eval_views=0, min_area=10, small_area=4),
-             aligner=MotionAlignerConfig(epochs=3))
-#: Vehicles only (the Waymo scenario's agents are mostly vehicles), one accepted scenario per log.
+WORLD = WorldConfig(num_frames=6, width=80, height=56, test_every=3)  # no synthetic log is generated
+ALIGN = dict(alignment=AlignmentConfig(), aligner=MotionAlignerConfig(epochs=3))
+#: Vehicle edits and removals (the Waymo scenario's agents are mostly vehicles), one accepted scenario per log.
 CONFIG = {"version": 1,
           "searches": {"queries": ["a car following another car"], "variants_per_hit": 1},
           "mining": {"scenarios_per_log": 1, "categories": ["modify_vehicle", "remove"], "max_attempts": 2},
@@ -37,8 +38,8 @@ CONFIG = {"version": 1,
           "dataset": {"name": "nightly", "formats": ["parquet"]}}
 
 
-def test_a_mining_config_mines_every_aligned_log_images_or_not(prefect_api_url, shared_data: Path,
-                                                               tmp_path: Path) -> None:
+def test_a_mining_config_mines_a_log_without_images_and_exports_it(prefect_api_url, shared_data: Path,
+                                                                   tmp_path: Path) -> None:
     root, out = str(tmp_path / "store"), str(tmp_path / "datasets")
     motion = ingest_real_log.fn(root, "waymo-scenario", str(shared_data / SAMPLE)).summary.seq_id
     config_path = tmp_path / "mining.yaml"
@@ -46,14 +47,14 @@ def test_a_mining_config_mines_every_aligned_log_images_or_not(prefect_api_url, 
     loaded = load_mining_config(config_path)
     mining, export = plans_from_config(loaded, export_out=out)
     flow = main_flow.with_options(task_runner=make_task_runner(RunnerKind.threads, 2))
-    result = flow(store_root=root, seeds=[3], config=WORLD, reconstruction=reconstruction_config(30), evaluate=False,
-                  mining=mining, export=export, run_id="nightly-1", **ALIGN)
+    result = flow(store_root=root, seeds=[], config=WORLD, reconstruction=reconstruction_config(30), mining=mining,
+                  export=export, run_id="nightly-1", **ALIGN)
 
     store = ArtifactStore(root)
-    assert {p.seq_id: p.reconstructs for p in result.stages} == {motion: False, "synth-000003": True}
-    assert sorted(m.seq_id for m in result.mining) == sorted([motion, "synth-000003"])  # the image-less one too
+    assert [(p.seq_id, p.reconstructs) for p in result.stages] == [(motion, False)]
+    assert [m.seq_id for m in result.mining] == [motion] and not list_asset_banks(store)  # boxes: no bank needed
     rows = read_edit_records(store, "nightly-1")
-    assert {r.seq_id for r in rows} == {motion, "synth-000003"}
+    assert rows and {r.seq_id for r in rows} == {motion}
     for row in rows:  # every attempt is of a selected category, or refused for not being one
         assert row.mining["category"] in CONFIG["mining"]["categories"] or (
             row.mining["category"] in EDIT_CATEGORIES and row.failure_reason.startswith("category_not_selected"))
@@ -67,8 +68,8 @@ def test_a_mining_config_mines_every_aligned_log_images_or_not(prefect_api_url, 
     # exported into the file's dataset like any other scenario
     assert result.export is not None and result.export.dataset_uri.rstrip("/").endswith("datasets/nightly")
     entries = json.loads((Path(out) / "nightly" / "manifest.json").read_text())["scenarios"]
-    assert result.export.written == len(entries) >= 1
-    assert motion in {e["seq_id"] for e in entries.values()}
+    assert result.export.written == len(entries) == 1
+    assert [e["seq_id"] for e in entries.values()] == [motion]
 
     record = read_run_record(store, "nightly-1")
     assert record.parameters["mining"]["config"] == {"path": str(config_path), "version": 1, "key": loaded.key}
