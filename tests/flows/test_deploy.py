@@ -107,3 +107,18 @@ def test_a_worker_container_without_resources_and_a_file_that_is_not_yaml_are_na
     bad = tmp_path / "bad.yaml"
     bad.write_text("deployments: [unclosed\n")
     assert [f.file for f in check_prefect_file(bad, root=REPO)] == [str(bad)]
+
+
+def test_the_evaluation_flow_runs_eval_all_with_the_deployments_parameters(tmp_path, monkeypatch):
+    import flows.evaluation as evaluation
+
+    seen = {}
+    monkeypatch.setattr(evaluation, "evaluate_all", lambda store, out_root, config: seen.update(
+        store=store, out=out_root, config=config))
+    evaluation.evaluation_flow.fn(str(tmp_path), only=["mining", "search"], per_sequence=2, clients=None, seed=4)
+    config = seen["config"]
+    assert (seen["store"], seen["out"]) == (str(tmp_path), None)
+    assert (config.groups, config.per_sequence, config.clients, config.seed) == (("mining", "search"), 2, ("rule",), 4)
+    with pytest.raises(ValueError, match="no driving log"):  # the real one, on an empty store
+        monkeypatch.undo()
+        evaluation.evaluation_flow.fn(str(tmp_path))
