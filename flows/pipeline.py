@@ -30,11 +30,10 @@ from tasks.export import ExportConfig, ExportResult, export_dataset_task
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
-from tasks.mine import MiningSummary, mine_sequence_task
+from tasks.mine import MiningSummary, mine_sequence_task, saved_search_seeds_task
 from tasks.mining_config import ConfigSource, LoadedMiningConfig, load_mining_config
 from tasks.reconstruct import StoredScene, reconstruct_scene
 from tasks.run_record import StageRecorder, recorded_run
-from tasks.search import saved_search_seeds
 from tasks.stages import STAGES, LogStages, decide_stages, plan_alignment, plan_stages, resolve_seq_ids
 
 logger = logging.getLogger(__name__)
@@ -239,7 +238,7 @@ class MiningPlan:
         seed: the rule-based client's seed (scenarios are deterministic per seed).
         categories: the edit categories wanted (empty: all six).
         chat: the ``"openai"`` client's endpoint, model and API-key variable name (``None``: from the environment).
-        searches: saved searches whose hits seed the loop (``tasks.search.saved_search_seeds``).
+        searches: saved searches whose hits seed the loop (``tasks.mine.saved_search_seeds_task``).
         variants_per_hit: seed proposals per search-hit subject.
         only_hits: mine only the sequences where a saved search holds.
         config: the mining configuration file these settings came from (``None``: none), kept in the run record.
@@ -504,7 +503,7 @@ def _mine_and_export(store_root: str, language: list[StoredLanguageScene], run_i
     to_mine = minable(language) if mining is not None else []
     seeds: dict[str, list[Proposal]] = {}
     if mining is not None and mining.searches and to_mine:
-        seeds = run.result(run.submit(saved_search_seeds, "mine", to_mine, store_root, list(mining.searches),
+        seeds = run.result(run.submit(saved_search_seeds_task, "mine", to_mine, store_root, list(mining.searches),
                                       sequences=to_mine, per_hit=mining.variants_per_hit))
         if mining.only_hits:
             run.skip("mine", [s for s in to_mine if s not in seeds], "no saved search holds in it")

@@ -218,4 +218,15 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     return summary
 
 
-__all__ = ["VLM_KINDS", "MinedScenario", "MiningSummary", "make_client", "mine_sequence_task"]
+@task(name="saved-search-seeds", retries=0, cache_policy=NO_CACHE)
+def saved_search_seeds_task(store_root: str, queries: Sequence[str], *, sequences: list[str] | None = None,
+                            per_hit: int = 2) -> dict[str, list[Proposal]]:
+    """Per sequence, the seed proposals of a mining configuration's saved searches (``tasks.search.saved_search_seeds``:
+    ``per_hit`` variants of each hit's subject), for :func:`mine_sequence_task`'s ``seed_prompts``."""
+    from tasks.search import saved_search_seeds
+
+    return saved_search_seeds(store_root, queries, sequences=sequences, per_hit=per_hit)
+
+
+__all__ = ["VLM_KINDS", "MinedScenario", "MiningSummary", "make_client", "mine_sequence_task",
+           "saved_search_seeds_task"]

@@ -1,9 +1,9 @@
 """Search every log of a store by language and draw each hit (what ``simsplat search`` runs).
 
-Not a Prefect task (interactive, like ``simsplat query``), except ``saved_search_seeds``: the saved searches of a
-mining configuration turned into seed proposals inside a scheduled run. Per log: read the log (tracks, map; no images),
-its newest language scene when it is aligned (captions for colours and subtypes, node-id maps for the
-picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
+Not a Prefect task: interactive, like ``simsplat query`` (``saved_search_seeds``, the seed proposals of a mining
+configuration's saved searches, runs in a flow as ``tasks.mine.saved_search_seeds_task``). Per log: read the log
+(tracks, map; no images), its newest language scene when it is aligned (captions for colours and subtypes, node-id
+maps for the picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
 the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
 objects' masks outlined (``viz.grounding_view.grounding_picture``) for aligned logs with camera images,
 else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``) with the matched objects outlined and
@@ -18,8 +18,6 @@ from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
-from prefect import task
-from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.mining.rule_proposals import Proposal
@@ -120,13 +118,11 @@ def object_kinds(items: Sequence[SearchableLog]) -> dict[str, dict[str, str]]:
     return {i.log.seq_id: {o: f.kind for o, f in i.objects.items()} for i in items}
 
 
-@task(name="saved-search-seeds", retries=0, cache_policy=NO_CACHE)
 def saved_search_seeds(store_root: str, queries: Sequence[str], *, sequences: list[str] | None = None,
                        per_hit: int = 2) -> dict[str, list[Proposal]]:
     """The seed proposals of every saved search in ``queries`` (:func:`search_seeds`, the store's logs read once),
     per sequence of ``sequences`` (default: every log): the first query's first, a wording already seeded by an
-    earlier query left out. A Prefect task
-    (the scheduled run's mining seeds); ``saved_search_seeds.fn(...)`` is the plain function."""
+    earlier query left out (``tasks.mine.saved_search_seeds_task`` runs it in a flow)."""
     items = load_store(store_root, sequences)
     kinds = object_kinds(items)
     merged: dict[str, list[Proposal]] = {}
