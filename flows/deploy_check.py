@@ -3,7 +3,8 @@ would trip over, found without a Prefect server, a Ray cluster or Kubernetes.
 
 Each check returns :class:`Finding` s naming the file, the deployment (or manifest part) and the field; an empty list
 means the file passed. Entry points are imported (``prefect.flows.load_flow_from_entrypoint``), so a flow module that
-fails to import is a finding too.
+fails to import is a finding too. A mining configuration a deployment names (its ``mining_config`` parameter, a path
+relative to the repository root) is read and checked as the run would (``tasks.mining_config``).
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ import yaml
 
 #: The keys ``ray up`` needs in a cluster YAML.
 RAY_REQUIRED = ("cluster_name", "provider")
+#: Deployment parameters naming a mining configuration file (checked with ``tasks.mining_config``).
+MINING_CONFIG_PARAMETERS = ("mining_config",)
 #: Node layouts ``ray up`` accepts: the current node types or the older head/worker spec.
 RAY_NODE_LAYOUTS = (("head_node_type", "available_node_types"), ("head_node", "worker_nodes"))
 
@@ -133,6 +136,24 @@ def _load_flow(entrypoint: str, root: Path) -> tuple[Any, str]:
     return (flow, "") if isinstance(flow, Flow) else (None, f"{name!r} is not a flow")
 
 
+def _check_mining_configs(parameters: Mapping[str, Any], root: Path, finding: Callable[[str, str], Finding]
+                          ) -> list[Finding]:
+    """Each mining configuration file the ``parameters`` name (:data:`MINING_CONFIG_PARAMETERS`, relative to
+    ``root``) reads and validates; a finding quotes the file's own error (its field and value)."""
+    from tasks.mining_config import MiningConfigError, load_mining_config
+
+    found = []
+    for name in MINING_CONFIG_PARAMETERS:
+        value = parameters.get(name)
+        if not isinstance(value, str) or _is_template(value):
+            continue
+        try:
+            load_mining_config(root / value)
+        except MiningConfigError as exc:
+            found.append(finding(f"parameters.{name}", str(exc)))
+    return found
+
+
 def _check_schedules(schedules: Any, finding: Callable[[str, str], Finding]) -> list[Finding]:
     """Each ``cron`` schedule parses as Prefect parses it (``CronSchedule``: croniter and the time zone)."""
     from prefect.client.schemas.schedules import CronSchedule
@@ -180,6 +201,7 @@ def check_deployment(deployment: Mapping[str, Any], file: str, root: Path, pools
     else:
         flow, why = _load_flow(entrypoint, root)
         found += [finding("entrypoint", why)] if flow is None else _check_parameters(flow, parameters, finding)
+    found += _check_mining_configs(parameters, root, finding)
     found += _check_schedules(deployment.get("schedules"), finding)
     pool = (deployment.get("work_pool") or {}).get("name")
     if pools is not None and pool is not None and not _is_template(pool) and pool not in pools:

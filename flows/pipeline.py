@@ -22,7 +22,9 @@ from flows.runtime import flow_resubmits_crashed_tasks
 from simsplat_core.eval.grounding.metrics import CATEGORIES
 from simsplat_core.language.alignment.motion_training import MotionAlignerConfig
 from simsplat_core.language.alignment.scene_builder import AlignmentConfig
+from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.scene import ReconstructionConfig
+from simsplat_core.vlm.openai_chat import OpenAIChatConfig
 from simsplat_core.world import WorldConfig, default_seq_id
 from storage.runs import new_run_id, run_dir
 from tasks.align import StoredAligner, StoredLanguageScene, align_scene, train_motion_aligner
@@ -31,8 +33,9 @@ from tasks.export import ExportConfig, ExportResult, export_dataset_task
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
-from tasks.mine import MiningSummary, mine_sequence_task
+from tasks.mine import MiningSummary, mine_sequence_task, saved_search_seeds_task
 from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
+from tasks.mining_config import ConfigSource, LoadedMiningConfig, load_mining_config
 from tasks.reconstruct import StoredScene, reconstruct_scene
 from tasks.run_plan import RunAsked, plan_run, record_idle_run
 from tasks.run_record import StageRecorder, recorded_run
@@ -231,23 +234,36 @@ def align_scenes(store_root: str, targets: list[tuple[str, str | None]], trainin
 
 @dataclass(frozen=True)
 class MiningPlan:
-    """Mining settings of a flow run.
+    """Mining settings of a flow run (:func:`plans_from_config` makes them from a mining configuration file).
 
     Attributes:
         per_sequence: accepted scenarios wanted per sequence (K).
         max_attempts: attempts per proposal (the first plus adjusted retries).
-        vlm: client, ``"rule"`` (built-in, offline) or ``"openai"`` (from the environment).
+        vlm: client, ``"rule"`` (built-in, offline) or ``"openai"``.
         seed: the rule-based client's seed (scenarios are deterministic per seed).
+        categories: the edit categories wanted (empty: all six).
+        chat: the ``"openai"`` client's endpoint, model and API-key variable name (``None``: from the environment).
+        searches: saved searches whose hits seed the loop (``tasks.mine.saved_search_seeds_task``).
+        variants_per_hit: seed proposals per search-hit subject.
+        only_hits: mine only the sequences where a saved search holds.
+        config: the mining configuration file these settings came from (``None``: none), kept in the run record.
     """
 
     per_sequence: int = 3
     max_attempts: int = 3
     vlm: str = "rule"
     seed: int = 0
+    categories: tuple[str, ...] = ()
+    chat: OpenAIChatConfig | None = None
+    searches: tuple[str, ...] = ()
+    variants_per_hit: int = 2
+    only_hits: bool = False
+    config: ConfigSource | None = None
 
     def ledger(self) -> LedgerSettings:
-        """The settings the mining ledger keys its records by: a sequence is mined once per log and settings."""
-        return ledger_settings(self)
+        """The settings the mining ledger keys its records by: a sequence is mined once per log and settings (the
+        mining configuration's content key among them, so any change to the file mines again)."""
+        return ledger_settings(self, self.config.key if self.config is not None else "")
 
 
 @dataclass(frozen=True)
@@ -256,7 +272,8 @@ class ExportPlan:
 
     Attributes:
         out: the folder the dataset goes in (``<out>/<name>/``); ``None``: the store's ``datasets/``.
-        name: the dataset's name; ``None``: the run id (so every run is a dataset of its own).
+        name: the dataset's name; ``None``: the run id (so every run is a dataset of its own). A named dataset
+            grows by one increment per run: every accepted scenario of the store not yet in it.
         formats: export formats (default: every one).
     """
 
@@ -265,17 +282,39 @@ class ExportPlan:
     formats: tuple[str, ...] = ()
 
     def config(self, run_id: str) -> ExportConfig:
-        """The export's configuration for run ``run_id`` (its accepted scenarios only)."""
+        """The export's configuration for run ``run_id``: its accepted scenarios into a dataset of its own, or into the
+        named dataset every accepted scenario not yet there (the same filters every run, so each adds to it)."""
         from tasks.export_inputs import ExportFilters
 
         base = ExportConfig()
+        runs = () if self.name else (run_id,)
         return dataclasses.replace(base, name=self.name or run_id, formats=self.formats or base.formats,
-                                   filters=ExportFilters(include="accepted", runs=(run_id,)))
+                                   filters=ExportFilters(include="accepted", runs=runs))
+
+
+def plans_from_config(loaded: LoadedMiningConfig, *, per_sequence: int | None = None, vlm: str | None = None,
+                      export_out: str | None = None) -> tuple[MiningPlan, ExportPlan | None]:
+    """The run's mining and export from a mining configuration file (``tasks.mining_config``), with the command
+    line's overrides: ``per_sequence`` (``--mine K``), ``vlm`` (``--vlm``: another client than the file's drops its
+    endpoint) and ``export_out`` (``--export DIR``: the dataset's folder). No export when the file names no dataset
+    and no ``export_out`` is given."""
+    config = loaded.config
+    client = vlm or config.vlm.client
+    mining = MiningPlan(per_sequence or config.mining.scenarios_per_log, config.mining.max_attempts, client,
+                        config.mining.seed, config.mining.categories,
+                        config.vlm.chat_config() if client == config.vlm.client else None,
+                        config.searches.queries, config.searches.variants_per_hit, config.searches.only_hits,
+                        loaded.source)
+    dataset = config.dataset
+    if dataset is None:
+        return mining, ExportPlan(out=export_out) if export_out is not None else None
+    return mining, ExportPlan(out=export_out or dataset.out, name=dataset.name, formats=dataset.formats)
 
 
 def minable(language: list[StoredLanguageScene]) -> list[str]:
-    """Sequences the loop can mine: aligned from a reconstructed scene (an image-less log has nothing to render)."""
-    return [s.seq_id for s in language if s.scene_hash]
+    """Sequences the loop can mine: every aligned one (a log without camera images is mined on its tracks: box-only
+    inserts, judged on the bird's-eye view and the trajectories)."""
+    return [s.seq_id for s in language]
 
 
 def _publish_mining_table(summaries: list[MiningSummary], run_id: str) -> None:
@@ -292,20 +331,27 @@ def _publish_mining_table(summaries: list[MiningSummary], run_id: str) -> None:
 
 
 def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: MiningPlan,  # noqa: PLR0913
-                   run: StageRecorder = UNRECORDED, positions: list[int] | None = None) -> list[MiningSummary]:
-    """Build the asset bank when the store has none for its scenes (one task; a stored bank is reused, recorded as
-    the mine stage of ``seq_ids`` until their mining starts), then fan out one mining task per sequence, each with
-    its share of the cores, each recorded in the mining ledger once stored; publish the accepted scenarios' table.
-    ``positions``: each sequence's place among the run's minable ones (default: its index in ``seq_ids``): the
-    sequences take the edit categories in turn from there."""
-    bank: BuiltBank = run.result(run.submit(build_asset_bank, "mine", seq_ids, store_root))
-    logger.info("asset bank %s: %d assets%s", bank.bank_hash[:12], bank.assets, " (stored)" if bank.skipped else "")
+                   run: StageRecorder = UNRECORDED, positions: list[int] | None = None,
+                   rendered: list[str] | None = None, seeds: dict[str, list[Proposal]] | None = None
+                   ) -> list[MiningSummary]:
+    """Build the asset bank of the store's reconstructed scenes when the store has none for them (one task; a stored
+    bank is reused), recorded as the mine stage of ``seq_ids`` until their mining starts -- unless none of
+    ``seq_ids`` is among the ``rendered`` ones (those with a reconstructed scene; ``None``: all of them): logs without
+    camera images insert boxes and need no bank. Then fan out one mining task per sequence, each with its share of
+    the cores and its ``seeds`` (seed proposals, e.g. saved-search hits), each recorded in the mining ledger once
+    stored; publish the accepted scenarios' table. ``positions``: each sequence's place among the run's minable ones
+    (default: its index in ``seq_ids``): the sequences take the edit categories in turn from there."""
+    if rendered is None or set(rendered) & set(seq_ids):
+        bank: BuiltBank = run.result(run.submit(build_asset_bank, "mine", seq_ids, store_root))
+        logger.info("asset bank %s: %d assets%s", bank.bank_hash[:12], bank.assets,
+                    " (stored)" if bank.skipped else "")
     threads = task_cpu_share(len(seq_ids))
     with reserving_cpus(threads):
         futures = [run.submit(mine_sequence_task, "mine", [seq_id], store_root, seq_id, run_id,
                               per_sequence=plan.per_sequence, max_attempts=plan.max_attempts, vlm=plan.vlm,
-                              seed=plan.seed, category_offset=i * plan.per_sequence, threads=threads,
-                              ledger=plan.ledger())
+                              seed=plan.seed, seed_prompts=(seeds or {}).get(seq_id, ()),
+                              category_offset=i * plan.per_sequence, categories=plan.categories, chat=plan.chat,
+                              threads=threads, ledger=plan.ledger())
                    for i, seq_id in zip(positions or range(len(seq_ids)), seq_ids)]
     summaries = _gather(futures, "mine", label=lambda s: s.seq_id, run=run)
     _publish_mining_table(summaries, run_id)
@@ -413,8 +459,9 @@ def main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are the run's in
         evaluate: after alignment, run the grounding benchmark on the synthetic logs and write its
             tables under ``runs/<run_id>/tables/``.
         run_id: names the run directory (default: ``main-<UTC time>``); mined scenarios go to ``edits/<run_id>/``.
-        mining: after alignment, mine every sequence with a reconstructed scene for scenarios (asset bank built
-            first when missing; ``None``: no mining).
+        mining: after alignment, mine every aligned sequence for scenarios (an asset bank built first from the
+            reconstructed scenes when missing; a log without camera images is mined on its tracks with box-only
+            inserts; ``None``: no mining).
         export: after mining, export this run's accepted scenarios as a dataset (``None``: no export).
         landing: a folder (path or ``file://`` URI) scanned first for new logs of any registered source
             (``tasks.landing``: ingested once, a log that fails to load quarantined); ``None``: no scan.
@@ -488,20 +535,28 @@ def record_planned_skips(run: StageRecorder, plans: list[LogStages], generated: 
 def _mine_and_export(store_root: str, language: list[StoredLanguageScene], run_id: str, mining: MiningPlan | None,
                      export: ExportPlan | None, run: StageRecorder
                      ) -> tuple[list[MiningSummary], ExportResult | None]:
-    """The main job's mining (``mining``: every minable sequence not in the mining ledger for these settings) and
-    export (``export``: this run's accepted scenarios), each recorded per sequence with the reason of a skip."""
+    """The main job's mining (``mining``: every aligned sequence not in the mining ledger for these settings, logs
+    without images on their tracks; seeded by the plan's saved searches) and export (``export``: this run's accepted
+    scenarios), each recorded per sequence with the reason of a skip."""
     to_mine = minable(language) if mining is not None else []
     positions = {seq_id: i for i, seq_id in enumerate(to_mine)}
+    seeds: dict[str, list[Proposal]] = {}
     if mining is not None:
-        run.skip("mine", [s.seq_id for s in language if s.seq_id not in to_mine], "no reconstructed scene to render")
         ledgered = split_by_ledger(store_root, [s for s in language if s.seq_id in positions], mining.ledger().key)
         for record in ledgered.mined:
             run.skip("mine", [record.seq_id], mined_reason(record))
             if export is not None:
                 run.skip("export", [record.seq_id], not_exported_reason(record))
         to_mine = list(ledgered.to_mine)
-    mined = mine_scenarios(store_root, to_mine, run_id, mining, run, [positions[s] for s in to_mine]) \
-        if mining is not None and to_mine else []
+    if mining is not None and mining.searches and to_mine:
+        seeds = run.result(run.submit(saved_search_seeds_task, "mine", to_mine, store_root, list(mining.searches),
+                                      sequences=to_mine, per_hit=mining.variants_per_hit))
+        if mining.only_hits:
+            run.skip("mine", [s for s in to_mine if s not in seeds], "no saved search holds in it")
+            to_mine = [s for s in to_mine if s in seeds]
+    rendered = [s.seq_id for s in language if s.scene_hash]
+    mined = mine_scenarios(store_root, to_mine, run_id, mining, run, [positions[s] for s in to_mine], rendered,
+                           seeds) if mining is not None and to_mine else []
     run.count(accepted_scenarios=sum(s.accepted for s in mined))
     if export is None:
         return mined, None
@@ -574,6 +629,7 @@ def scheduled_main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are th
     landing: str | None = None,
     mine: int = 0,
     export: str | None = None,
+    mining_config: str | None = None,
 ) -> MainResult:
     """Deployment entry point (``deploy/prefect.yaml``): JSON parameters in, the main flow on ``runner``.
 
@@ -586,13 +642,22 @@ def scheduled_main_flow(  # noqa: PLR0913 -- Prefect flow: its parameters are th
     first (see ``main_flow``); ``mine`` accepted scenarios are mined per sequence (0: no mining; the rule-based
     client with ``seed``) and, with ``mine``, ``export`` is the folder the run's accepted scenarios go in as a
     dataset (``ExportPlan.out``; ``None``: no export).
+    ``mining_config`` is a mining configuration file (``tasks.mining_config``; a path relative to the working
+    directory, the repository's root in a deployment): the run mines and exports as it says, ``mine`` (when not 0)
+    and ``export`` overriding its scenarios per log and its dataset folder.
+
+    Raises:
+        MiningConfigError: ``mining_config`` cannot be read or is not valid (naming the file and the field).
     """
     from flows.runtime import RunnerKind, make_task_runner
 
     config = WorldConfig(num_frames=frames, width=width, height=height)
     seeds = list(range(seed, seed + sequences))
-    mining = MiningPlan(mine, seed=seed) if mine else None
+    mining: MiningPlan | None = MiningPlan(mine, seed=seed) if mine else None
     export_plan = ExportPlan(out=export) if export is not None and mining is not None else None
+    if mining_config is not None:
+        mining, export_plan = plans_from_config(load_mining_config(mining_config), per_sequence=mine or None,
+                                                export_out=export)
     params: dict[str, Any] = dict(store_root=store_root, seeds=seeds, config=config, landing=landing, mining=mining,
                                   reconstruction=reconstruction_config(iterations), export=export_plan)
     idle = idle_main_run(params)

@@ -35,6 +35,7 @@ from simsplat_core.mining.attempts import EDITS_COLUMNS, AttemptRecord, attempt_
 from simsplat_core.mining.loop import MiningConfig, default_client, mine_sequence
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.vlm_protocol import VLMClient
+from simsplat_core.vlm.openai_chat import OpenAIChatConfig
 from storage import ArtifactStore, intact_marker
 from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath
 from storage.inventory import require_asset_bank
@@ -97,9 +98,10 @@ class MiningSummary:
     scenarios: tuple[MinedScenario, ...] = ()
 
 
-def make_client(vlm: str, loaded: LoadedEdit, config: MiningConfig) -> VLMClient:
-    """The mining client: ``"rule"`` (the rule-based client of ``config.seed``) or ``"openai"`` (from the
-    environment; the key is never logged).
+def make_client(vlm: str, loaded: LoadedEdit, config: MiningConfig, chat: OpenAIChatConfig | None = None
+                ) -> VLMClient:
+    """The mining client: ``"rule"`` (the rule-based client of ``config.seed``) or ``"openai"`` (``chat``, else from
+    the environment; the key is read from the variable ``chat.api_key_env`` names and never logged).
 
     Raises:
         ValueError: an unknown ``vlm``; VLMError: ``"openai"`` without an endpoint configured.
@@ -108,9 +110,9 @@ def make_client(vlm: str, loaded: LoadedEdit, config: MiningConfig) -> VLMClient
         return default_client(loaded.ctx, config)
     if vlm == "openai":
         from simsplat_core.mining.openai_vlm import OpenAIVLMClient
-        from simsplat_core.vlm.openai_chat import OpenAIChatClient, OpenAIChatConfig
+        from simsplat_core.vlm.openai_chat import OpenAIChatClient
 
-        return OpenAIVLMClient(OpenAIChatClient(OpenAIChatConfig.from_env()))
+        return OpenAIVLMClient(OpenAIChatClient(chat or OpenAIChatConfig.from_env()))
     raise ValueError(f"unknown VLM client {vlm!r}; choose one of {list(VLM_KINDS)}")
 
 
@@ -151,14 +153,17 @@ def _artifact_key(seq_id: str) -> str:
 def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequence: int = 3, max_attempts: int = 3,  # noqa: PLR0913 -- Prefect task: its parameters are the run's inputs (options keyword-only)
                        vlm: str = "rule", seed: int = 0, seed_prompts: Sequence[str | Proposal] = (),
                        client: VLMClient | None = None, category_offset: int | None = None,
+                       categories: tuple[str, ...] = (), chat: OpenAIChatConfig | None = None,
                        threads: int = 0, ledger: LedgerSettings | None = None) -> MiningSummary:
     """Mine ``seq_id`` for ``per_sequence`` accepted scenarios (``max_attempts`` per proposal) and store them
     under run ``run_id`` (module docstring). ``client`` replaces the one ``vlm`` names (e.g. a rule-based client
     with another judge configuration). ``category_offset``: where the sequence starts in the run's order of edit
     categories (``MiningConfig.category_offset``; a run passes ``i * per_sequence`` for its ``i``-th sequence).
-    ``threads``: torch/numba threads for this task (0 = leave the process setting). ``ledger``: the run's mining
-    settings; once the sequence's edits and rows are stored, the mining ledger records it as mined with them
-    (``tasks.mining_ledger``; ``None``: not recorded).
+    ``categories``: the edit categories wanted (``MiningConfig.categories``; empty: all). ``chat``: the
+    OpenAI-compatible endpoint of ``vlm="openai"`` (``None``: from the environment). ``threads``: torch/numba
+    threads for this task (0 = leave the process setting). ``ledger``: the run's mining settings; once the
+    sequence's edits and rows are stored, the mining ledger records it as mined with them (``tasks.mining_ledger``;
+    ``None``: not recorded).
 
     Raises:
         FileNotFoundError: the store lacks the sequence's log, language scene, or (for a log with images) an asset
@@ -173,8 +178,8 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     if loaded.renders:  # a log without images inserts boxes (tasks.stored_edits)
         require_asset_bank(store, f"to mine {seq_id!r} with")
     config = MiningConfig(scenarios=per_sequence, max_attempts=max_attempts, seed=seed,
-                          category_offset=category_offset)
-    client = client if client is not None else make_client(vlm, loaded, config)
+                          category_offset=category_offset, categories=tuple(categories))
+    client = client if client is not None else make_client(vlm, loaded, config, chat)
     logger.info("%s: mining %d scenario(s) with %s (max %d attempts each, seed %d)", seq_id, per_sequence,
                 client.name, max_attempts, seed)
     step = StepProgress(f"mine {seq_id}", headline="")
@@ -221,4 +226,15 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
     return summary
 
 
-__all__ = ["VLM_KINDS", "MinedScenario", "MiningSummary", "make_client", "mine_sequence_task"]
+@task(name="saved-search-seeds", retries=0, cache_policy=NO_CACHE)
+def saved_search_seeds_task(store_root: str, queries: Sequence[str], *, sequences: list[str] | None = None,
+                            per_hit: int = 2) -> dict[str, list[Proposal]]:
+    """Per sequence, the seed proposals of a mining configuration's saved searches (``tasks.search.saved_search_seeds``:
+    ``per_hit`` variants of each hit's subject), for :func:`mine_sequence_task`'s ``seed_prompts``."""
+    from tasks.search import saved_search_seeds
+
+    return saved_search_seeds(store_root, queries, sequences=sequences, per_hit=per_hit)
+
+
+__all__ = ["VLM_KINDS", "MinedScenario", "MiningSummary", "make_client", "mine_sequence_task",
+           "saved_search_seeds_task"]

@@ -1,8 +1,9 @@
 """Search every log of a store by language and draw each hit (what ``simsplat search`` runs).
 
-Not a Prefect task: interactive, like ``simsplat query``. Per log: read the log (tracks, map; no images),
-its newest language scene when it is aligned (captions for colours and subtypes, node-id maps for the
-picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
+Not a Prefect task: interactive, like ``simsplat query`` (``saved_search_seeds``, the seed proposals of a mining
+configuration's saved searches, runs in a flow as ``tasks.mine.saved_search_seeds_task``). Per log: read the log
+(tracks, map; no images), its newest language scene when it is aligned (captions for colours and subtypes, node-id
+maps for the picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
 the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
 objects' masks outlined (``viz.grounding_view.grounding_picture``) for aligned logs with camera images,
 else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``) with the matched objects outlined and
@@ -13,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import re
+from collections.abc import Sequence
 from dataclasses import replace
 
 import numpy as np
@@ -108,5 +110,26 @@ def search_seeds(store_root: str, text: str, *, seq_ids: list[str] | None = None
     sequence (``mining.search_seeds.hit_variants``: variants of what each hit's subject does)."""
     items = load_store(store_root, seq_ids)
     found = search_logs(items, text)
-    kinds = {i.log.seq_id: {o: f.kind for o, f in i.objects.items()} for i in items}
-    return found, hit_variants(found.hits, kinds, per_hit)
+    return found, hit_variants(found.hits, object_kinds(items), per_hit)
+
+
+def object_kinds(items: Sequence[SearchableLog]) -> dict[str, dict[str, str]]:
+    """Per sequence, ``object id -> kind`` (``vehicle`` / ``pedestrian`` / ...) of its objects."""
+    return {i.log.seq_id: {o: f.kind for o, f in i.objects.items()} for i in items}
+
+
+def saved_search_seeds(store_root: str, queries: Sequence[str], *, sequences: list[str] | None = None,
+                       per_hit: int = 2) -> dict[str, list[Proposal]]:
+    """The seed proposals of every saved search in ``queries`` (:func:`search_seeds`, the store's logs read once),
+    per sequence of ``sequences`` (default: every log): the first query's first, a wording already seeded by an
+    earlier query left out (``tasks.mine.saved_search_seeds_task`` runs it in a flow)."""
+    items = load_store(store_root, sequences)
+    kinds = object_kinds(items)
+    merged: dict[str, list[Proposal]] = {}
+    for text in queries:
+        found = search_logs(items, text)
+        logger.info("saved search %r: %s", text, found.message)
+        for seq_id, proposals in hit_variants(found.hits, kinds, per_hit).items():
+            seeded = merged.setdefault(seq_id, [])
+            seeded += [p for p in proposals if p.prompt not in {s.prompt for s in seeded}]
+    return merged

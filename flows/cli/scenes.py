@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -10,7 +11,6 @@ from flows.cli.common import (
     CaptionerOption,
     IterationsOption,
     RunnerOption,
-    VLMOption,
     WorkersOption,
     alignment_config,
     check_vlm,
@@ -31,6 +31,9 @@ from flows.cli.printers import (
     print_tables,
 )
 from flows.runtime import RunnerKind
+
+if TYPE_CHECKING:
+    from flows.pipeline import ExportPlan, MiningPlan
 
 commands = typer.Typer()
 
@@ -57,13 +60,24 @@ def run(
     iterations: IterationsOption = None,
     align: Annotated[bool, typer.Option(help="Run the language-alignment stage after reconstruction.")] = True,
     captioner: CaptionerOption = "builtin",
-    mine: Annotated[int, typer.Option(min=0, help="After alignment, mine this many accepted scenarios per sequence "
-                                      "with a reconstructed scene (0: no mining; the asset bank is built first "
-                                      "when missing).")] = 0,
-    vlm: VLMOption = "rule",
-    export: Annotated[str | None, typer.Option(help="With --mine: export the run's accepted scenarios as a dataset "
-                                               "into EXPORT/<run_id>/ (WOMD shards, ScenarioNet, Parquet; see "
-                                               "`simsplat export`).")] = None,
+    mine: Annotated[int, typer.Option(min=0, help="After alignment, mine this many accepted scenarios per aligned "
+                                      "sequence (logs without camera images on their tracks; 0: no mining, or "
+                                      "the --mining-config file's count; the asset bank is built first when "
+                                      "missing). Overrides the file's scenarios_per_log.")] = 0,
+    vlm: Annotated[str | None, typer.Option(help="VLM client of the mining loop: rule (built-in, offline) or openai "
+                                            "(SIMSPLAT_VLM_URL, SIMSPLAT_VLM_MODEL, SIMSPLAT_VLM_API_KEY). Overrides "
+                                            "the --mining-config file's client (default: its client, else rule).")
+                   ] = None,
+    export: Annotated[str | None, typer.Option(help="With --mine or --mining-config: export the run's accepted "
+                                               "scenarios as a dataset into EXPORT/<name>/ (the file's dataset "
+                                               "name, else the run id; WOMD shards, ScenarioNet, Parquet; see "
+                                               "`simsplat export`). Overrides the file's dataset folder.")] = None,
+    mining_config: Annotated[Path | None, typer.Option(help="Mining configuration (YAML, versioned; e.g. "
+                                                       "deploy/mining/nightly.yaml): saved searches seeding the "
+                                                       "loop, edit categories and counts per log, attempts, seed, "
+                                                       "the VLM client and its endpoint, the dataset appended to. "
+                                                       "Mines after alignment; --mine, --vlm and --export override "
+                                                       "its values.")] = None,
     landing: Annotated[str | None, typer.Option(help="Landing folder (path, file:// or object-store URI such as "
                                                 "s3://bucket/prefix) scanned first for new "
                                                 "logs of any registered source: each is ingested once, one that "
@@ -72,21 +86,19 @@ def run(
     """Run the main job over every log in the store (ingested real logs included), after generating
     --sequences synthetic ones: one reconstructed scene per log with camera images, then language
     alignment (motion aligner trained on every log + one queryable language scene per log; a log without
-    images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K,
-    scenario mining (K accepted scenarios per sequence, stored under STORE/edits/<run_id>/) and, with --export
-    DIR, their export as a dataset for planner training. With --landing DIR, the logs in DIR not yet ingested are
-    ingested first; one that fails to load is quarantined under STORE/landing/quarantine/ and not retried until
-    it changes. A run with nothing new (no new landing log, the --sequences already stored alike, every stored
-    log reconstructed, aligned and, with --mine, mined before with the same settings) is recorded as such in
-    seconds, without starting Prefect or Ray."""
-    from flows.pipeline import ExportPlan, MiningPlan, idle_main_run, main_flow, reconstruction_config
+    images is aligned from its tracks and map), the grounding benchmark on the synthetic logs and, with --mine K
+    or --mining-config FILE, scenario mining of every aligned log (K accepted scenarios per sequence, stored under
+    STORE/edits/<run_id>/; a log without camera images is mined on its tracks, judged on the bird's-eye view and
+    the trajectories) and, with --export DIR or the file's dataset, their export as a dataset for planner
+    training. With --landing DIR, the logs in DIR not yet ingested are ingested first; one that fails to load is
+    quarantined under STORE/landing/quarantine/ and not retried until it changes. A run with nothing new (no
+    new landing log, the --sequences already stored alike, every stored log reconstructed, aligned and, when mining,
+    mined before with the same settings) is recorded as such in seconds, without starting Prefect or Ray."""
+    from flows.pipeline import idle_main_run, main_flow, reconstruction_config
     from tasks.answers import mining_as_dict
 
     alignment = alignment_config(captioner)
-    check_vlm(vlm)
-    if export is not None and not mine:
-        raise typer.BadParameter("--export exports mined scenarios: give --mine K too (or run `simsplat export`)",
-                                 param_hint="--export")
+    mining, export_plan = run_mining_plans(mine, vlm, export, seed, mining_config)
     if landing is not None:
         check_landing(landing)
     elif sequences == 0:
@@ -94,8 +106,7 @@ def run(
     params = dict(store_root=store, seeds=list(range(seed, seed + sequences)),
                   config=world_config(frames, width, height), reconstruction=reconstruction_config(iterations),
                   alignment=alignment, align=align,
-                  mining=MiningPlan(mine, vlm=vlm, seed=seed) if mine else None,
-                  export=ExportPlan(out=export) if export is not None else None, landing=landing)
+                  mining=mining, export=export_plan, landing=landing)
     writable_store(store)  # last: a refused parameter leaves no store behind
     idle = idle_main_run(params)  # nothing new: recorded without starting Prefect or Ray
     if idle is not None:
@@ -118,6 +129,32 @@ def run(
     if result.export is not None:
         print_export(result.export)
     print_artifacts(store)
+
+
+def run_mining_plans(mine: int, vlm: str | None, export: str | None, seed: int, mining_config: Path | None
+                     ) -> tuple[MiningPlan | None, ExportPlan | None]:
+    """The run's mining and export from the command line: ``--mining-config`` (``flows.pipeline.plans_from_config``,
+    ``--mine``, ``--vlm`` and ``--export`` overriding the file), else ``--mine K`` with ``--vlm`` and ``--seed``;
+    a bad parameter when the file is not valid, the client is unknown or unconfigured, or ``--export`` has nothing
+    to export."""
+    from flows.pipeline import ExportPlan, MiningPlan, plans_from_config
+    from tasks.mining_config import MiningConfigError, load_mining_config
+
+    if mining_config is not None:
+        try:
+            loaded = load_mining_config(mining_config)
+        except MiningConfigError as exc:
+            raise typer.BadParameter(str(exc), param_hint="--mining-config") from exc
+        planned, export_plan = plans_from_config(loaded, per_sequence=mine or None, vlm=vlm, export_out=export)
+        if planned.vlm != "openai" or planned.chat is None:  # an endpoint named in the file needs no environment
+            check_vlm(planned.vlm)
+        return planned, export_plan
+    check_vlm(vlm or "rule")
+    if export is not None and not mine:
+        raise typer.BadParameter("--export exports mined scenarios: give --mine K or --mining-config FILE too (or "
+                                 "run `simsplat export`)", param_hint="--export")
+    mining = MiningPlan(mine, vlm=vlm or "rule", seed=seed) if mine else None
+    return mining, ExportPlan(out=export) if export is not None else None
 
 
 def check_landing(landing: str) -> None:

@@ -60,7 +60,7 @@ from simsplat_core.mining.judge_input import judge_request_from_edit, targets_of
 from simsplat_core.mining.judge_views import JudgeViews, judge_views, proposal_views
 from simsplat_core.mining.proposal_feed import Pending, ProposalFeed
 from simsplat_core.mining.rule_client import RuleBasedVLMClient
-from simsplat_core.mining.rule_proposals import Proposal
+from simsplat_core.mining.rule_proposals import Proposal, selected_categories
 from simsplat_core.mining.scene_facts import scene_facts, summary
 from simsplat_core.mining.vlm_protocol import PLAUSIBILITY_MAX, PLAUSIBILITY_MIN, Judgement, SceneSummary, VLMClient
 from simsplat_core.vlm.openai_chat import VLMError, VLMUnreachableError
@@ -91,6 +91,9 @@ class MiningConfig:
         category_offset: where this sequence starts in the run's order of edit categories (the rule-based client's,
             :func:`default_client`; a run sets ``i * scenarios`` for its ``i``-th sequence so that its sequences
             take the categories in turn; ``None``: each sequence its own seeded order).
+        categories: the edit categories wanted (``rule_proposals.EDIT_CATEGORIES``; empty: all). The rule-based
+            client proposes only those; a proposal of any client whose category is known to be another one (said by
+            its proposer, or the category of its command program) is refused as ``category_not_selected``.
         options: the editor's options (default: full refinement, the ego reacts).
     """
 
@@ -105,6 +108,7 @@ class MiningConfig:
     min_visible_pixels: int = 30
     seed: int = 0
     category_offset: int | None = None
+    categories: tuple[str, ...] = ()
     options: EditorOptions = field(default=DEFAULT_OPTIONS)
 
     def __post_init__(self) -> None:
@@ -117,12 +121,17 @@ class MiningConfig:
                              f"got {self.min_plausibility}")
         if self.min_visible_pixels < 0:
             raise ValueError(f"MiningConfig.min_visible_pixels must be >= 0, got {self.min_visible_pixels}")
+        try:
+            selected_categories(self.categories)
+        except ValueError as exc:
+            raise ValueError(f"MiningConfig.categories: {exc}") from exc
 
 
 def default_client(ctx: EditContext, config: MiningConfig) -> RuleBasedVLMClient:
-    """The rule-based client of ``config.seed`` and ``config.category_offset``, parsing with the context's text
-    encoder."""
-    return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder, category_offset=config.category_offset)
+    """The rule-based client of ``config.seed``, ``config.category_offset`` and ``config.categories``, parsing with
+    the context's text encoder."""
+    return RuleBasedVLMClient(config.seed, encoder=ctx.engine.text_encoder, category_offset=config.category_offset,
+                              categories=config.categories)
 
 
 def program_json(program: EditProgram | None) -> str:
@@ -219,6 +228,13 @@ class _Miner:
                     f" ({reason})" if reason else "")
         return record
 
+    def _selected(self, category: str) -> bool:
+        """Whether ``category`` is among the config's edit categories (all when it names none)."""
+        return not self.config.categories or category in self.config.categories
+
+    def _not_selected(self, category: str) -> str:
+        return f"category_not_selected: {category} is not among {list(self.config.categories)}"
+
     def proposing_failed(self, index: int, pending: Pending) -> AttemptRecord:
         s = _Scenario(index, pending, scenario_key(self.ctx.log.seq_id, self.config.seed, index, ""))
         return self._record(s, 1, "failed", f"vlm_error: propose: {pending.error}", {"propose": pending.propose_s})
@@ -227,6 +243,9 @@ class _Miner:
         """Every attempt of one proposal, each handed to ``progress`` as it is made."""
         s = _Scenario(index, pending, scenario_key(self.ctx.log.seq_id, self.config.seed, index, pending.prompt))
         seconds = {"propose": pending.propose_s}
+        if pending.category and not self._selected(pending.category):
+            progress(self._record(s, 1, "refused", self._not_selected(pending.category), seconds))
+            return
         started = time.perf_counter()
         try:
             program = self.client.to_command(pending.prompt, self.scene)
@@ -246,6 +265,11 @@ class _Miner:
         self._answered()
         seconds["command"] = time.perf_counter() - started
         program = program if program.prompt else program.model_copy(update={"prompt": pending.prompt})
+        category = pending.category or edit_category(program, command_kinds(program, self.ctx.states))
+        if not self._selected(category):
+            progress(self._record(s, 1, "refused", self._not_selected(category), seconds, program=program,
+                                  category=category))
+            return
         adjustment = ""
         for attempt in range(1, self.config.max_attempts + 1):
             record, adjusted = self._attempt(s, attempt, program, adjustment, seconds)

@@ -54,15 +54,17 @@ class RuleBasedVLMClient:
         judge_config: the judge's thresholds.
         category_offset: where this sequence starts in the run's order of edit categories
             (``rule_proposals.propose_edits``; ``None``: the scene's own seeded order).
+        categories: the edit categories to propose (``rule_proposals.EDIT_CATEGORIES``; empty: all).
     """
 
     name = "rule-based/1"
 
     def __init__(self, seed: int = 0, facts_of: Callable[[SceneSummary], SceneFacts] | None = None, *,
                  encoder: TextEncoder | None = None, judge_config: JudgeConfig | None = None,
-                 category_offset: int | None = None) -> None:
+                 category_offset: int | None = None, categories: tuple[str, ...] = ()) -> None:
         self.seed = int(seed)
         self.category_offset = category_offset
+        self.categories = tuple(categories)
         self.facts_of = facts_of
         self.encoder = encoder
         self.judge_config = judge_config or JudgeConfig()
@@ -89,7 +91,7 @@ class RuleBasedVLMClient:
         Raises:
             ValueError: no facts (see :meth:`facts`), or no feasible edit in the scene.
         """
-        found = propose_edits(self.facts(summary), count, self.seed, self.category_offset)
+        found = propose_edits(self.facts(summary), count, self.seed, self.category_offset, self.categories)
         if not found:
             raise ValueError(f"{summary.seq_id}: no feasible edit in this scene (no nameable objects, no lane and no "
                              "assets)")

@@ -454,31 +454,51 @@ def _take(found: list[Proposal], used: set[str]) -> Proposal:
     return found.pop(index)
 
 
-def category_order(seed: int, offset: int) -> list[str]:
+def selected_categories(categories: Iterable[str] = ()) -> tuple[str, ...]:
+    """``categories`` checked against :data:`EDIT_CATEGORIES` (empty: every category), in the given order.
+
+    Raises:
+        ValueError: an unknown category (named, with the known ones).
+    """
+    chosen = tuple(categories)
+    unknown = [c for c in chosen if c not in EDIT_CATEGORIES]
+    if unknown:
+        raise ValueError(f"unknown edit categor{'y' if len(unknown) == 1 else 'ies'} {unknown}: choose from "
+                         f"{list(EDIT_CATEGORIES)}")
+    return chosen or EDIT_CATEGORIES
+
+
+def category_order(seed: int, offset: int, categories: Iterable[str] = ()) -> list[str]:
     """The run's order of the edit categories: a permutation seeded by ``seed`` alone (the same for every
-    sequence of a run), rotated to start at ``offset`` (mod the number of categories)."""
+    sequence of a run), less the categories not in ``categories`` (empty: keep all), rotated to start at ``offset``
+    (mod the number kept)."""
+    keep = set(selected_categories(categories))
     base = [EDIT_CATEGORIES[i] for i in np.random.default_rng(int(seed) & 0xFFFFFFFF).permutation(len(EDIT_CATEGORIES))]
+    base = [c for c in base if c in keep]
     k = int(offset) % len(base)
     return base[k:] + base[:k]
 
 
-def propose_edits(facts: SceneFacts, count: int, seed: int = 0, category_offset: int | None = None) -> list[Proposal]:
+def propose_edits(facts: SceneFacts, count: int, seed: int = 0, category_offset: int | None = None,
+                  categories: Iterable[str] = ()) -> list[Proposal]:
     """Up to ``count`` distinct proposals for the scene (module docstring), deterministic for ``seed``.
 
     The categories come in a seeded order of the scene (``category_offset`` ``None``), or, given
     ``category_offset``, in the run's order from there (:func:`category_order`): a run gives its ``i``-th sequence
     ``i * K`` (K scenarios per sequence), so that its sequences take the categories in turn instead of each
     drawing its own order (with two sequences and K = 3, independent orders leave a category out 19 times in 20).
+    ``categories`` keeps only those edit categories (empty: all six); the order of the kept ones is unchanged.
 
     Raises:
-        ValueError: ``count < 1``.
+        ValueError: ``count < 1``, or an unknown category.
     """
     if count < 1:
         raise ValueError(f"count must be >= 1, got {count}")
+    keep = set(selected_categories(categories))
     rng = proposal_rng(seed, facts.seq_id)
-    pools = {c: deque(kinds) for c, kinds in candidates(facts, rng).items()}
-    order = (category_order(seed, category_offset) if category_offset is not None
-             else [EDIT_CATEGORIES[i] for i in rng.permutation(len(EDIT_CATEGORIES))])
+    pools = {c: deque(kinds) for c, kinds in candidates(facts, rng).items() if c in keep}
+    order = (category_order(seed, category_offset, categories) if category_offset is not None
+             else [c for c in (EDIT_CATEGORIES[i] for i in rng.permutation(len(EDIT_CATEGORIES))) if c in keep])
     picked: list[Proposal] = []
     seen: set[str] = set()
     used: set[str] = set()
@@ -503,4 +523,4 @@ def propose_edits(facts: SceneFacts, count: int, seed: int = 0, category_offset:
 
 
 __all__ = ["EDIT_CATEGORIES", "KINDS", "Proposal", "ProposalKind", "candidates", "category_order", "propose_edits",
-           "proposal_rng"]
+           "proposal_rng", "selected_categories"]

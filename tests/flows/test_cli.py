@@ -206,6 +206,21 @@ def test_run_rejects_an_unknown_captioner(tmp_path):
     assert not (tmp_path / "store").exists()
 
 
+def test_run_names_a_bad_mining_config_and_an_export_without_mining_before_any_work(tmp_path, monkeypatch):
+    config = tmp_path / "mining.yaml"
+    config.write_text("version: 1\nmining:\n  categories: [add_truck]\n")
+    result = runner.invoke(app, ["run", "--store", str(tmp_path / "store"), "--mining-config", str(config)])
+    text = _flat(result.output)
+    assert result.exit_code != 0 and "--mining-config" in text and "mining.categories" in text and "add_truck" in text
+    result = runner.invoke(app, ["run", "--store", str(tmp_path / "store"), "--export", str(tmp_path / "out")])
+    assert result.exit_code != 0 and "--mining-config" in _flat(result.output)
+    monkeypatch.delenv("SIMSPLAT_VLM_URL", raising=False)
+    config.write_text("version: 1\nvlm:\n  client: openai\n")  # no endpoint in the file nor the environment
+    result = runner.invoke(app, ["run", "--store", str(tmp_path / "store"), "--mining-config", str(config)])
+    assert result.exit_code != 0 and "SIMSPLAT_VLM_URL" in _flat(result.output)
+    assert not (tmp_path / "store").exists()
+
+
 def test_run_on_an_empty_store_without_sequences_says_how_to_add_logs(tmp_path):
     result = runner.invoke(app, ["run", "--store", str(tmp_path / "store")])
     assert result.exit_code != 0

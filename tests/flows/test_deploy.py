@@ -26,7 +26,7 @@ def _write(path: Path, spec: dict) -> Path:
 def test_the_shipped_deployment_files_pass():
     assert check_deploy_files(PREFECT, RAY, KUBERAY, root=REPO) == []
     names = {d["name"] for d in yaml.safe_load(PREFECT.read_text())["deployments"]}
-    assert {"nightly-mining", "dataset-generation"} <= names
+    assert {"nightly-mining", "dataset-generation", "evaluation"} <= names
 
 
 def test_deploy_check_exits_0_on_the_shipped_files_and_1_with_the_findings_as_json(tmp_path, monkeypatch):
@@ -69,6 +69,25 @@ def test_each_broken_deployment_gives_one_finding_naming_file_deployment_and_fie
     assert [(f.file, f.item, f.field) for f in findings] == [(str(path), "nightly-mining", field)]
 
 
+@pytest.mark.parametrize(("config", "problem"), [
+    (None, "cannot read"),
+    ({"version": 1, "mining": {"categories": ["add_truck"]}}, "mining.categories: unknown edit category"),
+    ({"version": 3}, "version: 3 is not a supported version"),
+])
+def test_a_deployment_naming_a_bad_mining_config_is_a_finding_quoting_the_file_and_its_field(tmp_path, config,
+                                                                                             problem):
+    (tmp_path / "flows").symlink_to(REPO / "flows")  # entry points resolve under the root, so does the config
+    spec = yaml.safe_load(PREFECT.read_text())
+    nightly = next(d for d in spec["deployments"] if d["name"] == "nightly-mining")
+    nightly["parameters"]["mining_config"] = "mining.yaml"
+    if config is not None:
+        _write(tmp_path / "mining.yaml", config)
+    path = _write(tmp_path / "prefect.yaml", spec)
+    (finding,) = check_prefect_file(path, root=tmp_path)
+    assert (finding.item, finding.field) == ("nightly-mining", "parameters.mining_config")
+    assert finding.problem.startswith(str(tmp_path / "mining.yaml")) and problem in finding.problem
+
+
 def test_a_kuberay_manifest_without_head_group_and_a_ray_yaml_without_provider_are_named(tmp_path):
     kuberay = yaml.safe_load(KUBERAY.read_text())
     del kuberay["spec"]["headGroupSpec"]
@@ -88,3 +107,18 @@ def test_a_worker_container_without_resources_and_a_file_that_is_not_yaml_are_na
     bad = tmp_path / "bad.yaml"
     bad.write_text("deployments: [unclosed\n")
     assert [f.file for f in check_prefect_file(bad, root=REPO)] == [str(bad)]
+
+
+def test_the_evaluation_flow_runs_eval_all_with_the_deployments_parameters(tmp_path, monkeypatch):
+    import flows.evaluation as evaluation
+
+    seen = {}
+    monkeypatch.setattr(evaluation, "evaluate_all", lambda store, out_root, config: seen.update(
+        store=store, out=out_root, config=config))
+    evaluation.evaluation_flow.fn(str(tmp_path), only=["mining", "search"], per_sequence=2, clients=None, seed=4)
+    config = seen["config"]
+    assert (seen["store"], seen["out"]) == (str(tmp_path), None)
+    assert (config.groups, config.per_sequence, config.clients, config.seed) == (("mining", "search"), 2, ("rule",), 4)
+    with pytest.raises(ValueError, match="no driving log"):  # the real one, on an empty store
+        monkeypatch.undo()
+        evaluation.evaluation_flow.fn(str(tmp_path))

@@ -173,6 +173,23 @@ def test_a_refused_proposal_is_a_refused_row_and_the_loop_goes_on(ctx: EditConte
     assert removed.scenario == refused.scenario + 1
 
 
+def test_proposals_of_categories_not_selected_are_refused_unexecuted(ctx: EditContext,
+                                                                    rule_client: RuleBasedVLMClient) -> None:
+    # the cone's category comes from its command program (the scripted client does not say it), the seed's from
+    # its proposer; only the removal is among the selected categories
+    config = dataclasses.replace(CONFIG, scenarios=1, categories=("remove",))
+    seeds = [Proposal(SLOWER_SUV, "modify_vehicle", "slow_down", False)]
+    result = mine_sequence(ctx, ScriptedClient([CONE_AHEAD, REMOVE_VAN], rule_client), config, seed_prompts=seeds)
+    slower, cone, removed = result.records
+    for record, category in ((slower, "modify_vehicle"), (cone, "add_static")):
+        assert record.status == "refused" and record.category == category and record.edited is None
+        assert record.failure_reason == f"category_not_selected: {category} is not among ['remove']"
+    assert slower.program_json == "" and cone.program_json != ""
+    assert removed.prompt == REMOVE_VAN and removed.status == "accepted"
+    with pytest.raises(ValueError, match="MiningConfig.categories: unknown edit category \\['add_truck'\\]"):
+        MiningConfig(categories=("add_truck",))
+
+
 @pytest.mark.parametrize("stage", ["command", "judge"])
 def test_a_failing_vlm_is_a_failed_attempt_and_nothing_is_accepted(ctx: EditContext, rule_client: RuleBasedVLMClient,
                                                                    stage: str) -> None:
