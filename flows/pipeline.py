@@ -34,8 +34,8 @@ from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
 from tasks.mine import MiningSummary, mine_sequence_task, saved_search_seeds_task
-from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
 from tasks.mining_config import ConfigSource, LoadedMiningConfig, load_mining_config
+from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reconstruct_scene
 from tasks.run_plan import RunAsked, plan_run, record_idle_run
 from tasks.run_record import StageRecorder, recorded_run
