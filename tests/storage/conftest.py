@@ -13,6 +13,7 @@ import pytest
 
 from simsplat_core.types import CameraImage, MapFeature, ObjectInfo, SceneLog, Track
 from storage import ArtifactStore
+from storage.store import LOCKS_DIR
 
 try:
     from pyarrow._fs import _MockFileSystem  # in-memory filesystem without atomic rename (like S3)
@@ -185,9 +186,11 @@ def logs_equal() -> Callable[..., None]:
 
 
 def snapshot_tree(root: Path) -> dict[str, str]:
-    """``{relative path: sha256}`` of every file under ``root``, hidden ones included; dirs as ``"<dir>"``."""
+    """``{relative path: sha256}`` of every file under ``root``, hidden ones included; dirs as ``"<dir>"``. The
+    commit locks under ``.locks/`` are left out: lock files, kept by design, are not artifacts."""
     result: dict[str, str] = {}
     for dirpath, dirnames, filenames in os.walk(root):
+        dirnames[:] = [d for d in dirnames if d != LOCKS_DIR]
         for d in dirnames:
             result[os.path.relpath(os.path.join(dirpath, d), root)] = "<dir>"
         for f in filenames:
