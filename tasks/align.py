@@ -30,7 +30,13 @@ from storage import (
     read_scene_log,
     require_log_manifest,
 )
-from storage.alignment import model_dir, read_aligner_manifest, read_aligner_state, write_aligner_model
+from storage.alignment import (
+    list_aligner_models,
+    model_dir,
+    read_aligner_manifest,
+    read_aligner_state,
+    write_aligner_model,
+)
 from storage.language_scenes import language_dir, read_language_manifest, write_language_scene
 
 logger = logging.getLogger(__name__)
@@ -39,6 +45,10 @@ logger = logging.getLogger(__name__)
 ALIGNER_VERSION = "motion-aligner-v1"
 #: Version of the scene-alignment stage; bump it to invalidate every stored language scene.
 LANGUAGE_VERSION = "language-scene-v1"
+#: A stored aligner (same config, text encoder and version) is reused while the logs it was trained on make up at
+#: least this share of the logs asked for: a store that grows by a few logs a night retrains it (and so re-aligns
+#: every scene, whose key holds the aligner's) only each time it has grown by half, not on every new log.
+ALIGNER_REUSE_SHARE = 2 / 3
 
 
 @dataclass(frozen=True)
@@ -67,10 +77,31 @@ def aligner_hash(log_keys: list[str], config: MotionAlignerConfig, encoder_name:
     return content_key("align-model", ALIGNER_VERSION, sorted(log_keys), config.to_json(), encoder_name)
 
 
+def covering_aligner(store: ArtifactStore, log_keys: list[str], config: MotionAlignerConfig, encoder_name: str,
+                     share: float = ALIGNER_REUSE_SHARE) -> tuple[str, dict] | None:
+    """The stored aligner of ``config`` and ``encoder_name`` whose training logs cover the largest part (at least
+    ``share``) of ``log_keys``, newest first among equals; ``None`` when none does. Its ``(model_hash, manifest)``."""
+    wanted = set(log_keys)
+    best: tuple[float, str, dict] | None = None
+    for model_hash in list_aligner_models(store):  # newest first: a tie keeps the newer one
+        manifest = read_aligner_manifest(store, model_hash) or {}
+        provenance = manifest.get("provenance", {})
+        if (provenance.get("version") != ALIGNER_VERSION or provenance.get("config") != config.to_json()
+                or provenance.get("text_encoder") != encoder_name):
+            continue
+        covered = len(wanted & set(provenance.get("log_keys", []))) / len(wanted)
+        if covered >= share and (best is None or covered > best[0]):
+            best = (covered, model_hash, manifest)
+    return None if best is None else (best[1], best[2])
+
+
 @task(name="train-motion-aligner", retries=0, cache_policy=NO_CACHE)
-def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None
-                         ) -> StoredAligner:
-    """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories).
+def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None,
+                         reuse_share: float = ALIGNER_REUSE_SHARE) -> StoredAligner:
+    """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories), unless a
+    stored one (same config and text encoder) was trained on logs that make up at least ``reuse_share`` of them
+    (``covering_aligner``; 1.0: only one trained on exactly these logs). A reused aligner is returned as skipped,
+    with the logs it was trained on.
 
     Raises:
         FileNotFoundError: a log is missing from the store (named).
@@ -89,6 +120,14 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
     if existing is not None:
         logger.info("motion aligner %s already stored, skipping", key[:12])
         return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
+    covering = covering_aligner(store, keys, config, encoder.name, reuse_share)
+    if covering is not None:
+        model_hash, manifest = covering
+        trained_on = tuple(manifest.get("provenance", {}).get("seq_ids", ()))
+        logger.info("motion aligner %s (trained on %d of these %d logs) reused", model_hash[:12],
+                    len(set(keys) & set(manifest["provenance"]["log_keys"])), len(keys))
+        return StoredAligner(model_hash, model_dir(model_hash), trained_on, dict(manifest.get("metrics", {})), 0.0,
+                             True)
     started = time.perf_counter()
     logs = [read_scene_log(store, seq_id, load_images=False) for seq_id in seq_ids]
     aligner = MotionAligner.fit(logs, config, encoder)
