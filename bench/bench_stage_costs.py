@@ -91,7 +91,7 @@ def main() -> int:
     parser.add_argument("--out", default=str(RESULTS))
     parser.add_argument("--name", default="stage_costs")
     args = parser.parse_args()
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s", force=True)
     set_compute_threads(args.threads)
     root = tempfile.mkdtemp(prefix="bench-stage-costs-")
     seq_id = default_seq_id(args.seed)
