@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from prefect import task
@@ -77,11 +78,14 @@ def aligner_hash(log_keys: list[str], config: MotionAlignerConfig, encoder_name:
     return content_key("align-model", ALIGNER_VERSION, sorted(log_keys), config.to_json(), encoder_name)
 
 
-def covering_aligner(store: ArtifactStore, log_keys: list[str], config: MotionAlignerConfig, encoder_name: str,
-                     share: float = ALIGNER_REUSE_SHARE) -> tuple[str, dict] | None:
+def covering_aligner(store: ArtifactStore, log_sources: Mapping[str, str], config: MotionAlignerConfig,
+                     encoder_name: str, share: float = ALIGNER_REUSE_SHARE) -> tuple[str, dict] | None:
     """The stored aligner of ``config`` and ``encoder_name`` whose training logs cover the largest part (at least
-    ``share``) of ``log_keys``, newest first among equals; ``None`` when none does. Its ``(model_hash, manifest)``."""
-    wanted = set(log_keys)
+    ``share``) of the logs ``log_sources`` (content key -> source), and among them a log of every source (the first
+    log of a new source, e.g. a real one in a synthetic store, gets an aligner trained on it); newest first among
+    equals; ``None`` when none does. Its ``(model_hash, manifest)``."""
+    wanted = set(log_sources)
+    sources = set(log_sources.values())
     best: tuple[float, str, dict] | None = None
     for model_hash in list_aligner_models(store):  # newest first: a tie keeps the newer one
         manifest = read_aligner_manifest(store, model_hash) or {}
@@ -89,8 +93,11 @@ def covering_aligner(store: ArtifactStore, log_keys: list[str], config: MotionAl
         if (provenance.get("version") != ALIGNER_VERSION or provenance.get("config") != config.to_json()
                 or provenance.get("text_encoder") != encoder_name):
             continue
-        covered = len(wanted & set(provenance.get("log_keys", []))) / len(wanted)
-        if covered >= share and (best is None or covered > best[0]):
+        covered_keys = wanted & set(provenance.get("log_keys", []))
+        covered = len(covered_keys) / len(wanted)
+        if covered < share or {log_sources[k] for k in covered_keys} != sources:
+            continue
+        if best is None or covered > best[0]:
             best = (covered, model_hash, manifest)
     return None if best is None else (best[1], best[2])
 
@@ -99,9 +106,9 @@ def covering_aligner(store: ArtifactStore, log_keys: list[str], config: MotionAl
 def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None,
                          reuse_share: float = ALIGNER_REUSE_SHARE) -> StoredAligner:
     """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories), unless a
-    stored one (same config and text encoder) was trained on logs that make up at least ``reuse_share`` of them
-    (``covering_aligner``; 1.0: only one trained on exactly these logs). A reused aligner is returned as skipped,
-    with the logs it was trained on.
+    stored one (same config and text encoder) was trained on logs that make up at least ``reuse_share`` of them,
+    of every source among them (``covering_aligner``; 1.0: only one trained on exactly these logs). A reused
+    aligner is returned as skipped, with the logs it was trained on.
 
     Raises:
         FileNotFoundError: a log is missing from the store (named).
@@ -111,16 +118,16 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
         raise ValueError("train_motion_aligner: no logs to train on")
     config = config or MotionAlignerConfig()
     store = ArtifactStore(store_root)
-    keys = []
-    for seq_id in seq_ids:
-        keys.append(require_log_manifest(store, seq_id, "to train the aligner on")["key"])
+    manifests = [require_log_manifest(store, seq_id, "to train the aligner on") for seq_id in seq_ids]
+    keys = [manifest["key"] for manifest in manifests]
     encoder = default_text_encoder()
     key = aligner_hash(keys, config, encoder.name)
     existing = read_aligner_manifest(store, key)
     if existing is not None:
         logger.info("motion aligner %s already stored, skipping", key[:12])
         return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
-    covering = covering_aligner(store, keys, config, encoder.name, reuse_share)
+    covering = covering_aligner(store, {m["key"]: str(m.get("source", "")) for m in manifests}, config,
+                                encoder.name, reuse_share)
     if covering is not None:
         model_hash, manifest = covering
         trained_on = tuple(manifest.get("provenance", {}).get("seq_ids", ()))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -163,6 +165,12 @@ def test_a_stored_aligner_covering_most_logs_is_reused_not_retrained(tmp_path):
 
     other_config = train_motion_aligner.fn(store.root, ["s1", "s2", "s3"], MotionAlignerConfig(epochs=2))
     assert not other_config.skipped and other_config.model_hash != first.model_hash
+
+    real = dataclasses.replace(generate_log(seed=4, config=WorldConfig(num_frames=20, width=48, height=32),
+                                            seq_id="r4"), source="waymo")
+    write_scene_log(store, real)
+    with_a_new_source = train_motion_aligner.fn(store.root, ["s1", "s2", "r4"], CONFIG)  # 2 of 3, none of waymo
+    assert not with_a_new_source.skipped and with_a_new_source.seq_ids == ("s1", "s2", "r4")
 
     exact = train_motion_aligner.fn(store.root, ["s1", "s2", "s3"], CONFIG, reuse_share=1.0)
     assert not exact.skipped and exact.seq_ids == ("s1", "s2", "s3")
