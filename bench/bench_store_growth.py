@@ -19,9 +19,9 @@ read the whole store rather than one sequence:
   (what a run does whenever the store's set of logs changed and no stored aligner covers it).
 
 Per step and size: the median wall time of ``--repeats`` calls, the time per log, and the peak of Python allocations
-(``tracemalloc``, a separate call; ``aligner_training`` is timed once, allocations included). A step that grows
-faster than linearly shows as a rising time per log. The 1-minute load average is recorded with every size: the
-machine is shared, so compare sizes of one run. Writes ``<out>/<name>.json``.
+(``tracemalloc``, a separate call; ``aligner_training`` and ``search_preparation`` are timed once, allocations
+included). A step that grows faster than linearly shows as a rising time per log. The 1-minute load average is
+recorded with every size: the machine is shared, so compare sizes of one run. Writes ``<out>/<name>.json``.
 """
 
 from __future__ import annotations
@@ -134,7 +134,7 @@ def steps(train_aligner: bool) -> dict[str, Callable[[str], Any]]:
 
 
 #: Steps too slow to repeat: timed once, with the allocation peak of that same call.
-ONCE = ("aligner_training",)
+ONCE = ("aligner_training", "search_preparation")
 
 
 def measure_once(step: Callable[[str], Any], root: str) -> dict[str, float]:

@@ -7,7 +7,9 @@
 Inputs (each recorded in the output with where it came from):
 
 * per sequence, the CPU seconds of every stage except reconstruction, measured on this machine by
-  ``bench/bench_stage_costs.py`` (default 40-frame sequence; mining K accepted scenarios). They are assumed to run
+  ``bench/bench_stage_costs.py`` (default 40-frame sequence; mining K accepted scenarios) or, while its output is
+  absent, taken from the benchmarks on record (``world``, ``alignment``, ``mining``, ``export`` JSON files; each
+  figure names its file and key in the output). They are assumed to run
   on the nodes' CPU cores at the same CPU cost per core (``--vcpu-speed`` scales that: 0.6 for a hyper-thread that
   gives 60 % of a core here);
 * reconstruction on one GPU: ``--gpu-reconstruct-s`` (default: 31.5 s, the default sequence on one H100 with the
@@ -41,16 +43,52 @@ CPU_STAGES = ("generate", "align", "mine", "export")
 TASKS_PER_SEQUENCE = 4
 
 
-def project(args: argparse.Namespace, stage_costs: dict[str, Any], orchestration: dict[str, Any] | None
+def _json(path: Path) -> dict[str, Any]:
+    return json.loads(path.read_text())
+
+
+def recorded_stage_costs(results: Path) -> dict[str, dict[str, Any]]:
+    """CPU seconds per default sequence of each CPU stage from the benchmarks on record in ``results`` (each with the
+    file and figure it comes from); ``train_aligner`` is per log."""
+    world, align, mining, export = (_json(results / f"{n}.json") for n in ("world", "alignment", "mining", "export"))
+    accepted = mining["mining"][0]["accepted"] / len(mining["sequences"])  # per sequence
+    export_ms = sum(f["cpu_ms_median"] for f in export["formats"].values())
+    return {
+        "generate": {"cpu_s": round(world["median_generate_s"] + world["median_write_s"], 2),
+                     "source": "world.json: median_generate_s + median_write_s (one thread)"},
+        "align": {"cpu_s": round(2 * align["times"]["total_s"], 1),
+                  "source": "alignment.json: times.total_s x 2 threads (an upper bound of its CPU time)"},
+        "mine": {"cpu_s": round(mining["cpu_s"] / len(mining["sequences"]), 1), "accepted": accepted,
+                 "source": f"mining.json: cpu_s / sequences (K={mining['per_sequence']} wanted per sequence)"},
+        "export": {"cpu_s": round(export_ms / 1e3 * accepted, 3),
+                   "source": "export.json: CPU ms per scenario of the three formats x accepted scenarios"},
+        "train_aligner": {"cpu_s": round(2 * align["times"]["aligner_training_s"], 1),
+                          "source": "alignment.json: aligner_training_s x 2 threads (its training set; per log an "
+                                    "upper bound)"},
+    }
+
+
+def measured_stage_costs(path: Path) -> dict[str, dict[str, Any]] | None:
+    """The CPU seconds of ``bench/bench_stage_costs.py``'s output at ``path`` (``None`` when absent)."""
+    if not path.is_file():
+        return None
+    stages = _json(path)["stages"]
+    return {name: {"cpu_s": stages[name]["cpu_s"], "source": f"{path.name}: stages.{name}.cpu_s",
+                   **({"accepted": stages[name]["accepted"]} if "accepted" in stages[name] else {})}
+            for name in (*CPU_STAGES, "train_aligner")}
+
+
+def project(args: argparse.Namespace, stages: dict[str, dict[str, Any]], orchestration: dict[str, Any] | None
             ) -> dict[str, Any]:
-    """The projection's figures from the measured inputs and the cluster assumptions in ``args``."""
-    stages = stage_costs["stages"]
+    """The projection's figures from per-stage CPU seconds, the orchestration figures and the assumptions in
+    ``args``."""
     cpu_per_sequence = sum(stages[s]["cpu_s"] for s in CPU_STAGES) / args.vcpu_speed
     overhead_ms = 0.0
     startup_s = 0.0
     if orchestration is not None:
-        overhead_ms = max(0.0, orchestration["overhead"]["trivial"]["overhead_ms_per_task_one_worker"]["ray-1"])
-        startup_s = orchestration["prefect_api_start_s"] + orchestration["ray_init_s"]["seconds"]
+        per_task = orchestration["overhead"]["trivial"]["overhead_ms_per_task_one_worker"]
+        overhead_ms = max(0.0, per_task.get("ray-1", per_task.get("threads-1", 0.0)))
+        startup_s = orchestration["prefect_api_start_s"] + orchestration["ray_init_s"].get("seconds", 0.0)
     cpu_per_sequence += TASKS_PER_SEQUENCE * overhead_ms / 1e3
     gpu_rate = args.gpus_per_node / args.gpu_reconstruct_s  # sequences per second per node
     cpu_rate = args.vcpus_per_node / cpu_per_sequence
@@ -64,11 +102,9 @@ def project(args: argparse.Namespace, stage_costs: dict[str, Any], orchestration
                         "gpu_hour_usd": args.gpu_hour_usd, "price_is_an_assumption": True,
                         "gpu_reconstruct_s": args.gpu_reconstruct_s,
                         "gpu_reconstruct_source": "recorded: default sequence on one H100, gsplat backend",
-                        "cpu_stages_source": str(args.stage_costs),
-                        "mine_per_sequence": stages["mine"].get("accepted"),
+                        "mine_accepted_per_sequence": stages["mine"].get("accepted"),
                         "orchestration_source": str(args.orchestration) if orchestration is not None else None},
-        "per_sequence": {"cpu_s": round(cpu_per_sequence, 1),
-                         "cpu_s_by_stage": {s: stages[s]["cpu_s"] for s in CPU_STAGES},
+        "per_sequence": {"cpu_s": round(cpu_per_sequence, 1), "stages": stages,
                          "orchestration_s": round(TASKS_PER_SEQUENCE * overhead_ms / 1e3, 3),
                          "gpu_s": args.gpu_reconstruct_s},
         "node": {"gpu_bound_sequences_per_hour": round(3600 * gpu_rate), "cpu_bound_sequences_per_hour":
@@ -96,9 +132,9 @@ def main() -> int:
     parser.add_argument("--name", default="scale_projection")
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(message)s")
-    stage_costs = json.loads(args.stage_costs.read_text())
-    orchestration = json.loads(args.orchestration.read_text()) if args.orchestration.is_file() else None
-    result = project(args, stage_costs, orchestration)
+    stages = measured_stage_costs(args.stage_costs) or recorded_stage_costs(RESULTS)
+    orchestration = _json(args.orchestration) if args.orchestration.is_file() else None
+    result = project(args, stages, orchestration)
     logger.info("%s", json.dumps(result, indent=2))
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
