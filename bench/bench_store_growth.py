@@ -172,6 +172,7 @@ def main() -> int:
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--scratch", type=Path, default=None, help="where the sub-stores go (default: beside STORE)")
     parser.add_argument("--train-aligner", action="store_true", help="also time the aligner's training per size")
+    parser.add_argument("--skip", nargs="*", default=[], help="steps not to measure (e.g. search_preparation)")
     parser.add_argument("--out", default="bench/results")
     parser.add_argument("--name", default="store_growth")
     args = parser.parse_args()
@@ -185,10 +186,10 @@ def main() -> int:
                                           "python": platform.python_version()},
                               "store": str(full), "logs_in_store": len(seq_ids), "aligners_in_store": models,
                               "repeats": args.repeats, "sizes": {}}
-    named = steps(args.train_aligner)
+    named = {name: step for name, step in steps(args.train_aligner).items() if name not in args.skip}
     if not list_aligner_models(ArtifactStore(str(full))):
         logger.warning("no aligner in %s yet: load_aligner not measured", full)
-        named.pop("load_aligner")
+        named.pop("load_aligner", None)
     for size in sorted(set(args.sizes)):
         if size > len(seq_ids):
             logger.warning("size %d skipped: the store holds %d logs", size, len(seq_ids))
