@@ -204,19 +204,22 @@ def main() -> int:
                         figures["ms_per_log"], figures["peak_alloc_mb"])
         row["load_after"] = load_average()
         result["sizes"][str(size)] = row
+        write_result(result, list(named), Path(args.out) / f"{args.name}.json")  # after every size: slow steps
+    return 0
+
+
+def write_result(result: dict[str, Any], names: list[str], path: Path) -> None:
+    """Write ``result`` with the growth of each step from the smallest to the largest size measured so far."""
     sizes = sorted(result["sizes"], key=int)
     if len(sizes) > 1:
-        small, large = sizes[0], sizes[-1]
-        result["growth"] = {name: {"size_ratio": round(int(large) / int(small), 2),
-                                   "time_ratio": round(result["sizes"][large]["steps"][name]["median_s"]
-                                                       / max(result["sizes"][small]["steps"][name]["median_s"], 1e-9),
+        small, large = (result["sizes"][s]["steps"] for s in (sizes[0], sizes[-1]))
+        result["growth"] = {name: {"size_ratio": round(int(sizes[-1]) / int(sizes[0]), 2),
+                                   "time_ratio": round(large[name]["median_s"] / max(small[name]["median_s"], 1e-9),
                                                        2)}
-                            for name in named}
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / f"{args.name}.json").write_text(json.dumps(result, indent=2) + "\n")
-    logger.info("wrote %s", out / f"{args.name}.json")
-    return 0
+                            for name in names if name in small and name in large}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(result, indent=2) + "\n")
+    logger.info("wrote %s", path)
 
 
 if __name__ == "__main__":
