@@ -16,8 +16,9 @@ Inputs (each recorded in the output with where it came from):
   gsplat backend, 900 iterations at 0.024 s each; recorded figure, not measured by this script);
 * the orchestration overhead per task (``bench/bench_orchestration.py``, Prefect + Ray, one worker) times the tasks
   per sequence, added to the CPU work; the Prefect API's and Ray's start-up added once;
-* the aligner's training, once per run over all logs, at the CPU seconds per log that ``bench_stage_costs`` measured
-  on one log (it grows linearly with the logs: ``bench/bench_store_growth.py --train-aligner``);
+* the aligner's training, once per run in one process, on ``--aligner-logs`` logs (a sample: on all 10,000 it would
+  take longer than the mining) at the CPU seconds per log measured on one log (it grows linearly with the logs:
+  ``bench/bench_store_growth.py --train-aligner``);
 * the price: ``--gpu-hour-usd`` per GPU-hour for a whole node (CPUs included) — an assumption, not a quote.
 
 The cluster runs GPU and CPU work of different sequences at once (Ray schedules reconstruction tasks on GPUs and the
@@ -93,7 +94,8 @@ def project(args: argparse.Namespace, stages: dict[str, dict[str, Any]], orchest
     gpu_rate = args.gpus_per_node / args.gpu_reconstruct_s  # sequences per second per node
     cpu_rate = args.vcpus_per_node / cpu_per_sequence
     node_rate = min(gpu_rate, cpu_rate)
-    aligner_s = stages["train_aligner"]["cpu_s"] / args.vcpu_speed * args.logs  # one process, once per run
+    aligner_logs = min(args.logs, args.aligner_logs)
+    aligner_s = stages["train_aligner"]["cpu_s"] / args.vcpu_speed * aligner_logs  # one process, once per run
     wall_s = args.logs / (args.nodes * node_rate) + aligner_s + startup_s
     gpu_hours = args.nodes * args.gpus_per_node * wall_s / 3600
     return {
@@ -110,7 +112,9 @@ def project(args: argparse.Namespace, stages: dict[str, dict[str, Any]], orchest
         "node": {"gpu_bound_sequences_per_hour": round(3600 * gpu_rate), "cpu_bound_sequences_per_hour":
                  round(3600 * cpu_rate), "bound": "gpu" if gpu_rate <= cpu_rate else "cpu",
                  "sequences_per_hour": round(3600 * node_rate)},
-        "run": {"aligner_training_s": round(aligner_s), "startup_s": round(startup_s, 1),
+        "run": {"mining_h": round(args.logs / (args.nodes * node_rate) / 3600, 2),
+                "aligner_training_logs": aligner_logs,
+                "aligner_training_s": round(aligner_s), "startup_s": round(startup_s, 1),
                 "wall_h": round(wall_s / 3600, 2), "gpu_hours": round(gpu_hours, 1),
                 "cost_usd": int(math.ceil(gpu_hours * args.gpu_hour_usd))},
     }
@@ -125,6 +129,8 @@ def main() -> int:
     parser.add_argument("--vcpu-speed", type=float, default=0.6,
                         help="a node's vCPU relative to one core of the measuring machine")
     parser.add_argument("--gpu-reconstruct-s", type=float, default=31.5)
+    parser.add_argument("--aligner-logs", type=int, default=1000,
+                        help="logs the motion aligner is trained on (a sample of the store; its cost is per log)")
     parser.add_argument("--gpu-hour-usd", type=float, default=3.0, help="assumed price of one GPU-hour (whole node)")
     parser.add_argument("--stage-costs", type=Path, default=RESULTS / "stage_costs.json")
     parser.add_argument("--orchestration", type=Path, default=RESULTS / "orchestration.json")
