@@ -10,6 +10,7 @@ makes what they lack.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
+from collections.abc import Set as AbstractSet
 from dataclasses import dataclass
 
 from storage.assets import list_asset_banks
@@ -43,7 +44,7 @@ class Requirement:
     makes: str
     present: Callable[[ArtifactStore, str], bool] | None = None
 
-    def has(self, store: ArtifactStore, seq_id: str, logs: Sequence[str]) -> bool:
+    def has(self, store: ArtifactStore, seq_id: str, logs: AbstractSet[str]) -> bool:
         """Whether ``seq_id`` (among the complete ``logs``) has this artifact."""
         return seq_id in logs and (self.present is None or self.present(store, seq_id))
 
@@ -60,7 +61,8 @@ LANGUAGE_SCENE = Requirement("no language scene of {which}", "alignment", "align
 def sequences_with(store: ArtifactStore, needs: Requirement = LOG) -> list[str]:
     """The sequences of ``store`` that have a complete log and ``needs``' artifact, sorted."""
     logs = list_logs(store)
-    return [s for s in logs if needs.has(store, s, logs)]
+    complete = frozenset(logs)
+    return [s for s in logs if needs.has(store, s, complete)]
 
 
 def require_sequences(store: ArtifactStore, seq_ids: Sequence[str] | None = None,
@@ -74,12 +76,13 @@ def require_sequences(store: ArtifactStore, seq_ids: Sequence[str] | None = None
             that makes it).
     """
     logs = list_logs(store)
+    complete = frozenset(logs)  # membership per sequence in O(1): the checks below are per sequence
     if needs is LOG and not logs and not seq_ids:
         raise MissingInputError(f"no driving log in {store.uri(LOG.directory)}: {ADD_LOGS}")
-    chosen = list(seq_ids) if seq_ids else [s for s in logs if needs.has(store, s, logs)]
-    missing = [s for s in chosen if not needs.has(store, s, logs)]
+    chosen = list(seq_ids) if seq_ids else [s for s in logs if needs.has(store, s, complete)]
+    missing = [s for s in chosen if not needs.has(store, s, complete)]
     if missing or not chosen:
-        having = [s for s in logs if needs.has(store, s, logs)]
+        having = [s for s in logs if needs.has(store, s, complete)]
         which = str(missing) if missing else "any log"
         raise MissingInputError(f"{needs.lacking.format(which=which)} in "
                                 f"{store.uri(needs.directory)}; {needs.holders}: {having} "

@@ -10,6 +10,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from prefect import task
@@ -31,7 +32,13 @@ from storage import (
     read_scene_log,
     require_log_manifest,
 )
-from storage.alignment import model_dir, read_aligner_state, write_aligner_model
+from storage.alignment import (
+    list_aligner_models,
+    model_dir,
+    read_aligner_manifest,
+    read_aligner_state,
+    write_aligner_model,
+)
 from storage.language_scenes import language_dir, write_language_scene
 from tasks.retry_policy import STAGE_RETRIES
 
@@ -41,6 +48,10 @@ logger = logging.getLogger(__name__)
 ALIGNER_VERSION = "motion-aligner-v1"
 #: Version of the scene-alignment stage; bump it to invalidate every stored language scene.
 LANGUAGE_VERSION = "language-scene-v1"
+#: A stored aligner (same config, text encoder and version) is reused while the logs it was trained on make up at
+#: least this share of the logs asked for: a store that grows by a few logs a night retrains it (and so re-aligns
+#: every scene, whose key holds the aligner's) only each time it has grown by half, not on every new log.
+ALIGNER_REUSE_SHARE = 2 / 3
 
 
 @dataclass(frozen=True)
@@ -69,30 +80,65 @@ def aligner_hash(log_keys: list[str], config: MotionAlignerConfig, encoder_name:
     return content_key("align-model", ALIGNER_VERSION, sorted(log_keys), config.to_json(), encoder_name)
 
 
-def _training_log_keys(store: ArtifactStore, seq_ids: list[str]) -> list[str]:
-    return [str(require_log_manifest(store, seq_id, "to train the aligner on")["key"]) for seq_id in seq_ids]
+def _training_logs(store: ArtifactStore, seq_ids: list[str]) -> list[dict]:
+    return [require_log_manifest(store, seq_id, "to train the aligner on") for seq_id in seq_ids]
 
 
-def reusable_aligner(store: ArtifactStore, seq_ids: list[str], config: MotionAlignerConfig,
-                     encoder_name: str) -> StoredAligner | None:
-    """The stored aligner that ``train_motion_aligner`` would reuse for ``seq_ids`` (keyed by ``aligner_hash``),
-    ``None`` when it has to train one. The stored files are checked against their manifest
-    (``storage.markers.intact_marker``: a corrupt one is recomputed); the run planner asks it too.
+def covering_aligner(store: ArtifactStore, log_sources: Mapping[str, str], config: MotionAlignerConfig,
+                     encoder_name: str, share: float = ALIGNER_REUSE_SHARE) -> tuple[str, dict] | None:
+    """The stored aligner of ``config`` and ``encoder_name`` whose training logs cover the largest part (at least
+    ``share``) of the logs ``log_sources`` (content key -> source), and among them a log of every source (the first
+    log of a new source, e.g. a real one in a synthetic store, gets an aligner trained on it); newest first among
+    equals; ``None`` when none does. Its ``(model_hash, manifest)``."""
+    wanted = set(log_sources)
+    sources = set(log_sources.values())
+    best: tuple[float, str, dict] | None = None
+    for model_hash in list_aligner_models(store):  # newest first: a tie keeps the newer one
+        manifest = read_aligner_manifest(store, model_hash) or {}
+        provenance = manifest.get("provenance", {})
+        if (provenance.get("version") != ALIGNER_VERSION or provenance.get("config") != config.to_json()
+                or provenance.get("text_encoder") != encoder_name):
+            continue
+        covered_keys = wanted & set(provenance.get("log_keys", []))
+        covered = len(covered_keys) / len(wanted)
+        if covered < share or {log_sources[k] for k in covered_keys} != sources:
+            continue
+        if best is None or covered > best[0]:
+            best = (covered, model_hash, manifest)
+    return None if best is None else (best[1], best[2])
+
+
+def reusable_aligner(store: ArtifactStore, seq_ids: list[str], config: MotionAlignerConfig, encoder_name: str,
+                     reuse_share: float = ALIGNER_REUSE_SHARE) -> StoredAligner | None:
+    """The stored aligner that ``train_motion_aligner`` would reuse for ``seq_ids``: the one trained on exactly these
+    logs (keyed by ``aligner_hash``), else the one ``covering_aligner`` finds; ``None`` when it has to train one. The
+    stored files are checked against their manifest (``storage.markers.intact_marker``: a corrupt one is not
+    reused); the run planner asks it too.
 
     Raises:
         FileNotFoundError: a log is missing from the store (named).
     """
-    key = aligner_hash(_training_log_keys(store, seq_ids), config, encoder_name)
+    manifests = _training_logs(store, seq_ids)
+    key = aligner_hash([str(m["key"]) for m in manifests], config, encoder_name)
     existing = intact_marker(store, model_dir(key), key)
-    if existing is None:
+    if existing is not None:
+        return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
+    covering = covering_aligner(store, {str(m["key"]): str(m.get("source", "")) for m in manifests}, config,
+                                encoder_name, reuse_share)
+    if covering is None or intact_marker(store, model_dir(covering[0]), covering[0]) is None:
         return None
-    return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
+    model_hash, manifest = covering
+    trained_on = tuple(manifest.get("provenance", {}).get("seq_ids", ()))
+    return StoredAligner(model_hash, model_dir(model_hash), trained_on, dict(manifest.get("metrics", {})), 0.0, True)
 
 
 @task(name="train-motion-aligner", cache_policy=NO_CACHE, **STAGE_RETRIES.task_options())
-def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None
-                         ) -> StoredAligner:
-    """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories).
+def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlignerConfig | None = None,
+                         reuse_share: float = ALIGNER_REUSE_SHARE) -> StoredAligner:
+    """Train the motion/location aligner on the stored logs ``seq_ids`` (auto-labelled trajectories), unless a
+    stored one (same config and text encoder) was trained on logs that make up at least ``reuse_share`` of them,
+    of every source among them (``reusable_aligner``; 1.0: only one trained on exactly these logs). A reused
+    aligner is returned as skipped, with the logs it was trained on.
 
     Raises:
         FileNotFoundError: a log is missing from the store (named).
@@ -103,10 +149,11 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
     config = config or MotionAlignerConfig()
     store = ArtifactStore(store_root)
     encoder = default_text_encoder()
-    keys = _training_log_keys(store, seq_ids)
-    stored = reusable_aligner(store, seq_ids, config, encoder.name)
+    keys = [str(m["key"]) for m in _training_logs(store, seq_ids)]
+    stored = reusable_aligner(store, seq_ids, config, encoder.name, reuse_share)
     if stored is not None:
-        logger.info("motion aligner %s already stored, skipping", stored.model_hash[:12])
+        logger.info("motion aligner %s (trained on %d of these %d logs) reused", stored.model_hash[:12],
+                    len(set(stored.seq_ids) & set(seq_ids)), len(seq_ids))
         return stored
     key = aligner_hash(keys, config, encoder.name)
     started = time.perf_counter()

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -148,3 +150,28 @@ def test_align_scene_with_a_vlm_captioner_over_http(aligned, monkeypatch):
     assert captioned and all(n.caption.text == "a purple hatchback" for n in captioned)
     assert len(server.requests) == len(captioned)
     assert {r["body"]["model"] for r in server.requests} == {"stand-in-vlm"}
+
+
+def test_a_stored_aligner_covering_most_logs_is_reused_not_retrained(tmp_path):
+    store = ArtifactStore(tmp_path / "store")
+    for seed in (1, 2, 3):
+        write_scene_log(store, generate_log(seed=seed, config=WorldConfig(num_frames=20, width=48, height=32),
+                                            seq_id=f"s{seed}"))
+    first = train_motion_aligner.fn(store.root, ["s1", "s2"], CONFIG)
+
+    grown = train_motion_aligner.fn(store.root, ["s1", "s2", "s3"], CONFIG)  # 2 of 3 logs covered
+    assert grown.skipped and grown.model_hash == first.model_hash and grown.seq_ids == ("s1", "s2")
+    assert list_aligner_models(store) == [first.model_hash]
+
+    other_config = train_motion_aligner.fn(store.root, ["s1", "s2", "s3"], MotionAlignerConfig(epochs=2))
+    assert not other_config.skipped and other_config.model_hash != first.model_hash
+
+    real = dataclasses.replace(generate_log(seed=4, config=WorldConfig(num_frames=20, width=48, height=32),
+                                            seq_id="r4"), source="waymo")
+    write_scene_log(store, real)
+    with_a_new_source = train_motion_aligner.fn(store.root, ["s1", "s2", "r4"], CONFIG)  # 2 of 3, none of waymo
+    assert not with_a_new_source.skipped and with_a_new_source.seq_ids == ("s1", "s2", "r4")
+
+    exact = train_motion_aligner.fn(store.root, ["s1", "s2", "s3"], CONFIG, reuse_share=1.0)
+    assert not exact.skipped and exact.seq_ids == ("s1", "s2", "s3")
+    assert train_motion_aligner.fn(store.root, ["s3", "s1"], CONFIG).model_hash == exact.model_hash  # covers all
