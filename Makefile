@@ -41,7 +41,7 @@ demo: $(STAMP)
 
 test: $(STAMP) lint browser
 	$(VENV)/bin/simsplat deploy check
-	$(VENV)/bin/pytest -q
+	$(VENV)/bin/pytest -q --durations=25
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -32,9 +32,16 @@ REMOVE = "Remove the white sedan."
 PROPOSED = "Delete the white sedan from the scene."
 
 
+def _stored_paths(root: str) -> set[str]:
+    """Every path of the store ``root`` but the edits and the commit locks (``.locks/``: lock files, not
+    artifacts)."""
+    return {str(p.relative_to(root)) for p in Path(root).rglob("*")
+            if not {"edits", ".locks"} & set(p.relative_to(root).parts)}
+
+
 @pytest.fixture(scope="module")
 def evaluated(store_root: str, tmp_path_factory: pytest.TempPathFactory) -> tuple[Any, Path, set[str]]:  # noqa: F811
-    before = {str(p.relative_to(store_root)) for p in Path(store_root).rglob("*") if "edits" not in p.parts}
+    before = _stored_paths(store_root)
     out = tmp_path_factory.mktemp("mining_eval")
     with pytest.MonkeyPatch.context() as mp:
         mp.delenv("SIMSPLAT_VLM_URL", raising=False)
@@ -70,7 +77,7 @@ def test_the_mining_tables_are_written_with_a_row_per_client(store_root: str, ev
     search = store.read_table("tables/search.parquet", SEARCH_SPEC.schema).to_pylist()  # the search benchmark
     assert len(search) == len(ALL_QUERIES) and all(0.0 <= (r["log_ba"] or 0.0) <= 1.0 for r in search)
     assert (out / "tables" / "search.md").read_text().startswith("# Search")
-    after = {str(p.relative_to(store_root)) for p in Path(store_root).rglob("*") if "edits" not in p.parts}
+    after = _stored_paths(store_root)
     assert after == before  # the stored scenes, logs and banks are not written
 
 
