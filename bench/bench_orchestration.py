@@ -29,10 +29,8 @@ from __future__ import annotations
 
 import argparse
 import functools
-import json
 import logging
 import os
-import platform
 import shutil
 import sys
 import tempfile
@@ -49,6 +47,7 @@ os.environ.setdefault("PREFECT_SERVER_ANALYTICS_ENABLED", "false")
 
 from prefect import flow, task  # noqa: E402
 from prefect.cache_policies import NO_CACHE  # noqa: E402
+from run_info import load_average, machine_info, write_json_result  # noqa: E402
 
 from flows.runtime import RunnerKind, make_task_runner, prefect_api, shutdown_ray  # noqa: E402
 from simsplat_core.world import WorldConfig  # noqa: E402
@@ -58,11 +57,6 @@ logger = logging.getLogger("bench.orchestration")
 
 #: The real small stage's world: a log of a few frames at a small size (about 0.1-0.3 s to generate here).
 TINY_WORLD = WorldConfig(num_frames=8, width=64, height=48)
-
-
-def load_average() -> list[float]:
-    """The 1/5/15-minute load averages (empty where the OS has none)."""
-    return [round(v, 2) for v in os.getloadavg()] if hasattr(os, "getloadavg") else []
 
 
 @task(name="bench-trivial", cache_policy=NO_CACHE)
@@ -216,8 +210,7 @@ def main() -> int:
     args = parser.parse_args()
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s", force=True)
     scratch = Path(tempfile.mkdtemp(prefix="bench-orchestration-"))
-    result: dict[str, Any] = {"machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
-                                          "python": platform.python_version(), "load_at_start": load_average()}}
+    result: dict[str, Any] = {"machine": machine_info() | {"load_at_start": load_average()}}
     try:
         load = load_average()
         started = time.perf_counter()
@@ -244,10 +237,7 @@ def main() -> int:
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     result["machine"]["load_at_end"] = load_average()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / f"{args.name}.json").write_text(json.dumps(result, indent=2) + "\n")
-    logger.info("wrote %s", out / f"{args.name}.json")
+    write_json_result(result, Path(args.out) / f"{args.name}.json")
     return 0
 
 

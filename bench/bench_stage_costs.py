@@ -23,8 +23,6 @@ import argparse
 import dataclasses
 import json
 import logging
-import os
-import platform
 import shutil
 import sys
 import tempfile
@@ -35,6 +33,8 @@ from typing import Any
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+
+from run_info import load_average, machine_info, write_json_result  # noqa: E402
 
 from simsplat_core.compute_threads import set_compute_threads  # noqa: E402
 from simsplat_core.scene import ReconstructionConfig  # noqa: E402
@@ -49,11 +49,6 @@ from tasks.reconstruct import reconstruct_scene  # noqa: E402
 
 logger = logging.getLogger("bench.stage_costs")
 RESULTS = Path(__file__).resolve().parent / "results"
-
-
-def load_average() -> list[float]:
-    """The 1/5/15-minute load averages (empty where the OS has none)."""
-    return [round(v, 2) for v in os.getloadavg()] if hasattr(os, "getloadavg") else []
 
 
 def timed(stages: dict[str, Any], name: str, call: Callable[[], Any]) -> Any:
@@ -116,16 +111,12 @@ def main() -> int:
     finally:
         shutil.rmtree(root, ignore_errors=True)
     per_sequence = sum(s["wall_s"] for name, s in stages.items() if name != "reconstruct")
-    result = {"machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "python": platform.python_version(),
-                          "threads": args.threads},
+    result = {"machine": machine_info() | {"threads": args.threads},
               "sequence": {"seed": args.seed, "world": dataclasses.asdict(WorldConfig())},
               "iterations_run": args.iterations, "default_iterations": default_iterations, "stages": stages,
               "per_sequence_wall_s_with_projected_reconstruction": round(
                   per_sequence + stages["reconstruct"]["projection"]["projected_wall_s"], 1)}
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / f"{args.name}.json").write_text(json.dumps(result, indent=2, default=str) + "\n")
-    logger.info("wrote %s", out / f"{args.name}.json")
+    write_json_result(result, Path(args.out) / f"{args.name}.json")
     return 0
 
 

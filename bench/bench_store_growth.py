@@ -27,10 +27,8 @@ recorded with every size: the machine is shared, so compare sizes of one run. Wr
 from __future__ import annotations
 
 import argparse
-import json
 import logging
 import os
-import platform
 import shutil
 import statistics
 import sys
@@ -42,6 +40,8 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from run_info import load_average, machine_info, write_json_result  # noqa: E402
+
 from storage import ArtifactStore, list_logs, require_log_manifest  # noqa: E402
 from storage.alignment import list_aligner_models, read_aligner_manifest  # noqa: E402
 from storage.inventory import LANGUAGE_SCENE, SCENE, sequences_with  # noqa: E402
@@ -52,11 +52,6 @@ from tasks.search import load_store  # noqa: E402
 from tasks.stages import decide_stages, resolve_seq_ids  # noqa: E402
 
 logger = logging.getLogger("bench.store_growth")
-
-
-def load_average() -> list[float]:
-    """The 1/5/15-minute load averages (empty where the OS has none)."""
-    return [round(v, 2) for v in os.getloadavg()] if hasattr(os, "getloadavg") else []
 
 
 def _link_tree(src: Path, dst: Path) -> None:
@@ -182,8 +177,7 @@ def main() -> int:
     seq_ids = list_logs(ArtifactStore(str(full)))
     scratch = args.scratch or full.parent / f"{full.name}-subsets"
     models = len(list((full / "alignment").iterdir())) if (full / "alignment").is_dir() else 0
-    result: dict[str, Any] = {"machine": {"cpus": os.cpu_count(), "platform": platform.platform(),
-                                          "python": platform.python_version()},
+    result: dict[str, Any] = {"machine": machine_info(),
                               "store": str(full), "logs_in_store": len(seq_ids), "aligners_in_store": models,
                               "repeats": args.repeats, "sizes": {}}
     named = {name: step for name, step in steps(args.train_aligner).items() if name not in args.skip}
@@ -217,9 +211,7 @@ def write_result(result: dict[str, Any], names: list[str], path: Path) -> None:
                                    "time_ratio": round(large[name]["median_s"] / max(small[name]["median_s"], 1e-9),
                                                        2)}
                             for name in names if name in small and name in large}
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(json.dumps(result, indent=2) + "\n")
-    logger.info("wrote %s", path)
+    write_json_result(result, path)
 
 
 if __name__ == "__main__":

@@ -36,6 +36,8 @@ from pathlib import Path
 from typing import Any
 
 logger = logging.getLogger("bench.scale_projection")
+from run_info import write_json_result
+
 RESULTS = Path(__file__).resolve().parent / "results"
 
 #: Stages of one sequence that run on CPU cores (reconstruction runs on a GPU; the aligner's training once per run).
@@ -142,9 +144,7 @@ def main() -> int:
     orchestration = _json(args.orchestration) if args.orchestration.is_file() else None
     result = project(args, stages, orchestration)
     logger.info("%s", json.dumps(result, indent=2))
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / f"{args.name}.json").write_text(json.dumps(result, indent=2) + "\n")
+    write_json_result(result, Path(args.out) / f"{args.name}.json")
     return 0
 
 

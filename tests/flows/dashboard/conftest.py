@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import socket
 import threading
 import time
 from collections.abc import Iterator
@@ -19,6 +18,7 @@ import uvicorn
 from flows.dashboard.app import create_app
 from flows.dashboard.settings import DashboardSettings
 from tests.flows.dashboard.store_fixture import DashboardStore, build_dashboard_store
+from tests.flows.prefect_processes import free_port
 
 #: Where the browser is looked for (``SIMSPLAT_CHROMIUM`` overrides).
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
@@ -27,12 +27,6 @@ CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
 @pytest.fixture(scope="session")
 def dashboard_store(tmp_path_factory: pytest.TempPathFactory) -> DashboardStore:
     return build_dashboard_store(tmp_path_factory.mktemp("dashboard_store"))
-
-
-def _free_port() -> int:
-    with socket.socket() as sock:
-        sock.bind(("127.0.0.1", 0))
-        return int(sock.getsockname()[1])
 
 
 class ServedDashboard:
@@ -57,7 +51,7 @@ class ServedDashboard:
 
 def serve(store_root: str, **kw: Any) -> ServedDashboard:
     """The dashboard of ``store_root`` on a free loopback port."""
-    return ServedDashboard(DashboardSettings(store_root, port=_free_port(), **kw))
+    return ServedDashboard(DashboardSettings(store_root, port=free_port(), **kw))
 
 
 @pytest.fixture(scope="package")
