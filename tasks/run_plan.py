@@ -128,7 +128,7 @@ def plan_run(store_root: str, asked: RunAsked) -> RunPlan:
     found = _with(found, scenes=tuple(s for s in scenes.values() if s is not None))
     if not asked.align:
         return found
-    return _plan_alignment(store_root, asked, found)
+    return _plan_alignment(store_root, store, asked, found)
 
 
 def _with(plan: RunPlan, **changes: Any) -> RunPlan:
@@ -139,12 +139,11 @@ def _pending(plan: RunPlan, work: str) -> RunPlan:
     return _with(plan, pending=(*plan.pending, work))
 
 
-def _plan_alignment(store_root: str, asked: RunAsked, found: RunPlan) -> RunPlan:
+def _plan_alignment(store_root: str, store: ArtifactStore, asked: RunAsked, found: RunPlan) -> RunPlan:
     """``found`` with the stored aligner and language scenes, then the mining ledger's split; pending work named."""
     from simsplat_core.language.appearance.embedders import appearance_embedder
     from simsplat_core.language.text import default_text_encoder
 
-    store = ArtifactStore(store_root)
     encoder = default_text_encoder()
     embedder = appearance_embedder(asked.alignment.captioner, encoder)
     aligner = reusable_aligner(store, [p.seq_id for p in found.stages], asked.aligner or MotionAlignerConfig(),
