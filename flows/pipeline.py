@@ -37,7 +37,7 @@ from tasks.mine import MiningSummary, mine_sequence_task, saved_search_seeds_tas
 from tasks.mining_config import ConfigSource, LoadedMiningConfig, load_mining_config
 from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reconstruct_scene
-from tasks.run_plan import RunAsked, plan_run, record_idle_run
+from tasks.run_plan import IN_STORE, RunAsked, minable_sequences, plan_run, record_idle_run
 from tasks.run_record import StageRecorder, recorded_run
 from tasks.stages import STAGES, LogStages, decide_stages, plan_alignment, plan_stages, resolve_seq_ids
 
@@ -311,12 +311,6 @@ def plans_from_config(loaded: LoadedMiningConfig, *, per_sequence: int | None = 
     return mining, ExportPlan(out=export_out or dataset.out, name=dataset.name, formats=dataset.formats)
 
 
-def minable(language: list[StoredLanguageScene]) -> list[str]:
-    """Sequences the loop can mine: every aligned one (a log without camera images is mined on its tracks: box-only
-    inserts, judged on the bird's-eye view and the trajectories)."""
-    return [s.seq_id for s in language]
-
-
 def _publish_mining_table(summaries: list[MiningSummary], run_id: str) -> None:
     """The accepted scenarios, each with its dashboard card's address when a dashboard is configured."""
     base = dashboard_url()
@@ -508,7 +502,7 @@ def idle_main_run(params: Mapping[str, Any]) -> MainResult | None:
     mining: MiningPlan | None = args["mining"]
     asked = RunAsked(tuple(args["seeds"]), args["config"], args["landing"],
                      args["reconstruction"] or ReconstructionConfig(), args["alignment"] or AlignmentConfig(),
-                     args["aligner"], args["align"], mining.ledger() if mining is not None else None, minable)
+                     args["aligner"], args["align"], mining.ledger() if mining is not None else None)
     plan = plan_run(args["store_root"], asked)
     if not plan.nothing_new:
         logger.info("work to do: %s", "; ".join(plan.pending))
@@ -525,7 +519,7 @@ def record_planned_skips(run: StageRecorder, plans: list[LogStages], generated: 
     """Record the stages each log skips by plan (``tasks.stages``' reasons; logs stored before this run skip
     ingest), among those the main job was asked to run."""
     produced = {s.summary.seq_id for s in generated}
-    run.skip("ingest", [p.seq_id for p in plans if p.seq_id not in produced], "in the store before this run")
+    run.skip("ingest", [p.seq_id for p in plans if p.seq_id not in produced], IN_STORE)
     for plan in plans:
         for stage, reason in plan.skipped().items():
             if stage == "reconstruct" or (align and evaluate):
@@ -538,7 +532,7 @@ def _mine_and_export(store_root: str, language: list[StoredLanguageScene], run_i
     """The main job's mining (``mining``: every aligned sequence not in the mining ledger for these settings, logs
     without images on their tracks; seeded by the plan's saved searches) and export (``export``: this run's accepted
     scenarios), each recorded per sequence with the reason of a skip."""
-    to_mine = minable(language) if mining is not None else []
+    to_mine = minable_sequences(language) if mining is not None else []
     positions = {seq_id: i for i, seq_id in enumerate(to_mine)}
     seeds: dict[str, list[Proposal]] = {}
     if mining is not None:

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from storage.errors import CorruptArtifactError
+from storage.run_records import record_from
 from storage.store import ArtifactStore, join_relpath
 
 LEDGER_DIR = join_relpath("mining", "ledger")
@@ -80,16 +81,12 @@ def read_ledger_record(store: ArtifactStore, settings_key: str, seq_id: str) -> 
     if not store.exists(relpath):
         return None
     source = store.uri(relpath)
-    data = store.read_json(relpath)
-    if not isinstance(data, dict):
-        raise CorruptArtifactError(f"{source}: a ledger record must be a JSON object, got {type(data).__name__}")
-    names = {f.name for f in dataclasses.fields(LedgerRecord)}
+    record: LedgerRecord = record_from(LedgerRecord, store.read_json(relpath), source)
+    scenarios: Any = record.scenarios  # still the file's JSON objects
     try:
-        values = {k: v for k, v in data.items() if k in names}
-        values["scenarios"] = tuple(LedgerScenario(**s) for s in values.get("scenarios", ()))
-        record = LedgerRecord(**values)
+        record = dataclasses.replace(record, scenarios=tuple(LedgerScenario(**s) for s in scenarios))
     except TypeError as exc:
-        raise CorruptArtifactError(f"{source}: not a mining ledger record ({exc})") from exc
+        raise CorruptArtifactError(f"{source}: not a mining ledger record's scenarios ({exc})") from exc
     if (record.settings_key, record.seq_id) != (settings_key, seq_id):
         raise CorruptArtifactError(f"{source}: its fields name {record.settings_key}/{record.seq_id}, not its path")
     return record

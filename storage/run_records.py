@@ -250,7 +250,7 @@ def write_stage_record(store: ArtifactStore, run_id: str, record: StageRecord) -
     store.write_json(relpath, {"record_version": RECORD_VERSION, **json_safe(record)})
 
 
-def _record_from(cls: type, data: Any, source: str) -> Any:
+def record_from(cls: type, data: Any, source: str) -> Any:
     """``cls(**data)`` from a record file's JSON; ``CorruptArtifactError`` naming the file and the field."""
     if not isinstance(data, dict):
         raise CorruptArtifactError(f"{source}: a record must be a JSON object, got {type(data).__name__}")
@@ -275,7 +275,7 @@ def read_run_record(store: ArtifactStore, run_id: str) -> RunRecord | None:
     relpath = run_record_relpath(run_id)
     if not store.exists(relpath):
         return None
-    record: RunRecord = _record_from(RunRecord, store.read_json(relpath), store.uri(relpath))
+    record: RunRecord = record_from(RunRecord, store.read_json(relpath), store.uri(relpath))
     if record.run_id != run_id:
         raise CorruptArtifactError(f"{store.uri(relpath)}: run_id {record.run_id!r} is not its folder's {run_id!r}")
     return record
@@ -290,7 +290,7 @@ def read_stage_record(store: ArtifactStore, run_id: str, seq_id: str, stage: str
     relpath = stage_record_relpath(run_id, seq_id, stage, status)
     if not store.exists(relpath):
         return None
-    record: StageRecord = _record_from(StageRecord, store.read_json(relpath), store.uri(relpath))
+    record: StageRecord = record_from(StageRecord, store.read_json(relpath), store.uri(relpath))
     return record
 
 
@@ -311,7 +311,7 @@ def read_stage_matrix(store: ArtifactStore, run_id: str) -> StageMatrix:
     problems: list[str] = []
     for relpath in _stage_files(store, run_id):
         try:
-            record: StageRecord = _record_from(StageRecord, store.read_json(relpath), store.uri(relpath))
+            record: StageRecord = record_from(StageRecord, store.read_json(relpath), store.uri(relpath))
             if relpath != stage_record_relpath(run_id, record.seq_id, record.stage, record.status):
                 raise CorruptArtifactError(f"{store.uri(relpath)}: its fields say {record.seq_id}/{record.stage}-"
                                            f"{record.status}, not its file name")

@@ -95,11 +95,6 @@ def ledger_settings(plan: MiningSettings, config_key: str = "") -> LedgerSetting
                           int(plan.seed), config_key)
 
 
-def mining_settings_key(plan: MiningSettings, config_key: str = "") -> str:
-    """The ledger key of ``plan`` with the mining configuration's key ``config_key`` (``ledger_settings``)."""
-    return ledger_settings(plan, config_key).key
-
-
 def _log_key(store: ArtifactStore, seq_id: str) -> str:
     return str(require_log_manifest(store, seq_id, "to mine")["key"])
 

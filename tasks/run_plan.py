@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -44,14 +44,13 @@ from tasks.stages import LogStages, decide_stages, resolve_seq_ids
 
 logger = logging.getLogger(__name__)
 
-#: Which of the aligned sequences the run mines (``flows.pipeline.minable``).
-MinablePolicy = Callable[[list[StoredLanguageScene]], list[str]]
 IN_STORE = "in the store before this run"
 NOT_MINABLE = "not among the sequences this run mines"
 
 
-def every_aligned(language: list[StoredLanguageScene]) -> list[str]:
-    """The default ``MinablePolicy``: every aligned sequence."""
+def minable_sequences(language: list[StoredLanguageScene]) -> list[str]:
+    """Sequences a main run mines: every aligned one (a log without camera images is mined on its tracks: box-only
+    inserts, judged on the bird's-eye view and the trajectories)."""
     return [s.seq_id for s in language]
 
 
@@ -91,7 +90,6 @@ class RunAsked:
         landing: the landing location (``None``: none).
         reconstruction, alignment, aligner: the stages' configurations (``aligner`` ``None``: the default).
         align: whether the run aligns; mining: the ledger settings of its mining (``None``: no mining).
-        minable: which aligned sequences it mines.
     """
 
     seeds: tuple[int, ...] = ()
@@ -102,7 +100,6 @@ class RunAsked:
     aligner: MotionAlignerConfig | None = None
     align: bool = True
     mining: LedgerSettings | None = None
-    minable: MinablePolicy = every_aligned
 
 
 def plan_run(store_root: str, asked: RunAsked) -> RunPlan:
@@ -131,7 +128,7 @@ def plan_run(store_root: str, asked: RunAsked) -> RunPlan:
     found = _with(found, scenes=tuple(s for s in scenes.values() if s is not None))
     if not asked.align:
         return found
-    return _plan_alignment(store_root, asked, found)
+    return _plan_alignment(store_root, store, asked, found)
 
 
 def _with(plan: RunPlan, **changes: Any) -> RunPlan:
@@ -142,12 +139,11 @@ def _pending(plan: RunPlan, work: str) -> RunPlan:
     return _with(plan, pending=(*plan.pending, work))
 
 
-def _plan_alignment(store_root: str, asked: RunAsked, found: RunPlan) -> RunPlan:
+def _plan_alignment(store_root: str, store: ArtifactStore, asked: RunAsked, found: RunPlan) -> RunPlan:
     """``found`` with the stored aligner and language scenes, then the mining ledger's split; pending work named."""
     from simsplat_core.language.appearance.embedders import appearance_embedder
     from simsplat_core.language.text import default_text_encoder
 
-    store = ArtifactStore(store_root)
     encoder = default_text_encoder()
     embedder = appearance_embedder(asked.alignment.captioner, encoder)
     aligner = reusable_aligner(store, [p.seq_id for p in found.stages], asked.aligner or MotionAlignerConfig(),
@@ -165,7 +161,7 @@ def _plan_alignment(store_root: str, asked: RunAsked, found: RunPlan) -> RunPlan
     found = _with(found, aligner=aligner, language=tuple(aligned))
     if asked.mining is None:
         return found
-    minable = tuple(asked.minable(aligned))
+    minable = tuple(minable_sequences(aligned))
     split = split_by_ledger(store_root, [s for s in aligned if s.seq_id in minable], asked.mining.key)
     found = _with(found, minable=minable, mining=split)
     return _pending(found, f"mine {', '.join(split.to_mine)}") if split.to_mine else found
