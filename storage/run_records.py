@@ -156,8 +156,9 @@ class RunRecord:
         when it was interrupted), s."""
         start = parse_time(self.started_at)
         now = now or datetime.datetime.now(datetime.UTC)
-        end = parse_time(self.finished_at) or (self.last_sign_of_life if self.observed_status(now) == INTERRUPTED
-                                               else now)
+        end = parse_time(self.finished_at)
+        if end is None:
+            end = self.last_sign_of_life if self.observed_status(now) == INTERRUPTED else now
         return None if start is None or end is None else max(0.0, (end - start).total_seconds())
 
 

@@ -325,8 +325,8 @@ def recorded_run(store_root: str, run_id: str, flow: str | None = None,
         StoreNotWritableError: on entry, when the store cannot be written (``ArtifactStore.check_writable``).
     """
     name, given = _flow_run_facts() if flow is None or parameters is None else ("", {})
-    ArtifactStore(store_root).check_writable()  # an unwritable store fails here, before any stage runs
     recorder = RunRecorder(store_root, run_id, flow or name)
+    recorder.store.check_writable()  # an unwritable store fails here, before any stage runs
     recorder.start(given if parameters is None else parameters)
     try:
         yield recorder
