@@ -90,8 +90,7 @@ def _matches(value: Any, annotation: Any) -> bool | None:
         if not isinstance(value, list):
             return False
         item = (typing.get_args(annotation) or (Any,))[0]
-        verdicts = [_matches(v, item) for v in value] if item is not Any else []
-        return False if False in verdicts else True
+        return item is Any or all(_matches(v, item) is not False for v in value)
     return None
 
 

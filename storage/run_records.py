@@ -79,10 +79,10 @@ def json_safe(value: Any) -> Any:
         return {str(k): json_safe(v) for k, v in value.items()}
     if isinstance(value, list | tuple | set | frozenset):
         return [json_safe(v) for v in value]
-    if isinstance(value, np.ndarray):
+    if isinstance(value, np.ndarray | np.generic):
         return json_safe(value.tolist())
-    if isinstance(value, enum.Enum | np.generic):
-        return json_safe(value.item() if isinstance(value, np.generic) else value.value)
+    if isinstance(value, enum.Enum):
+        return json_safe(value.value)
     if isinstance(value, bool | int | str) or value is None:
         return value
     if isinstance(value, float):
@@ -156,8 +156,9 @@ class RunRecord:
         when it was interrupted), s."""
         start = parse_time(self.started_at)
         now = now or datetime.datetime.now(datetime.UTC)
-        end = parse_time(self.finished_at) or (self.last_sign_of_life if self.observed_status(now) == INTERRUPTED
-                                               else now)
+        end = parse_time(self.finished_at)
+        if end is None:
+            end = self.last_sign_of_life if self.observed_status(now) == INTERRUPTED else now
         return None if start is None or end is None else max(0.0, (end - start).total_seconds())
 
 

@@ -26,6 +26,8 @@ import random
 from dataclasses import dataclass
 from typing import Any
 
+from storage.errors import StoreNotWritableError
+
 #: ``errno`` values of ``OSError``s that another attempt cannot get past: the store is full, read-only or forbidden,
 #: or a path is missing or of the wrong kind.
 PERMANENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EACCES, errno.EPERM, errno.ENOENT,
@@ -35,8 +37,9 @@ PERMANENT_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS, errno.EAC
 def is_transient(exc: BaseException) -> bool:
     """Whether another attempt may succeed where ``exc`` failed: connection and timeout errors, and ``OSError``s
     whose ``errno`` is not one of ``PERMANENT_ERRNOS``. ``ValueError``s (a missing input, a bad configuration, a
-    schema mismatch, a corrupt artifact) and every other exception are not."""
-    if isinstance(exc, ValueError):
+    schema mismatch, a corrupt artifact), the store's ``StoreNotWritableError`` (its own wording of a full,
+    read-only or forbidden store, which carries no ``errno``) and every other exception are not."""
+    if isinstance(exc, ValueError | StoreNotWritableError):
         return False
     if isinstance(exc, ConnectionError | TimeoutError):
         return True

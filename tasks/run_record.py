@@ -272,12 +272,12 @@ class RunRecorder(StageRecorder):
         submitted = self._calls.get(future.task_run_id)
         if submitted is None:
             return
-        if submitted.crashes:
-            note = "; ".join(filter(None, [note, f"resubmitted after {submitted.crashes} worker crash(es)"]))
+        notes = [note,
+                 f"resubmitted after {submitted.crashes} worker crash(es)" if submitted.crashes else "",
+                 f"one task for {len(submitted.seq_ids)} sequences" if len(submitted.seq_ids) > 1 else ""]
+        note = "; ".join(filter(None, notes))
         state = getattr(future, "state", None)
         ended = parse_time(_iso(getattr(state, "timestamp", None))) or datetime.datetime.now(datetime.UTC)
-        if len(submitted.seq_ids) > 1:
-            note = "; ".join(filter(None, [note, f"one task for {len(submitted.seq_ids)} sequences"]))
         for seq_id in submitted.seq_ids:
             running = self._running_event(seq_id, submitted.stage)
             started = running.started_at if running and running.started_at else submitted.submitted_at
@@ -325,8 +325,8 @@ def recorded_run(store_root: str, run_id: str, flow: str | None = None,
         StoreNotWritableError: on entry, when the store cannot be written (``ArtifactStore.check_writable``).
     """
     name, given = _flow_run_facts() if flow is None or parameters is None else ("", {})
-    ArtifactStore(store_root).check_writable()  # an unwritable store fails here, before any stage runs
     recorder = RunRecorder(store_root, run_id, flow or name)
+    recorder.store.check_writable()  # an unwritable store fails here, before any stage runs
     recorder.start(given if parameters is None else parameters)
     try:
         yield recorder

@@ -38,7 +38,8 @@ class RunSummary:
 
     Attributes:
         run_id: the run folder; flow: the flow that made it (``""``: unknown, an evaluation-only run).
-        status: ``running``, ``completed``, ``failed``, or ``tables only`` for a run without a record.
+        status: ``running``, ``completed``, ``failed``, ``interrupted`` (``RunRecord.observed_status``: a running run
+            whose heartbeat stopped), ``tables only`` for a run without a record, or ``unreadable``.
         started_at: ISO 8601 UTC (an evaluation-only run: when its manifest was written), ``None``: unknown.
         seconds: duration (so far, for a running run), s; ``None``: unknown.
         code_version: ``git describe`` of the code that ran (``""``: unknown).

@@ -13,7 +13,7 @@ import pytest
 from prefect.states import Failed
 
 from storage import ArtifactStore
-from storage.errors import CorruptArtifactError, MissingInputError, SchemaError
+from storage.errors import CorruptArtifactError, MissingInputError, SchemaError, StoreNotWritableError
 from storage.run_records import read_stage_matrix
 from tasks import align, assets, export, grounding_eval, landing, logs, mine, reconstruct
 from tasks.retry_policy import STAGE_RETRIES, RetryPolicy, is_transient, retry_when_transient
@@ -31,7 +31,8 @@ def test_connection_timeout_and_io_errors_are_transient(exc):
 @pytest.mark.parametrize("exc", [MissingInputError("no log synth-000001"), ValueError("iterations must be > 0"),
                                  SchemaError("frames.parquet: column K"), CorruptArtifactError("truncated"),
                                  OSError(errno.ENOSPC, "No space left on device"), PermissionError(errno.EACCES, "no"),
-                                 OSError(errno.EROFS, "Read-only file system"), RuntimeError("a bug")])
+                                 OSError(errno.EROFS, "Read-only file system"), RuntimeError("a bug"),
+                                 StoreNotWritableError("/store/x: cannot write to the store /store: the disk is full")])
 def test_input_configuration_space_and_permission_errors_are_not(exc):
     assert not is_transient(exc) and not retry_when_transient(None, None, Failed(data=exc))
 
