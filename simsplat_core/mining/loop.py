@@ -249,11 +249,13 @@ class _Miner:
         started = time.perf_counter()
         try:
             program = self.client.to_command(pending.prompt, self.scene)
-        except EditRefused as exc:
+        except EditRefused as exc:  # an answer: the endpoint was reached
+            self._answered()
             seconds["command"] = time.perf_counter() - started
             progress(self._record(s, 1, "refused", _refusal(exc), seconds))
             return
         except pydantic.ValidationError as exc:
+            self._answered()
             seconds["command"] = time.perf_counter() - started
             progress(self._record(s, 1, "refused", f"invalid_command: {_error(exc)}", seconds))
             return
