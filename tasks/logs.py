@@ -23,13 +23,14 @@ from simsplat_core.world import WORLD_VERSION, WorldConfig, default_seq_id, gene
 from storage import (
     ArtifactStore,
     content_key,
-    intact_marker,
     manifest_bytes,
     read_log_manifest,
     read_scene_log,
     require_log_manifest,
     write_scene_log,
 )
+from storage.integrity import intact
+from storage.markers import MARKER_NAME
 from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
@@ -57,8 +58,8 @@ class StoredLog:
 def _produced_before(store: ArtifactStore, seq_id: str, key: str) -> StoredLog | None:
     """The complete log ``seq_id`` when its producer stored it under ``key``, else ``None``."""
     manifest = read_log_manifest(store, seq_id)
-    if manifest is not None:
-        manifest = intact_marker(store, f"logs/{seq_id}", manifest["key"])
+    if manifest is not None and not intact(store, f"logs/{seq_id}", manifest, MARKER_NAME):
+        manifest = None
     provenance = (manifest or {}).get("provenance", {})
     if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
         return _already_stored(store, seq_id, manifest)
