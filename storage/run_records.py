@@ -81,8 +81,10 @@ def json_safe(value: Any) -> Any:
         return [json_safe(v) for v in value]
     if isinstance(value, np.ndarray):
         return json_safe(value.tolist())
-    if isinstance(value, enum.Enum | np.generic):
-        return json_safe(value.item() if isinstance(value, np.generic) else value.value)
+    if isinstance(value, np.generic):
+        return json_safe(value.item())
+    if isinstance(value, enum.Enum):
+        return json_safe(value.value)
     if isinstance(value, bool | int | str) or value is None:
         return value
     if isinstance(value, float):
