@@ -33,10 +33,9 @@ from storage import (
     require_log_manifest,
 )
 from storage.alignment import (
-    list_aligner_models,
     model_dir,
-    read_aligner_manifest,
     read_aligner_state,
+    stored_aligner_manifests,
     write_aligner_model,
 )
 from storage.integrity import intact
@@ -95,8 +94,7 @@ def covering_aligner(store: ArtifactStore, log_sources: Mapping[str, str], confi
     wanted = set(log_sources)
     sources = set(log_sources.values())
     best: tuple[float, str, dict] | None = None
-    for model_hash in list_aligner_models(store):  # newest first: a tie keeps the newer one
-        manifest = read_aligner_manifest(store, model_hash) or {}
+    for model_hash, manifest in stored_aligner_manifests(store):  # newest first: a tie keeps the newer one
         provenance = manifest.get("provenance", {})
         if (provenance.get("version") != ALIGNER_VERSION or provenance.get("config") != config.to_json()
                 or provenance.get("text_encoder") != encoder_name):
