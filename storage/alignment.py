@@ -99,6 +99,11 @@ def read_aligner_state(store: ArtifactStore, model_hash: str):
 
 def list_aligner_models(store: ArtifactStore) -> list[str]:
     """Hashes of the complete stored models, newest first."""
+    return [name for name, _ in stored_aligner_manifests(store)]
+
+
+def stored_aligner_manifests(store: ArtifactStore) -> list[tuple[str, dict[str, Any]]]:
+    """``(model_hash, manifest)`` of every complete stored model, newest first (each manifest read once)."""
     if not store.is_dir(ALIGNMENT_DIR):
         return []
     found = []
@@ -108,5 +113,5 @@ def list_aligner_models(store: ArtifactStore) -> list[str]:
         except ValueError:
             continue
         if manifest is not None:
-            found.append((manifest.get("written_at", ""), name))
-    return [name for _, name in sorted(found, reverse=True)]
+            found.append((str(manifest.get("written_at", "")), name, manifest))
+    return [(name, manifest) for _, name, manifest in sorted(found, key=lambda f: f[:2], reverse=True)]

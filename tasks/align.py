@@ -33,13 +33,14 @@ from storage import (
     require_log_manifest,
 )
 from storage.alignment import (
-    list_aligner_models,
     model_dir,
-    read_aligner_manifest,
     read_aligner_state,
+    stored_aligner_manifests,
     write_aligner_model,
 )
+from storage.integrity import intact
 from storage.language_scenes import language_dir, write_language_scene
+from storage.markers import MARKER_NAME
 from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
@@ -93,8 +94,7 @@ def covering_aligner(store: ArtifactStore, log_sources: Mapping[str, str], confi
     wanted = set(log_sources)
     sources = set(log_sources.values())
     best: tuple[float, str, dict] | None = None
-    for model_hash in list_aligner_models(store):  # newest first: a tie keeps the newer one
-        manifest = read_aligner_manifest(store, model_hash) or {}
+    for model_hash, manifest in stored_aligner_manifests(store):  # newest first: a tie keeps the newer one
         provenance = manifest.get("provenance", {})
         if (provenance.get("version") != ALIGNER_VERSION or provenance.get("config") != config.to_json()
                 or provenance.get("text_encoder") != encoder_name):
@@ -118,16 +118,23 @@ def reusable_aligner(store: ArtifactStore, seq_ids: list[str], config: MotionAli
     Raises:
         FileNotFoundError: a log is missing from the store (named).
     """
-    manifests = _training_logs(store, seq_ids)
+    return _reusable_aligner(store, seq_ids, _training_logs(store, seq_ids), config, encoder_name, reuse_share)
+
+
+def _reusable_aligner(store: ArtifactStore, seq_ids: list[str], manifests: list[dict], config: MotionAlignerConfig,
+                      encoder_name: str, reuse_share: float) -> StoredAligner | None:
+    """``reusable_aligner`` given the manifests of the logs ``seq_ids`` (``_training_logs``)."""
     key = aligner_hash([str(m["key"]) for m in manifests], config, encoder_name)
     existing = intact_marker(store, model_dir(key), key)
     if existing is not None:
         return StoredAligner(key, model_dir(key), tuple(seq_ids), dict(existing.get("metrics", {})), 0.0, True)
     covering = covering_aligner(store, {str(m["key"]): str(m.get("source", "")) for m in manifests}, config,
                                 encoder_name, reuse_share)
-    if covering is None or intact_marker(store, model_dir(covering[0]), covering[0]) is None:
+    if covering is None:
         return None
     model_hash, manifest = covering
+    if not intact(store, model_dir(model_hash), manifest, MARKER_NAME):
+        return None
     trained_on = tuple(manifest.get("provenance", {}).get("seq_ids", ()))
     return StoredAligner(model_hash, model_dir(model_hash), trained_on, dict(manifest.get("metrics", {})), 0.0, True)
 
@@ -149,8 +156,9 @@ def train_motion_aligner(store_root: str, seq_ids: list[str], config: MotionAlig
     config = config or MotionAlignerConfig()
     store = ArtifactStore(store_root)
     encoder = default_text_encoder()
-    keys = [str(m["key"]) for m in _training_logs(store, seq_ids)]
-    stored = reusable_aligner(store, seq_ids, config, encoder.name, reuse_share)
+    manifests = _training_logs(store, seq_ids)
+    keys = [str(m["key"]) for m in manifests]
+    stored = _reusable_aligner(store, seq_ids, manifests, config, encoder.name, reuse_share)
     if stored is not None:
         logger.info("motion aligner %s (trained on %d of these %d logs) reused", stored.model_hash[:12],
                     len(set(stored.seq_ids) & set(seq_ids)), len(seq_ids))
@@ -233,6 +241,12 @@ def reusable_language_scene(store: ArtifactStore, seq_id: str, scene_hash: str |
         FileNotFoundError: the log is missing from the store (named).
     """
     key = _scene_language_hash(_log_key(store, seq_id), scene_hash, model_hash, config, encoder_name, embedder_name)
+    return _stored_language_scene(store, seq_id, scene_hash, model_hash, key)
+
+
+def _stored_language_scene(store: ArtifactStore, seq_id: str, scene_hash: str | None, model_hash: str, key: str
+                           ) -> StoredLanguageScene | None:
+    """The complete, intact stored language scene ``key`` of ``seq_id`` under aligner ``model_hash``, else ``None``."""
     existing = intact_marker(store, language_dir(model_hash, seq_id, key), key)
     if existing is None:
         return None
@@ -259,12 +273,12 @@ def align_scene(store_root: str, seq_id: str, scene_hash: str | None, model_hash
     store = ArtifactStore(store_root)
     encoder = default_text_encoder()
     embedder = appearance_embedder(config.captioner, encoder)
-    stored = reusable_language_scene(store, seq_id, scene_hash, model_hash, config, encoder.name, embedder.name)
-    if stored is not None:
-        logger.info("%s: language scene %s already stored, skipping", seq_id, stored.language_hash[:12])
-        return stored
     log_key = _log_key(store, seq_id)
     key = _scene_language_hash(log_key, scene_hash, model_hash, config, encoder.name, embedder.name)
+    stored = _stored_language_scene(store, seq_id, scene_hash, model_hash, key)
+    if stored is not None:
+        logger.info("%s: language scene %s already stored, skipping", seq_id, key[:12])
+        return stored
     relpath = language_dir(model_hash, seq_id, key)
     if threads:
         set_compute_threads(threads)

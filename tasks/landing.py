@@ -47,7 +47,7 @@ from storage.landing import (
 )
 from storage.remote_folder import default_mirror_dir, fetched, is_remote, list_remote_files, mirror_folder
 from storage.run_records import utc_now
-from storage.uris import join_uri, split_query
+from storage.uris import is_uri, join_uri, split_query
 from tasks.logs import DecodedLog, StoredLog, decode_real_log, store_real_log
 from tasks.retry_policy import STAGE_RETRIES
 from tasks.run_record import error_text
@@ -119,7 +119,7 @@ def landing_folder(landing: str) -> Path:
         ValueError: a URI of an object store (those are mirrored: ``scan_landing``), naming it.
         FileNotFoundError: the folder does not exist (named).
     """
-    if "://" in landing:
+    if is_uri(landing):
         filesystem, path = pafs.FileSystem.from_uri(landing)
         if not isinstance(filesystem, pafs.LocalFileSystem):
             raise ValueError(f"landing location {landing!r}: not a local folder ({filesystem.type_name})")

@@ -23,13 +23,15 @@ from simsplat_core.world import WORLD_VERSION, WorldConfig, default_seq_id, gene
 from storage import (
     ArtifactStore,
     content_key,
-    intact_marker,
+    log_dir,
     manifest_bytes,
     read_log_manifest,
     read_scene_log,
     require_log_manifest,
     write_scene_log,
 )
+from storage.integrity import intact
+from storage.markers import MARKER_NAME
 from tasks.retry_policy import STAGE_RETRIES
 
 logger = logging.getLogger(__name__)
@@ -57,8 +59,8 @@ class StoredLog:
 def _produced_before(store: ArtifactStore, seq_id: str, key: str) -> StoredLog | None:
     """The complete log ``seq_id`` when its producer stored it under ``key``, else ``None``."""
     manifest = read_log_manifest(store, seq_id)
-    if manifest is not None:
-        manifest = intact_marker(store, f"logs/{seq_id}", manifest["key"])
+    if manifest is not None and not intact(store, log_dir(seq_id), manifest, MARKER_NAME):
+        manifest = None
     provenance = (manifest or {}).get("provenance", {})
     if manifest is not None and provenance.get("producer_key") == key and "summary" in provenance:
         return _already_stored(store, seq_id, manifest)
@@ -66,7 +68,7 @@ def _produced_before(store: ArtifactStore, seq_id: str, key: str) -> StoredLog |
 
 
 def _store_log(store: ArtifactStore, seq_id: str, key: str, produce: Callable[[], SceneLog]) -> StoredLog:
-    relpath = f"logs/{seq_id}"
+    relpath = log_dir(seq_id)
     stored = _produced_before(store, seq_id, key)
     if stored is not None:
         logger.info("%s: already stored for producer key %s, skipping", seq_id, key[:12])
@@ -102,7 +104,7 @@ def _already_stored(store: ArtifactStore, seq_id: str, manifest: dict) -> Stored
     else:
         read = summarize_log(read_scene_log(store, seq_id, load_images=False))
         summary = dataclasses.replace(read, num_images=int(manifest.get("images", {}).get("count", 0)))
-    return StoredLog(summary, f"logs/{seq_id}", manifest_bytes(manifest), 0.0, True)
+    return StoredLog(summary, log_dir(seq_id), manifest_bytes(manifest), 0.0, True)
 
 
 def _synthetic_key(seed: int, config: WorldConfig) -> str:

@@ -83,7 +83,12 @@ def reusable_scene(store: ArtifactStore, seq_id: str, config: ReconstructionConf
     Raises:
         FileNotFoundError: the store holds no complete log ``seq_id``.
     """
-    key = scene_hash(require_log_manifest(store, seq_id, "to reconstruct")["key"], config)
+    log_key = require_log_manifest(store, seq_id, "to reconstruct")["key"]
+    return _stored_scene(store, seq_id, scene_hash(log_key, config))
+
+
+def _stored_scene(store: ArtifactStore, seq_id: str, key: str) -> StoredScene | None:
+    """The complete, intact stored scene ``scenes/<seq_id>/<key>``, else ``None``."""
     existing = intact_marker(store, scene_dir(seq_id, key), key)
     if existing is None:
         return None
@@ -98,12 +103,12 @@ def reconstruct_scene(store_root: str, seq_id: str, config: ReconstructionConfig
         FileNotFoundError: the store holds no complete log ``seq_id``.
     """
     store = ArtifactStore(store_root)
-    stored = reusable_scene(store, seq_id, config)
-    if stored is not None:
-        logger.info("%s: scene %s already stored, skipping", seq_id, stored.scene_hash[:12])
-        return stored
     log_manifest = require_log_manifest(store, seq_id, "to reconstruct")
     key = scene_hash(log_manifest["key"], config)
+    stored = _stored_scene(store, seq_id, key)
+    if stored is not None:
+        logger.info("%s: scene %s already stored, skipping", seq_id, key[:12])
+        return stored
 
     started = time.perf_counter()
     log = read_scene_log(store, seq_id)
