@@ -87,8 +87,21 @@ def make_task_runner(kind: RunnerKind, num_cpus: int | None = None):
         relay = os.environ.get(RELAY_ENV)
         return RayTaskRunner(address=address,
                              init_kwargs={"runtime_env": {"env_vars": {RELAY_ENV: relay}}} if relay else None)
-    init_kwargs = {"num_cpus": num_cpus or os.cpu_count() or 1, "include_dashboard": False, "log_to_driver": True}
+    init_kwargs = {"num_cpus": num_cpus or os.cpu_count() or 1, "include_dashboard": False, "log_to_driver": True,
+                   "runtime_env": {"env_vars": local_worker_env()}}
     return RayTaskRunner(init_kwargs=init_kwargs)
+
+
+# Ray starts its workers at niceness 15 so that they yield to its own daemons on a shared node. On a local run the
+# workers are the job: at niceness 15 any nice-0 process on the machine (the Prefect API server answering the
+# workers' state and log updates, the driver polling, whatever else runs there) takes the cores first, and a
+# reconstruction slows down several-fold on a loaded 2-core machine (bench/bench_ray_niceness.py).
+LOCAL_WORKER_NICENESS = 0
+
+
+def local_worker_env() -> dict[str, str]:
+    """Environment of the workers of a local Ray instance this process starts: they run at the driver's priority."""
+    return {"RAY_worker_niceness": str(LOCAL_WORKER_NICENESS)}
 
 
 @contextlib.contextmanager
