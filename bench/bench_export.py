@@ -116,13 +116,13 @@ def bench_logs(paths: list[str], repeats: int) -> dict[str, object]:
 def bench_store(store_root: str, cores: int) -> dict[str, object]:
     """Where the time of generating a dataset from ``store_root`` goes (module docstring)."""
     from storage import ArtifactStore
+    from storage.edits import edit_run_ids
     from storage.logs import list_logs
     from tasks.eval_all import stage_timings
     from tasks.export import ExportConfig, export_dataset
-    from tasks.export_inputs import edit_runs
 
     store = ArtifactStore(store_root)
-    runs = edit_runs(store)
+    runs = edit_run_ids(store)
     stages: dict[str, float] = {}
     for t in stage_timings(store, list_logs(store), runs):
         stages[t.stage] = stages.get(t.stage, 0.0) + t.seconds

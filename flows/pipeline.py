@@ -33,7 +33,7 @@ from tasks.export import ExportConfig, ExportResult, export_dataset_task
 from tasks.grounding_eval import GroundingEvaluation, evaluate_grounding_run
 from tasks.landing import LandingOutcome, land_log, scan_landing
 from tasks.logs import StoredLog, generate_synthetic_log, ingest_real_log, stored_log
-from tasks.mine import MiningSummary, mine_sequence_task, saved_search_seeds_task
+from tasks.mine import MiningSummary, compact_mining_run, mine_sequence_task, saved_search_seeds_task
 from tasks.mining_config import ConfigSource, LoadedMiningConfig, load_mining_config
 from tasks.mining_ledger import LedgerSettings, ledger_settings, mined_reason, not_exported_reason, split_by_ledger
 from tasks.reconstruct import StoredScene, reconstruct_scene
@@ -348,6 +348,7 @@ def mine_scenarios(store_root: str, seq_ids: list[str], run_id: str, plan: Minin
                               threads=threads, ledger=plan.ledger())
                    for i, seq_id in zip(positions or range(len(seq_ids)), seq_ids)]
     summaries = _gather(futures, "mine", label=lambda s: s.seq_id, run=run)
+    compact_mining_run(store_root, run_id)
     _publish_mining_table(summaries, run_id)
     return summaries
 

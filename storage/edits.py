@@ -2,7 +2,9 @@
 
 Layout (``DESIGN.md``)::
 
-    edits/<run_id>/edits.parquet                 the edits table: one row per attempt (appended atomically)
+    edits/<run_id>/edits.parts/<part>.parquet    the edits table: one row per attempt, one immutable part per
+                                                 append (``storage.table_parts``; edits.parquet of older stores
+                                                 is still read)
     edits/<run_id>/<seq_id>/<edit_id>/           one staged directory: complete (with _SUCCESS.json) or absent
         command.json                             the EditProgram (with its schema_version)
         trajectories.parquet                     every agent at every valid step after the edit (no removed ones)
@@ -54,11 +56,12 @@ from storage.pictures import encode_mp4
 from storage.schemas.base import arrow_to_vectors, vectors_to_arrow
 from storage.schemas.edits import EDIT_POSE_TRACKS_SCHEMA, EDITS_MINING_COLUMNS, EDITS_SCHEMA, TRAJECTORIES_SCHEMA
 from storage.store import ArtifactStore, join_relpath
+from storage.table_parts import PARTS_SUFFIX, PartedTable
 
 logger = logging.getLogger(__name__)
 
 EDITS_DIR = "edits"
-EDITS_TABLE = "edits.parquet"
+EDITS_TABLE_NAME = "edits"
 DELTA_FORMAT = "simsplat.edit_delta"
 DELTA_FORMAT_VERSION = 1
 #: ``edits.status`` values.
@@ -72,8 +75,8 @@ def _check_name(kind: str, value: str) -> str:
 
 
 def edits_table_relpath(run_id: str) -> str:
-    """``edits/<run_id>/edits.parquet``."""
-    return join_relpath(EDITS_DIR, _check_name("run id", run_id), EDITS_TABLE)
+    """``edits/<run_id>/edits.parts``: the folder of the run's edits table (``edits_table``)."""
+    return join_relpath(EDITS_DIR, _check_name("run id", run_id), EDITS_TABLE_NAME + PARTS_SUFFIX)
 
 
 def edit_dir(run_id: str, seq_id: str, edit_id: str) -> str:
@@ -141,39 +144,57 @@ def _row_of(record: EditRecord) -> dict[str, Any]:
     return {**{k: getattr(record, k) for k in _RECORD_FIELDS}, **mining}
 
 
+def edits_table(store: ArtifactStore, run_id: str) -> PartedTable:
+    """The run's edits table: ``edits/<run_id>/edits.parts/`` (and ``edits.parquet`` of older stores)."""
+    return PartedTable(store, join_relpath(EDITS_DIR, _check_name("run id", run_id)), EDITS_TABLE_NAME, EDITS_SCHEMA)
+
+
+def edit_run_ids(store: ArtifactStore) -> list[str]:
+    """The runs that have an edits table, sorted."""
+    return [run for run in store.listdir(EDITS_DIR) if not run.startswith(".") and edits_table(store, run).exists()]
+
+
 def read_edit_records(store: ArtifactStore, run_id: str) -> list[EditRecord]:
-    """Every row of ``edits/<run_id>/edits.parquet`` in append order (``[]`` when there is none). Version-1
-    tables (before the mining columns) read with empty ``mining``."""
-    rel = edits_table_relpath(run_id)
-    if not store.exists(rel):
-        return []
-    return [_record_of(row) for row in store.read_table(rel, EDITS_SCHEMA).to_pylist()]
+    """Every row of the run's edits table in append order (``[]`` when there is none). Version-1 tables (before the
+    mining columns) read with empty ``mining``."""
+    return [_record_of(row) for row in edits_table(store, run_id).read().to_pylist()]
 
 
 def append_edit_records(store: ArtifactStore, records: Sequence[EditRecord]) -> list[EditRecord]:
-    """Append ``records`` (all of one run) to the run's edits table in one atomic rewrite under the store's lock;
-    returns them numbered (``attempt``: 1 + the rows of the same sequence and edit id before)."""
+    """Append ``records`` (all of one run) to the run's edits table as one new part; returns them numbered
+    (``attempt``: 1 + the rows of the same sequence and edit id before).
+
+    Appends never rewrite what is stored, so concurrent writers (Ray workers on several machines, an object store)
+    cannot lose each other's rows. The numbering reads the table under the store's lock, which serialises the
+    writers of one machine; one sequence's attempts come from one task, so their numbers never collide.
+    """
     if not records:
         return []
     run_ids = {r.run_id for r in records}
     if len(run_ids) != 1:
         raise ValueError(f"append_edit_records: records of several runs {sorted(run_ids)}")
-    run_id = records[0].run_id
-    rel = edits_table_relpath(run_id)
+    table = edits_table(store, records[0].run_id)
     numbered: list[EditRecord] = []
-    with store.exclusive(rel):
-        rows = read_edit_records(store, run_id)
+    with store.exclusive(table.parts_relpath):
+        rows = read_edit_records(store, records[0].run_id)
         for record in records:
-            attempt = 1 + sum(r.edit_id == record.edit_id and r.seq_id == record.seq_id for r in rows)
-            record = dataclasses.replace(record, attempt=attempt)
-            rows.append(record)
-            numbered.append(record)
-        table = pa.Table.from_pylist([_row_of(r) for r in rows], schema=EDITS_SCHEMA)
-        store.write_table(rel, table, EDITS_SCHEMA)
+            attempt = 1 + sum(r.edit_id == record.edit_id and r.seq_id == record.seq_id for r in rows + numbered)
+            numbered.append(dataclasses.replace(record, attempt=attempt))
+        table.append(pa.Table.from_pylist([_row_of(r) for r in numbered], schema=EDITS_SCHEMA))
     for record in numbered:
         logger.info("edits %s: %s %s attempt %d (%s)", record.run_id, record.seq_id, record.edit_id,
                     record.attempt, record.status)
     return numbered
+
+
+def compact_edit_records(store: ArtifactStore, run_id: str) -> int:
+    """Fold the run's edits parts into one (its single writer, once the run's tasks are done); returns how many
+    parts were folded."""
+    table = edits_table(store, run_id)
+    if len(table.part_names()) < 2:
+        return 0
+    with store.exclusive(table.parts_relpath):
+        return table.compact()
 
 
 def append_edit_record(store: ArtifactStore, record: EditRecord) -> EditRecord:

@@ -40,7 +40,7 @@ from simsplat_core.types import SYNTHETIC_SOURCE
 from storage import ArtifactStore, list_logs, list_scenes, read_scene_manifest, require_log_manifest
 from storage.alignment import list_aligner_models, read_aligner_manifest
 from storage.assets import list_asset_banks
-from storage.edits import EDITS_DIR, read_edit_records
+from storage.edits import edit_run_ids, read_edit_records
 from storage.language_scenes import list_language_scenes
 from storage.runs import new_run_id, read_run_table, run_dir, run_table, write_run_tables
 from storage.scenes import metrics_from_json
@@ -110,7 +110,7 @@ def store_contents(store: ArtifactStore) -> StoreContents:
         logs=tuple(logs), synthetic=synthetic, ground_truth=truth,
         scenes=tuple(s for s in logs if list_scenes(store, s)),
         aligned=tuple(s for s in logs if list_language_scenes(store, s)),
-        asset_bank=bool(list_asset_banks(store)), timed_runs=tuple(_timed_edit_runs(store)))
+        asset_bank=bool(list_asset_banks(store)), timed_runs=tuple(edit_run_ids(store)))
 
 
 def content_keys(store: ArtifactStore, contents: StoreContents) -> dict[str, Any]:
@@ -121,14 +121,6 @@ def content_keys(store: ArtifactStore, contents: StoreContents) -> dict[str, Any
     banks = list_asset_banks(store)
     keys["asset_bank"] = banks[0] if banks else ""
     return keys
-
-
-def _timed_edit_runs(store: ArtifactStore) -> list[str]:
-    """Edit runs whose edits table has mining timings."""
-    if not store.is_dir(EDITS_DIR):
-        return []
-    return [run_id for run_id in store.listdir(EDITS_DIR)
-            if store.exists(join_relpath(EDITS_DIR, run_id, "edits.parquet"))]
 
 
 def reconstruction_rows(store: ArtifactStore, seq_ids: Sequence[str]) -> list[SceneMetrics]:

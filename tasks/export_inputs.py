@@ -22,6 +22,7 @@ from storage.edits import (
     EDITS_DIR,
     EditRecord,
     edit_dir,
+    edit_run_ids,
     read_edit_records,
     read_trajectories,
     trajectory_states,
@@ -90,11 +91,6 @@ class ExportInput:
         return self.seq_id if r is None else f"{r.run_id}/{r.seq_id}/{r.edit_id}/{r.attempt}"
 
 
-def edit_runs(store: ArtifactStore) -> list[str]:
-    """Every run of the store that has an ``edits`` table."""
-    return [run for run in store.listdir(EDITS_DIR) if store.exists(f"{EDITS_DIR}/{run}/edits.parquet")]
-
-
 def _keep(record: EditRecord, filters: ExportFilters) -> bool:
     if record.status != "succeeded":
         return False
@@ -107,7 +103,7 @@ def _keep(record: EditRecord, filters: ExportFilters) -> bool:
 
 
 def _edit_inputs(store: ArtifactStore, filters: ExportFilters) -> list[ExportInput]:
-    runs = edit_runs(store)
+    runs = edit_run_ids(store)
     unknown = sorted(set(filters.runs) - set(runs))
     if unknown:
         raise MissingInputError(f"--run {unknown}: no such edit run in {store.uri(EDITS_DIR)}; runs: {runs}")

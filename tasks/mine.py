@@ -37,7 +37,7 @@ from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.vlm_protocol import VLMClient
 from simsplat_core.vlm.openai_chat import OpenAIChatConfig
 from storage import ArtifactStore, intact_marker
-from storage.edits import EditRecord, append_edit_records, edit_dir, edits_table_relpath
+from storage.edits import EditRecord, append_edit_records, compact_edit_records, edit_dir, edits_table_relpath
 from storage.inventory import require_asset_bank
 from storage.schemas.edits import EDITS_MINING_COLUMNS
 from tasks.mining_ledger import LedgerSettings, MinedSequence, record_mined
@@ -224,6 +224,12 @@ def mine_sequence_task(store_root: str, seq_id: str, run_id: str, *, per_sequenc
         edits_table=store.uri(edits_table_relpath(run_id)), scenarios=tuple(scenarios))
     logger.info("%s: %d attempt(s), %d accepted (%s)", seq_id, summary.attempts, summary.accepted, summary.statuses)
     return summary
+
+
+def compact_mining_run(store_root: str, run_id: str) -> int:
+    """Fold the run's edits parts (one per mined sequence) into one once its mining tasks are done; called by the
+    run's single driver. Returns how many parts were folded."""
+    return compact_edit_records(ArtifactStore(store_root), run_id)
 
 
 @task(name="saved-search-seeds", retries=0, cache_policy=NO_CACHE)

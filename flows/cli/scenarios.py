@@ -120,7 +120,7 @@ def mine(
     from simsplat_core.vlm.openai_chat import VLMError
     from storage.runs import new_run_id
     from tasks.answers import mining_as_dict
-    from tasks.mine import mine_sequence_task
+    from tasks.mine import compact_mining_run, mine_sequence_task
 
     check_vlm(vlm)
     seq_ids = stored_sequences(store, seq, "language")
@@ -148,6 +148,8 @@ def mine(
                                                        category_offset=i * per_sequence))
     except (FileNotFoundError, VLMError) as exc:
         raise typer.BadParameter(str(exc)) from exc
+    finally:
+        compact_mining_run(store, run_id)
     data = mining_as_dict(run_id, summaries)
     if as_json:
         typer.echo(json.dumps(data, allow_nan=False))

@@ -4,7 +4,7 @@ attempts to acceptance, plausibility and its filterable scenario list (``/mining
     index = read_mining_index(store)                                  # MiningIndexView: one entry per edit run
     run = read_mining_run(store, "mine-0001", ScenarioFilters(category="remove"))
 
-Everything is read from ``edits/<run_id>/edits.parquet`` (``storage.edits.read_edit_records``) and reduced with
+Everything is read from the run's edits table (``storage.edits.read_edit_records``) and reduced with
 the evaluation's own definitions: proposals and their outcomes (``eval.mining.proposal_outcomes``), the funnel and
 failure classes (``eval.mining_funnel``). A run of plain ``simsplat edit`` rows (no mining columns) is listed with
 its row count and no funnel.
@@ -23,10 +23,9 @@ from simsplat_core.eval.mining import ProposalOutcome, group_proposals, proposal
 from simsplat_core.eval.mining_funnel import FUNNEL_STAGES, FunnelRow, failure_classes, funnel_rows, stage_reached
 from simsplat_core.mining.attempts import ATTEMPT_STATUSES
 from simsplat_core.mining.vlm_protocol import PLAUSIBILITY_MAX, PLAUSIBILITY_MIN
-from storage.edits import EditRecord, read_edit_records
+from storage.edits import EditRecord, edit_run_ids, edits_table_relpath, read_edit_records
 from storage.store import ArtifactStore
 from tasks.dashboard.sections import Section, section
-from tasks.export_inputs import edit_runs
 
 
 def edit_rows(records: Sequence[EditRecord]) -> list[dict[str, Any]]:
@@ -105,7 +104,7 @@ def read_mining_index(store: ArtifactStore) -> MiningIndexView:
 
     def runs() -> list[Section[RunSummary]]:
         return [section(f"run {run_id}", lambda run_id=run_id: _summary(run_id, _rows(store, run_id)))  # type: ignore[misc]
-                for run_id in sorted(edit_runs(store), reverse=True)]
+                for run_id in sorted(edit_run_ids(store), reverse=True)]
 
     return MiningIndexView(FUNNEL_STAGES, section("edit runs", runs))
 
@@ -244,7 +243,7 @@ def _scenario_rows(rows: Sequence[Mapping[str, Any]], outcomes: Sequence[Proposa
 def _content(store: ArtifactStore, run_id: str, filters: ScenarioFilters) -> RunContent:
     rows = _rows(store, run_id)
     if not rows:
-        raise FileNotFoundError(f"{store.uri(f'edits/{run_id}/edits.parquet')}: no edits table (or no rows)")
+        raise FileNotFoundError(f"{store.uri(edits_table_relpath(run_id))}: no edits table (or no rows)")
     if not is_mined(rows):
         raise ValueError(f"run {run_id!r} holds plain edits (no mining columns): it has no funnel")
     outcomes = proposal_outcomes("", rows)

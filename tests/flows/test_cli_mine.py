@@ -29,7 +29,7 @@ def test_mine_json_summarises_the_run(store_root: str, garbage_server: ChatServe
                                  "--vlm", "openai", "--run-id", "cli-mine", "--json"])
     assert result.exit_code == 0, result.output
     out = json.loads([line for line in result.output.splitlines() if line.startswith("{")][-1])
-    assert out["run_id"] == "cli-mine" and out["edits_table"].endswith("edits/cli-mine/edits.parquet")
+    assert out["run_id"] == "cli-mine" and out["edits_table"].endswith("edits/cli-mine/edits.parts")
     (seq,) = out["sequences"]
     assert seq["seq_id"] == "synth-000000" and seq["client"] == "openai-vlm:test-vlm"
     rows = read_edit_records(ArtifactStore(store_root), "cli-mine")

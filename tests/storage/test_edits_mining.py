@@ -12,7 +12,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from storage import ArtifactStore, SchemaError
-from storage.edits import EditRecord, append_edit_record, append_edit_records, edits_table_relpath, read_edit_records
+from storage.edits import EditRecord, append_edit_record, append_edit_records, edits_table, read_edit_records
 from storage.schemas.base import schema_version
 from storage.schemas.edits import EDITS_MINING_COLUMNS, EDITS_SCHEMA
 
@@ -33,7 +33,7 @@ def _write_edit_columns_only(store: ArtifactStore, run_id: str, rows: list[dict]
     """An edits table of ``version`` with the eight edit columns only (as version 1 wrote it)."""
     fields = [EDITS_SCHEMA.field(n) for n in _EDIT_COLUMNS]
     schema = pa.schema(fields, metadata={"schema_name": "edits", "schema_version": str(version)})
-    path = Path(store.root) / edits_table_relpath(run_id)
+    path = Path(store.root) / edits_table(store, run_id).legacy_relpath
     path.parent.mkdir(parents=True, exist_ok=True)
     pq.write_table(pa.Table.from_pylist(rows, schema=schema), str(path))
 
@@ -57,7 +57,7 @@ def test_mining_columns_round_trip_and_batch_appends_number_attempts(store: Arti
     assert rows[0].mining == {"export": False}  # a plain edit: mining columns null, not exported
     assert rows[2].export and rows[2].mining["mining_status"] == "accepted" and rows[2].mining["plausibility"] == 4
     assert "seconds_judge" not in rows[2].mining  # null stays absent
-    table = store.read_table(edits_table_relpath("mine1"), EDITS_SCHEMA)
+    table = edits_table(store, "mine1").read()
     assert table.column("export").to_pylist() == [False, False, True]
 
 
@@ -77,7 +77,7 @@ def test_version_1_edits_tables_still_read_and_append(store: ArtifactStore) -> N
                                              "failure_reason": ""}], version=1)
     (old,) = read_edit_records(store, "old")
     assert old.status == "succeeded" and old.mining == {} and not old.export
-    table = store.read_table(edits_table_relpath("old"), EDITS_SCHEMA)
+    table = edits_table(store, "old").read()
     assert table.schema.names == EDITS_SCHEMA.names and table.column("mining_status").null_count == 1
     appended = append_edit_record(store, EditRecord(run_id="old", seq_id="unit", edit_id="e1", prompt="p",
                                                     command_json="", status="refused", failure_reason="x: y"))
@@ -90,7 +90,7 @@ def test_version_2_edits_tables_read_without_judge_reasons(store: ArtifactStore)
     row = {"run_id": "v2", "seq_id": "unit", "edit_id": "e1", "attempt": 1, "prompt": "p", "command_json": "{}",
            "status": "succeeded", "failure_reason": "", "mining_status": "accepted", "scenario": 0, "plausibility": 4,
            "export": True}
-    path = Path(store.root) / edits_table_relpath("v2")
+    path = Path(store.root) / edits_table(store, "v2").legacy_relpath
     path.parent.mkdir(parents=True, exist_ok=True)
     pq.write_table(pa.Table.from_pylist([row], schema=schema), str(path))
     (old,) = read_edit_records(store, "v2")

@@ -68,7 +68,7 @@ def test_every_attempt_is_a_row_and_accepted_scenarios_are_stored(store_root: st
     assert scenario.edit_dir == store.uri(rel) and read_edit_manifest(store, "mine-a", SEQ, scenario.edit_id)
     assert validation_from_json(store, "mine-a", SEQ, scenario.edit_id)["ok"] is True
     assert set(mined.seconds) >= {"load", "propose", "command", "edit", "render", "judge", "write", "total"}
-    assert mined.edits_table.endswith("edits/mine-a/edits.parquet")
+    assert mined.edits_table.endswith("edits/mine-a/edits.parts")
 
 
 def test_the_same_seed_mines_the_same_scenarios(store_root: str, mined: MiningSummary) -> None:  # noqa: F811

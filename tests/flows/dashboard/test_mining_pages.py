@@ -115,10 +115,11 @@ def _broken_copy(dashboard_store: DashboardStore, tmp_path: Path) -> Path:
 
 def test_a_corrupt_edits_table_is_said_on_its_pages(dashboard_store: DashboardStore, tmp_path: Path) -> None:
     root = _broken_copy(dashboard_store, tmp_path)
-    (root / edits_table_relpath(dashboard_store.mining_run)).write_bytes(b"PAR1 not parquet")
+    for part in (root / edits_table_relpath(dashboard_store.mining_run)).iterdir():
+        part.write_bytes(b"PAR1 not parquet")
     client = TestClient(create_app(DashboardSettings(str(root))))
     (entry,) = client.get("/api/mining").json()["runs"]["value"]
-    assert "not a readable Parquet file" in entry["error"] and "edits.parquet" in entry["error"]
+    assert "not a readable Parquet file" in entry["error"] and "edits.parts" in entry["error"]
     run = client.get(f"/mining/{dashboard_store.mining_run}")
     assert run.status_code == 200 and "not a readable Parquet file" in run.text and 'role="alert"' in run.text
     edit_id = dashboard_store.mining.scenarios[0].edit_id
