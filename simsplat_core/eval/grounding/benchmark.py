@@ -488,12 +488,19 @@ class GroundingBenchmark:
 
     def counts(self) -> dict[str, int]:
         """Queries by kind and by category."""
-        out = {k: 0 for k in (*QUERY_KINDS, *QUERY_CATEGORIES)}
-        for q in self.queries:
-            out[q.kind] += 1
-            out[q.category] += 1
-        out["total"] = len(self.queries)
-        return out
+        return query_counts((q.kind, q.category) for q in self.queries)
+
+
+def query_counts(queries: Iterable[tuple[str, str]]) -> dict[str, int]:
+    """Queries by kind and by category, and their total, from ``(kind, category)`` pairs."""
+    out = {k: 0 for k in (*QUERY_KINDS, *QUERY_CATEGORIES)}
+    total = 0
+    for kind, category in queries:
+        out[kind] += 1
+        out[category] += 1
+        total += 1
+    out["total"] = total
+    return out
 
 
 def _rng(config: BenchmarkConfig, seq_id: str) -> np.random.Generator:
@@ -715,5 +722,6 @@ __all__ = [
     "matching",
     "object_facts",
     "plausible_readings",
+    "query_counts",
     "unambiguous_targets",
 ]

@@ -188,23 +188,37 @@ class CategoryScore:
 
 def summarise(outcomes: Iterable[QueryOutcome]) -> dict[str, dict[str, CategoryScore]]:
     """``{method: {"vehicle" | "pedestrian" | "total": CategoryScore}}`` in first-seen method order."""
-    grouped: dict[str, dict[str, list[QueryOutcome]]] = {}
-    for o in outcomes:
-        per = grouped.setdefault(o.method, {c: [] for c in CATEGORIES})
-        if o.query.category in per:
-            per[o.query.category].append(o)
-        per["total"].append(o)
+    return summarise_answers((o.method, o.query.category, o.correct, o.viou) for o in outcomes)
+
+
+def summarise_answers(answers: Iterable[tuple[str, str, bool, float]]) -> dict[str, dict[str, CategoryScore]]:
+    """:func:`summarise` of ``(method, query category, correct, vIoU)`` answers (e.g. rows of a stored outcomes
+    table), in first-seen method order."""
+    grouped: dict[str, dict[str, list[tuple[bool, float]]]] = {}
+    for method, category, correct, viou_value in answers:
+        per = grouped.setdefault(method, {c: [] for c in CATEGORIES})
+        if category in per:
+            per[category].append((correct, viou_value))
+        per["total"].append((correct, viou_value))
     out: dict[str, dict[str, CategoryScore]] = {}
     for method, per in grouped.items():
         out[method] = {}
         for cat, rows in per.items():
             if rows:
                 out[method][cat] = CategoryScore(
-                    len(rows), float(np.mean([r.correct for r in rows])), float(np.mean([r.viou for r in rows]))
+                    len(rows), float(np.mean([c for c, _ in rows])), float(np.mean([v for _, v in rows]))
                 )
             else:
                 out[method][cat] = CategoryScore(0, float("nan"), float("nan"))
     return out
+
+
+def latency_of(seconds: Sequence[float]) -> dict[str, float]:
+    """Median and 90th-percentile of per-query ``seconds`` (``nan`` when there are none)."""
+    secs = np.asarray(seconds, np.float64)
+    if secs.size == 0:
+        return {"median_s": float("nan"), "p90_s": float("nan")}
+    return {"median_s": float(np.median(secs)), "p90_s": float(np.percentile(secs, 90))}
 
 
 @dataclass
@@ -237,10 +251,7 @@ class GroundingResults:
 
     def latency(self, method: str) -> dict[str, float]:
         """Median and 90th-percentile seconds per query of ``method``."""
-        secs = np.array([o.seconds for o in self.for_method(method)])
-        if secs.size == 0:
-            return {"median_s": float("nan"), "p90_s": float("nan")}
-        return {"median_s": float(np.median(secs)), "p90_s": float(np.percentile(secs, 90))}
+        return latency_of([o.seconds for o in self.for_method(method)])
 
 
 def evaluate_grounding(
@@ -306,7 +317,9 @@ __all__ = [
     "evaluate_grounding",
     "frame_ious",
     "query_correct",
+    "latency_of",
     "summarise",
+    "summarise_answers",
     "viou",
     "viou_from_counts",
 ]
