@@ -112,7 +112,8 @@ def read_png(path: Path, size: tuple[int, int], out_size: tuple[int, int]) -> np
     if bgr is None:
         raise CorruptLogError(path, "file", "does not decode as an image")
     if (bgr.shape[1], bgr.shape[0]) != size:
-        raise CorruptLogError(path, "image size", f"{bgr.shape[1]}x{bgr.shape[0]}, calibration says {size[0]}x{size[1]}")
+        raise CorruptLogError(path, "image size",
+                              f"{bgr.shape[1]}x{bgr.shape[0]}, calibration says {size[0]}x{size[1]}")
     if out_size != size:
         bgr = cv2.resize(bgr, out_size, interpolation=cv2.INTER_AREA)
     return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB).astype(np.float32) * np.float32(1.0 / 255.0)
@@ -219,9 +220,9 @@ def load_kitti_raw(path: str | Path, image_scale: float = 1.0, seq_id: str | Non
                 image=read_png(folder / "data" / f"{name}.png", size, out_size),
                 depth=_camera_depth(drive, calib, index, name, size, out_size),
                 split=held_out_split(frame_idx, len(names))))
-    assert frame_times is not None
     log = SceneLog(
-        seq_id=seq_id or safe_seq_id(drive.name), source="kitti-raw", timestamps_us=frame_times,
+        seq_id=seq_id or safe_seq_id(drive.name), source="kitti-raw",
+        timestamps_us=frame_times if frame_times is not None else np.zeros(0, np.int64),
         ego_poses=ego_poses, images=tuple(images),
         metadata={"source_file": str(drive), "image_scale": repr(float(image_scale)),
                   "frames": f"{names[0]}..{names[-1]}", "depth": "sparse lidar (nan = no measurement)"})
