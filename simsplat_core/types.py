@@ -81,7 +81,8 @@ class CameraImage:
         width, height: image size in pixels.
         image: ``[H, W, 3]`` float32 RGB in ``[0, 1]``, or ``None`` when the log has no pixels
             (e.g. annotation-only logs).
-        depth: ``[H, W]`` float32 metric z-depth (``inf`` where nothing was hit), or ``None``.
+        depth: ``[H, W]`` float32 metric z-depth (``inf`` where nothing was hit, ``nan`` where a sparse
+            sensor such as a lidar measured nothing), or ``None``.
         instance: ``[H, W]`` int32 instance ids (``ObjectInfo.instance_id``; 0 = background), or ``None``.
         split: ``"train"`` or ``"test"``.
     """

@@ -17,7 +17,7 @@ from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.data.protowire import MessageSchema, ProtoDecodeError, decode_message
 from simsplat_core.data.tfrecord import iter_tfrecords
 from simsplat_core.geometry import box_corners_batch, invert_transform, project_box_bounds, transform_points
-from simsplat_core.types import CameraImage, LogValidationError, SceneLog, Track
+from simsplat_core.types import CameraImage, LogValidationError, SceneLog, Track, split_for_frame
 
 _Parsed = TypeVar("_Parsed")
 
@@ -241,3 +241,20 @@ def loaded(log: SceneLog, path: str | Path, started: float, name: str = "") -> S
                 f" (scenario {name})" if name else "", log.num_frames, len(log.images), len(log.objects),
                 len(log.map_features), time.perf_counter() - started)
     return log
+
+
+#: Logs with this many frames (inclusive) hold out their middle frame instead of every 10th.
+SHORT_LOG_FRAMES = (3, 9)
+
+
+def held_out_split(frame_idx: int, num_frames: int) -> str:
+    """``"test"`` or ``"train"`` for a frame of a real log of ``num_frames`` frames.
+
+    Short logs (``SHORT_LOG_FRAMES``) would hold out nothing under ``types.split_for_frame``'s every-10th
+    rule, so they hold out their middle frame ``num_frames // 2`` (all cameras); longer logs follow
+    ``split_for_frame``.
+    """
+    low, high = SHORT_LOG_FRAMES
+    if low <= num_frames <= high:
+        return "test" if frame_idx == num_frames // 2 else "train"
+    return split_for_frame(frame_idx)

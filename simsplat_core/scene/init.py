@@ -13,7 +13,9 @@ pixel footprints at the distance of the nearest training camera (quantised to po
 surface gets the same voxel size whichever view saw it), object voxels are a fixed size per object.
 **Sky** pixels (infinite depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
 centre, merged in cells of ``sky_step_deg``: the dome is part of the background node and renders the
-sky gradient of any view direction.
+sky gradient of any view direction. **Sparse** depth (projected lidar: ``nan`` = no measurement) gives
+every measured pixel, whatever the stride; it cannot tell sky apart, so the dome is then the random one
+of the no-depth init, coloured from the images.
 
 **Without depth**: background points on the ground around the ego path, on a shell (buildings) and on
 the sky dome; object points uniform in their boxes; colours are looked up by projecting into the
@@ -185,6 +187,16 @@ def _nearest_camera_distance(points: np.ndarray, cam_centers: np.ndarray, chunk:
 
 
 # ---------------------------------------------------------------------------------------------- depth init
+def _depth_samples(img: CameraImage, depth: np.ndarray, stride: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(ij [M, 2], dirs [M, 3])`` pixels to back-project: the ``stride`` grid of a dense ``[H, W]`` depth map,
+    every measured pixel of a sparse one (any ``nan``)."""
+    if not np.isnan(depth).any():
+        return _pixel_rays(img, stride)
+    ij, dirs = _pixel_rays(img, 1)
+    measured = np.isfinite(depth[ij[:, 0], ij[:, 1]])
+    return ij[measured], dirs[measured]
+
+
 def _sky_cloud(dirs: np.ndarray, rgb: np.ndarray, center: np.ndarray, cfg: InitConfig) -> PointCloud:
     """Sky pixels -> dome points merged in ``sky_step_deg`` cells (roughly equal area)."""
     if dirs.shape[0] == 0:
@@ -216,14 +228,14 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
     for img in train_images:
         if img.depth is None or img.image is None:
             raise ValueError(f"depth_clouds: frame {img.frame_idx} camera {img.camera!r} needs pixels and depth")
-        ij, dirs = _pixel_rays(img, cfg.pixel_stride)
+        ij, dirs = _depth_samples(img, img.depth, cfg.pixel_stride)
         depth = img.depth[ij[:, 0], ij[:, 1]].astype(np.float64)
         rgb = img.image[ij[:, 0], ij[:, 1]].astype(np.float64)
         nrm = normal_map(img)[ij[:, 0], ij[:, 1]]
         inst = img.instance[ij[:, 0], ij[:, 1]] if img.instance is not None else np.zeros(depth.shape, np.int32)
         finite = np.isfinite(depth) & (depth > 0)
-        sky_dirs.append(dirs[~finite])
-        sky_rgb.append(rgb[~finite])
+        sky_dirs.append(dirs[np.isposinf(depth)])
+        sky_rgb.append(rgb[np.isposinf(depth)])
         pts = img.cam_to_world[:3, 3] + dirs[finite] * depth[finite, None]
         inst_f, rgb_f, nrm_f = inst[finite], rgb[finite], nrm[finite]
         footprint = depth[finite] / float(img.K[0, 0])
@@ -282,6 +294,22 @@ def colors_from_images(points: np.ndarray, images: list[CameraImage], max_images
     return rgb
 
 
+def _sphere_points(center: np.ndarray, count: int, radius: float, min_el: float,
+                   rng: np.random.Generator) -> np.ndarray:
+    """``[count, 3]`` points uniform on the sphere cap above elevation ``min_el`` (radians) around ``center``."""
+    az = rng.uniform(-np.pi, np.pi, count)
+    el = np.arcsin(rng.uniform(np.sin(min_el), 1.0, count))
+    return center + radius * np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
+
+
+def random_sky(train_images: list[CameraImage], center: np.ndarray, count: int, cfg: InitConfig,
+               rng: np.random.Generator) -> PointCloud:
+    """``count`` dome points (radius ``sky_radius``, down to 10 degrees below the horizon) coloured from the
+    images."""
+    sky = _sphere_points(center, count, cfg.sky_radius, math.radians(-10.0), rng)
+    return PointCloud(sky, colors_from_images(sky, train_images), np.zeros(count))
+
+
 def random_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[ObjectInfo], center: np.ndarray,
                   cfg: InitConfig, rng: np.random.Generator) -> tuple[PointCloud, PointCloud, dict[str, PointCloud]]:
     """``(background, sky, {object_id: cloud})`` without depth (see the module docstring)."""
@@ -294,16 +322,10 @@ def random_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[
     phi = rng.uniform(-np.pi, np.pi, n_ground)
     ground = anchor + np.stack([r * np.cos(phi), r * np.sin(phi), np.zeros(n_ground)], axis=1)
 
-    def sphere(count: int, radius: float, min_el: float) -> np.ndarray:
-        az = rng.uniform(-np.pi, np.pi, count)
-        el = np.arcsin(rng.uniform(np.sin(min_el), 1.0, count))
-        return center + radius * np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=1)
-
-    shell = sphere(n_shell, 1.5 * cfg.random_ground_radius, 0.0)
-    sky = sphere(n_sky, cfg.sky_radius, math.radians(-10.0))
+    shell = _sphere_points(center, n_shell, 1.5 * cfg.random_ground_radius, 0.0, rng)
     bg_pts = np.concatenate([ground, shell])
     background = PointCloud(bg_pts, colors_from_images(bg_pts, train_images), np.zeros(bg_pts.shape[0]))
-    sky_cloud = PointCloud(sky, colors_from_images(sky, train_images), np.zeros(n_sky))
+    sky_cloud = random_sky(train_images, center, n_sky, cfg, rng)
     clouds = {}
     for obj in objects:
         track = log.track(obj.object_id)
@@ -367,6 +389,8 @@ def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: 
     has_depth = bool(train_images) and all(img.depth is not None and img.image is not None for img in train_images)
     if has_depth:
         background, sky, clouds = depth_clouds(log, train_images, objects, frames, poses, center, cfg)
+        if sky.points.shape[0] == 0:
+            sky = random_sky(train_images, center, cfg.random_background_points // 4, cfg, rng)
     else:
         background, sky, clouds = random_clouds(log, train_images, objects, center, cfg, rng)
     logger.info("init from %s: %d background, %d sky, %d object points", "depth" if has_depth else "random",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -49,3 +50,19 @@ def test_ingest_auto_detects_a_forecasting_scenario(prefect_api_url, tmp_path: P
     assert list_logs(store) == [SCENARIO_ID]
     log = read_scene_log(store, SCENARIO_ID)
     assert log.source == "av2-forecasting" and log.num_frames == 20 and len(log.tracks) == 3
+
+
+@pytest.mark.orchestration
+@pytest.mark.shared_data
+def test_ingest_kitti_raw_stores_cameras_poses_and_sparse_depth(prefect_api_url, shared_data: Path,
+                                                               tmp_path: Path) -> None:
+    store = ArtifactStore(str(tmp_path / "store"))
+    drive = shared_data / "kitti/KITTI_tiny/2011_09_26/2011_09_26_drive_0023_sync"
+    result = runner.invoke(app, ["ingest", "kitti-raw", str(drive), "--out", store.root, "--image-scale", "0.25"])
+    assert result.exit_code == 0, result.output
+    log = read_scene_log(store, "2011_09_26_drive_0023_sync")
+    assert log.source == "kitti-raw" and log.num_frames == 7 and not log.tracks
+    assert log.cameras == ("image_02", "image_03") and len(log.images) == 14
+    assert {img.frame_idx for img in log.images if img.split == "test"} == {3}
+    depth = log.images[0].depth
+    assert depth is not None and np.isnan(depth).any() and (np.isfinite(depth) & (depth > 0)).any()

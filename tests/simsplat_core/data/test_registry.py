@@ -23,7 +23,7 @@ from tests.simsplat_core.data.forecasting_files import SCENARIO_ID, write_scenar
 
 
 def test_sources_are_registered_once_with_descriptions() -> None:
-    assert source_names() == ("waymo-frame", "waymo-scenario", "av2", "av2-forecasting")
+    assert source_names() == ("waymo-frame", "waymo-scenario", "av2", "av2-forecasting", "kitti-raw")
     assert AUTO_SOURCE not in source_names()
     assert all(s.description and callable(s.detect) and callable(s.load) for s in LOG_SOURCES)
     assert log_source("waymo-frame").options == ("image_scale",) and log_source("av2").options == ()
@@ -79,6 +79,7 @@ SAMPLES = {
     "av2/sensor-log-7fab2350": "av2",
     "av2/forecasting-0a1e6f0a": "av2-forecasting",
     "av2/forecasting-0a1e6f0a/scenario_0a1e6f0a-1817-4a98-b02e-db8c9327d151.parquet": "av2-forecasting",
+    "kitti/KITTI_tiny/2011_09_26/2011_09_26_drive_0023_sync": "kitti-raw",
 }
 
 
