@@ -11,7 +11,7 @@ object go to that node's box frame (inverse pose of that frame); the rest go to 
 are merged in voxels (mean position and colour): background voxels are ``background_voxel_pixels``
 pixel footprints at the distance of the nearest training camera (quantised to powers of two, so a
 surface gets the same voxel size whichever view saw it), object voxels are a fixed size per object.
-**Sky** pixels (infinite depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
+Pixels outside ``valid_mask`` and ``nan`` depth (no measurement) are skipped. **Sky** pixels (``+inf`` depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
 centre, merged in cells of ``sky_step_deg``: the dome is part of the background node and renders the
 sky gradient of any view direction.
 
@@ -221,9 +221,11 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
         rgb = img.image[ij[:, 0], ij[:, 1]].astype(np.float64)
         nrm = normal_map(img)[ij[:, 0], ij[:, 1]]
         inst = img.instance[ij[:, 0], ij[:, 1]] if img.instance is not None else np.zeros(depth.shape, np.int32)
-        finite = np.isfinite(depth) & (depth > 0)
-        sky_dirs.append(dirs[~finite])
-        sky_rgb.append(rgb[~finite])
+        valid = img.valid_mask[ij[:, 0], ij[:, 1]] if img.valid_mask is not None else np.ones(depth.shape, bool)
+        finite = np.isfinite(depth) & (depth > 0) & valid
+        sky = np.isposinf(depth) & valid  # nan = no measurement: neither surface nor sky
+        sky_dirs.append(dirs[sky])
+        sky_rgb.append(rgb[sky])
         pts = img.cam_to_world[:3, 3] + dirs[finite] * depth[finite, None]
         inst_f, rgb_f, nrm_f = inst[finite], rgb[finite], nrm[finite]
         footprint = depth[finite] / float(img.K[0, 0])
