@@ -279,6 +279,8 @@ def colors_from_images(points: np.ndarray, images: list[CameraImage], max_images
         u = img.K[0, 0] * cam[:, 0] / safe + img.K[0, 2]
         v = img.K[1, 1] * cam[:, 1] / safe + img.K[1, 2]
         ok = (~done) & (z > 0.5) & (u >= 0) & (u < img.width) & (v >= 0) & (v < img.height)
+        if img.valid_mask is not None:  # the ego car's body is not the colour of the scene behind it
+            ok[ok] = img.valid_mask[v[ok].astype(int), u[ok].astype(int)]
         rgb[ok] = img.image[v[ok].astype(int), u[ok].astype(int)]
         done |= ok
     return rgb
@@ -355,11 +357,11 @@ def _gaussians(cloud: PointCloud, cfg: InitConfig, device: torch.device, max_sca
 def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: int = 0,
                   device: torch.device | str = "cpu") -> SceneGraph:
     """The initial scene graph of ``log`` (see the module docstring); ``train_frames`` are the frames
-    whose images may be used (held-out frames never are)."""
+    whose images may be used (held-out frames and held-out views never are)."""
     device = torch.device(device)
     rng = np.random.default_rng(seed)
     frames = np.arange(log.num_frames, dtype=np.int64)
-    train_images = [img for img in log.images if img.frame_idx in train_frames]
+    train_images = [img for img in log.images if img.frame_idx in train_frames and img.split == "train"]
     objects = sorted(log.objects, key=lambda o: o.object_id)
     center, scene_scale = scene_frame(log, train_images)
     poses = {}
