@@ -7,7 +7,7 @@ Layout of one log (written inside one ``staged_directory``, so it appears comple
                   tracks.parquet          one row per (object, frame), tracks in log order
                   objects.parquet         one row per ObjectInfo, in log order
                   map_features.parquet    one row per MapFeature, in log order
-                  images/<camera>/<frame_idx:06d>.exr   R,G,B (+ Z from depth, + id from instance, + mask from valid_mask)
+                  images/<camera>/<frame_idx:06d>.exr   R,G,B (+ Z from depth, id from instance, mask from valid_mask)
                   _SUCCESS.json           manifest: content key, row counts, bytes, source, metadata
 
 ``frames.image_uri`` is the EXR path *relative to the log directory* (``images/front/000003.exr``), or

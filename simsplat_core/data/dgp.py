@@ -26,6 +26,7 @@ import collections
 import json
 import logging
 import time
+from collections.abc import Sequence
 from pathlib import Path
 
 import cv2
@@ -146,6 +147,47 @@ def _ontology(root: Path) -> dict[int, str]:
     return parse_ontology(files[0]) if files else {}
 
 
+def _camera_image(root: Path, datum: DgpDatum, sensor: DgpSensor, frame_idx: int, world_from_global: np.ndarray,
+                  image_scale: float, split: str, ego_polygons: Sequence[Sequence[tuple[float, float]]]
+                  ) -> CameraImage:
+    """The calibrated, resized, ego-masked ``CameraImage`` of one camera datum."""
+    size = (max(1, round(datum.width * image_scale)), max(1, round(datum.height * image_scale)))
+    return CameraImage(
+        frame_idx=frame_idx,
+        timestamp_us=datum.timestamp_us,
+        camera=datum.sensor,
+        K=_scaled_K(sensor.K, size[0] / datum.width, size[1] / datum.height),
+        cam_to_world=world_from_global @ datum.world_from_sensor,
+        width=size[0],
+        height=size[1],
+        image=_read_image(root / datum.filename, datum, size),
+        split=split,
+        valid_mask=polygon_valid_mask(ego_polygons, *size),
+    )
+
+
+def _frame_boxes(root: Path, lidar: DgpDatum, frame_idx: int, world_from_global: np.ndarray,
+                 frame_images: list[CameraImage]) -> list[tuple[str, BoxObservation, int]]:
+    """``(object id, world-frame observation, class id)`` of every 3D box annotated on the lidar datum."""
+    box_file = lidar.annotations.get(BOUNDING_BOX_3D)
+    if box_file is None:
+        return []
+    boxes = parse_boxes_3d(root / box_file)
+    world_from_lidar = world_from_global @ lidar.world_from_sensor
+    poses = [world_from_lidar @ b.sensor_from_box for b in boxes]
+    centers = np.array([p[:3, 3] for p in poses]).reshape(-1, 3)
+    headings = np.array([float(yaw_of_rotation(p[:3, :3])) for p in poses])
+    sizes = np.array([b.size for b in boxes]).reshape(-1, 3)
+    in_view = boxes_visible(centers, sizes, headings, frame_images)
+    return [
+        (str(box.instance_id),
+         BoxObservation(frame_idx, centers[i], sizes[i], headings[i], float("nan"),
+                        bool(in_view[i]) and box.num_points != 0),
+         box.class_id)
+        for i, box in enumerate(boxes)
+    ]
+
+
 def load_dgp_scene(path: str | Path, image_scale: float = 1.0, seq_id: str | None = None,
                    ego_polygons: EgoPolygons | None = None) -> SceneLog:
     """Load a DGP scene folder (or its ``scene_*.json``) as one ``SceneLog`` (see module docstring).
@@ -202,40 +244,17 @@ def load_dgp_scene(path: str | Path, image_scale: float = 1.0, seq_id: str | Non
     for frame_idx, sample in enumerate(samples):
         cal_path, calibration = calibration_of(sample)
         held_out = camera_names[frame_idx % len(camera_names)] if camera_names else ""
-        frame_images = []
-        for datum in sorted((d for d in sample.datums if d.kind == "image"), key=lambda d: d.sensor):
-            sensor = _sensor(calibration, cal_path, datum.sensor)
-            size = (max(1, round(datum.width * image_scale)), max(1, round(datum.height * image_scale)))
-            frame_images.append(CameraImage(
-                frame_idx=frame_idx,
-                timestamp_us=datum.timestamp_us,
-                camera=datum.sensor,
-                K=_scaled_K(sensor.K, size[0] / datum.width, size[1] / datum.height),
-                cam_to_world=world_from_global @ datum.world_from_sensor,
-                width=size[0],
-                height=size[1],
-                image=_read_image(root / datum.filename, datum, size),
-                split="test" if datum.sensor == held_out else "train",
-                valid_mask=polygon_valid_mask(polygons.get(datum.sensor, ()), *size),
-            ))
+        frame_images = [
+            _camera_image(root, datum, _sensor(calibration, cal_path, datum.sensor), frame_idx, world_from_global,
+                          image_scale, "test" if datum.sensor == held_out else "train",
+                          polygons.get(datum.sensor, ()))
+            for datum in sorted((d for d in sample.datums if d.kind == "image"), key=lambda d: d.sensor)
+        ]
         images.extend(frame_images)
         lidar = _lidar_datum(scene_file, frame_idx, sample)
-        box_file = lidar.annotations.get(BOUNDING_BOX_3D)
-        if box_file is None:
-            continue
-        boxes = parse_boxes_3d(root / box_file)
-        world_from_lidar = world_from_global @ lidar.world_from_sensor
-        poses = [world_from_lidar @ b.sensor_from_box for b in boxes]
-        centers = np.array([p[:3, 3] for p in poses]).reshape(-1, 3)
-        headings = np.array([float(yaw_of_rotation(p[:3, :3])) for p in poses])
-        sizes = np.array([b.size for b in boxes]).reshape(-1, 3)
-        in_view = boxes_visible(centers, sizes, headings, frame_images)
-        for i, box in enumerate(boxes):
-            oid = str(box.instance_id)
-            visible = bool(in_view[i]) and box.num_points != 0
-            observations[oid].append(BoxObservation(frame_idx, centers[i], sizes[i], headings[i], float("nan"),
-                                                    visible))
-            class_votes[oid][box.class_id] += 1
+        for oid, observation, class_id in _frame_boxes(root, lidar, frame_idx, world_from_global, frame_images):
+            observations[oid].append(observation)
+            class_votes[oid][class_id] += 1
 
     order = sorted(observations, key=lambda oid: (observations[oid][0].frame_idx, oid))
     tracks = tuple(build_track(oid, observations[oid], timestamps) for oid in order)

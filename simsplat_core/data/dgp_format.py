@@ -22,7 +22,7 @@ import numpy as np
 from simsplat_core.data.errors import CorruptLogError
 from simsplat_core.geometry import make_transform, quat_wxyz_to_matrix
 
-_EPOCH = datetime.datetime(1970, 1, 1, tzinfo=datetime.timezone.utc)
+_EPOCH = datetime.datetime(1970, 1, 1, tzinfo=datetime.UTC)
 
 
 def read_json(path: Path) -> dict[str, Any]:
@@ -100,7 +100,7 @@ def parse_timestamp_us(path: Path, value: Any, where: str) -> int:
     except ValueError:
         raise CorruptLogError(path, f"field {where!r}", f"not an RFC 3339 timestamp: {value!r}") from None
     if stamp.tzinfo is None:
-        stamp = stamp.replace(tzinfo=datetime.timezone.utc)
+        stamp = stamp.replace(tzinfo=datetime.UTC)
     delta = stamp - _EPOCH
     return (delta.days * 86_400 + delta.seconds) * 1_000_000 + delta.microseconds
 

@@ -11,7 +11,8 @@ object go to that node's box frame (inverse pose of that frame); the rest go to 
 are merged in voxels (mean position and colour): background voxels are ``background_voxel_pixels``
 pixel footprints at the distance of the nearest training camera (quantised to powers of two, so a
 surface gets the same voxel size whichever view saw it), object voxels are a fixed size per object.
-Pixels outside ``valid_mask`` and ``nan`` depth (no measurement) are skipped. **Sky** pixels (``+inf`` depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
+Pixels outside ``valid_mask`` and ``nan`` depth (no measurement) are skipped. **Sky** pixels (``+inf``
+depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
 centre, merged in cells of ``sky_step_deg``: the dome is part of the background node and renders the
 sky gradient of any view direction.
 
