@@ -20,6 +20,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+#: Dataclass field metadata: a content key leaves the field out while it is ``None`` (so adding an optional
+#: field keeps the keys of records that do not use it).
+KEY_OMIT_WHEN_NONE = "key_omit_when_none"
+
 logger = logging.getLogger(__name__)
 
 #: Object categories understood by every stage. Loaders map their own taxonomies onto these.
@@ -81,10 +85,13 @@ class CameraImage:
         width, height: image size in pixels.
         image: ``[H, W, 3]`` float32 RGB in ``[0, 1]``, or ``None`` when the log has no pixels
             (e.g. annotation-only logs).
-        depth: ``[H, W]`` float32 metric z-depth (``inf`` where nothing was hit, ``nan`` where a sparse
-            sensor such as a lidar measured nothing), or ``None``.
+        depth: ``[H, W]`` float32 metric z-depth, or ``None``. ``+inf`` = the ray hits nothing (sky);
+            ``nan`` = no measurement there (e.g. pixels between projected lidar points): never sky.
         instance: ``[H, W]`` int32 instance ids (``ObjectInfo.instance_id``; 0 = background), or ``None``.
         split: ``"train"`` or ``"test"``.
+        valid_mask: ``[H, W]`` bool, ``True`` where the pixels show the scene (``False`` e.g. on the ego
+            car's own body), or ``None`` when every pixel is valid. Losses, metrics and initialisation skip
+            invalid pixels.
     """
 
     frame_idx: int
@@ -98,6 +105,7 @@ class CameraImage:
     depth: np.ndarray | None = None
     instance: np.ndarray | None = None
     split: str = "train"
+    valid_mask: np.ndarray | None = field(default=None, metadata={KEY_OMIT_WHEN_NONE: True})
 
     def validate(self) -> None:
         where = f"frame {self.frame_idx} camera {self.camera!r}"
@@ -112,6 +120,10 @@ class CameraImage:
             _require_shape(f"{where}: depth", self.depth, hw)
         if self.instance is not None:
             _require_shape(f"{where}: instance", self.instance, hw)
+        if self.valid_mask is not None:
+            _require_shape(f"{where}: valid_mask", self.valid_mask, hw)
+            if self.valid_mask.dtype != np.bool_:
+                raise LogValidationError(f"{where}: valid_mask must be bool, got {self.valid_mask.dtype}")
 
 
 @dataclass(frozen=True)

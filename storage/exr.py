@@ -25,7 +25,9 @@ from storage.store import ArtifactStore
 
 logger = logging.getLogger(__name__)
 
-BASE_CHANNELS: tuple[str, ...] = ("R", "G", "B", "A", "Z", "id")
+BASE_CHANNELS: tuple[str, ...] = ("R", "G", "B", "A", "Z", "id", "mask")
+#: The per-pixel validity channel (1 = valid, 0 = invalid; ``CameraImage.valid_mask``).
+MASK_CHANNEL = "mask"
 #: The node / instance id channel (always float32: exact integers).
 ID_CHANNEL = "id"
 FEATURE_PREFIX = "feat."
@@ -60,6 +62,7 @@ def render_channels(
     depth: np.ndarray | None = None,
     node_id: np.ndarray | None = None,
     features: np.ndarray | None = None,
+    valid_mask: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     """Channel dict for ``write_exr`` from render outputs.
 
@@ -69,6 +72,7 @@ def render_channels(
         depth: ``[H, W]`` (or ``[H, W, 1]``) z-depth.
         node_id: ``[H, W]`` integer ids (0 = background), ``|id| <= 2**24``.
         features: ``[H, W, D]`` per-pixel features -> ``feat.00 .. feat.{D-1}``.
+        valid_mask: ``[H, W]`` bool validity -> ``mask`` (1.0 valid, 0.0 invalid).
 
     Returns:
         ``{name: [H, W] float32}`` in canonical order.
@@ -80,6 +84,8 @@ def render_channels(
             raise ValueError(f"rgb must be [H, W, 3], got {rgb.shape}")
         for i, name in enumerate("RGB"):
             channels[name] = rgb[..., i]
+    if valid_mask is not None:
+        channels[MASK_CHANNEL] = np.asarray(valid_mask).astype(np.float32)
     for name, plane in (("A", alpha), ("Z", depth), ("id", node_id)):
         if plane is not None:
             plane = np.asarray(plane)

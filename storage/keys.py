@@ -8,7 +8,8 @@ Canonical encoding:
 * ``None``, ``bool``, ``int``, ``float`` (repr, exact), ``str``: as JSON (``1`` and ``1.0`` differ);
 * ``list``/``tuple``: JSON arrays; ``set``/``frozenset``: sorted by encoding;
 * ``dict``: JSON objects with sorted ``str`` keys (other key types raise ``TypeError``);
-* dataclasses: their class name plus fields (not ``asdict``, so arrays are not copied);
+* dataclasses: their class name plus fields (not ``asdict``, so arrays are not copied); a field whose
+  metadata sets ``KEY_OMIT_WHEN_NONE`` is left out while ``None``;
 * ``numpy`` arrays: dtype, shape and a SHA-256 of the C-contiguous bytes; numpy scalars: ``.item()``;
 * ``bytes``: SHA-256; ``pathlib`` paths and enums: their string / value.
 """
@@ -24,7 +25,10 @@ from typing import Any
 
 import numpy as np
 
+from simsplat_core.types import KEY_OMIT_WHEN_NONE
+
 KEY_VERSION = "simsplat-key-v1"
+
 
 
 def _digest(data: bytes) -> str:
@@ -49,7 +53,11 @@ def canonical(value: Any) -> Any:
     if isinstance(value, pathlib.PurePath):
         return {"__path__": value.as_posix()}
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        fields = {f.name: canonical(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        fields = {
+            f.name: canonical(getattr(value, f.name))
+            for f in dataclasses.fields(value)
+            if not (f.metadata.get(KEY_OMIT_WHEN_NONE) and getattr(value, f.name) is None)
+        }
         return {"__dataclass__": type(value).__qualname__, "fields": fields}
     if isinstance(value, dict):
         bad = [k for k in value if not isinstance(k, str)]

@@ -7,7 +7,7 @@ Layout of one log (written inside one ``staged_directory``, so it appears comple
                   tracks.parquet          one row per (object, frame), tracks in log order
                   objects.parquet         one row per ObjectInfo, in log order
                   map_features.parquet    one row per MapFeature, in log order
-                  images/<camera>/<frame_idx:06d>.exr   R,G,B (+ Z from depth, + id from instance)
+                  images/<camera>/<frame_idx:06d>.exr   R,G,B (+ Z from depth, id from instance, mask from valid_mask)
                   _SUCCESS.json           manifest: content key, row counts, bytes, source, metadata
 
 ``frames.image_uri`` is the EXR path *relative to the log directory* (``images/front/000003.exr``), or
@@ -33,7 +33,7 @@ import numpy as np
 import pyarrow as pa
 
 from simsplat_core.types import CameraImage, MapFeature, ObjectInfo, SceneLog, Track
-from storage.exr import read_exr, render_channels, write_exr
+from storage.exr import MASK_CHANNEL, read_exr, render_channels, write_exr
 from storage.integrity import require_intact
 from storage.keys import content_key
 from storage.markers import MARKER_NAME, is_done, mark_done, read_marker
@@ -179,7 +179,8 @@ def write_scene_log(
         for img, uri in zip(log.images, uris):
             if uri:
                 path = join_relpath(tmp, uri)
-                write_exr(store, path, render_channels(rgb=img.image, depth=img.depth, node_id=img.instance))
+                write_exr(store, path, render_channels(
+                    rgb=img.image, depth=img.depth, node_id=img.instance, valid_mask=img.valid_mask))
                 image_bytes += store.size(path)
         manifest = {
             "format": MANIFEST_FORMAT,
@@ -368,6 +369,7 @@ def _read_images(store: ArtifactStore, rel: str, frames: pa.Table, load_images: 
                 depth=channels.get("Z"),
                 instance=instance,
                 split=cols["split"][i],
+                valid_mask=channels[MASK_CHANNEL] > 0.5 if MASK_CHANNEL in channels else None,
             )
         )
     return tuple(images)

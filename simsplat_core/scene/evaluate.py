@@ -3,7 +3,8 @@
 Metrics follow :mod:`simsplat_core.scene.image_metrics`. Per image: PSNR and SSIM of the full image,
 and masked PSNR / SSIM over the *dynamic* pixels: ground-truth instance pixels of objects whose
 category is ``vehicle`` or ``pedestrian``. Scene figures are means over images (masked figures over
-the images with at least one dynamic pixel, the drivestudio convention).
+the images with at least one dynamic pixel, the drivestudio convention). A view with a validity mask
+(``ViewBatch.valid``) is scored over its valid pixels only (masked PSNR, ``"same"``-padded masked SSIM).
 """
 
 from __future__ import annotations
@@ -76,7 +77,12 @@ def render_views(graph: SceneGraph, batches: list[ViewBatch], objects: tuple[Obj
             dyn = torch.isin(batch.instance.cpu(), dyn_ids)
         else:
             dyn = torch.zeros(gt.shape[:3], dtype=torch.bool)
-        p, s = psnr(rgb, gt), ssim(rgb, gt)
+        if batch.valid is None:
+            p, s = psnr(rgb, gt), ssim(rgb, gt)
+        else:  # invalid pixels (e.g. the ego car's body) are not scored
+            valid = batch.valid.cpu()
+            p, s = masked_psnr(rgb, gt, valid), masked_ssim(rgb, gt, valid)
+            dyn = dyn & valid
         pd, sd = masked_psnr(rgb, gt, dyn), masked_ssim(rgb, gt, dyn)
         for c, cam in enumerate(batch.cameras):
             out.append(TestFrameRender(

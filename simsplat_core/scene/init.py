@@ -11,7 +11,8 @@ object go to that node's box frame (inverse pose of that frame); the rest go to 
 are merged in voxels (mean position and colour): background voxels are ``background_voxel_pixels``
 pixel footprints at the distance of the nearest training camera (quantised to powers of two, so a
 surface gets the same voxel size whichever view saw it), object voxels are a fixed size per object.
-**Sky** pixels (infinite depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
+Pixels outside ``valid_mask`` and ``nan`` depth (no measurement) are skipped. **Sky** pixels (``+inf``
+depth) become Gaussians on a dome of radius ``sky_radius`` around the scene
 centre, merged in cells of ``sky_step_deg``: the dome is part of the background node and renders the
 sky gradient of any view direction. **Sparse** depth (projected lidar: ``nan`` = no measurement) gives
 every measured pixel, whatever the stride; it cannot tell sky apart, so the dome is then the random one
@@ -233,9 +234,11 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
         rgb = img.image[ij[:, 0], ij[:, 1]].astype(np.float64)
         nrm = normal_map(img)[ij[:, 0], ij[:, 1]]
         inst = img.instance[ij[:, 0], ij[:, 1]] if img.instance is not None else np.zeros(depth.shape, np.int32)
-        finite = np.isfinite(depth) & (depth > 0)
-        sky_dirs.append(dirs[np.isposinf(depth)])
-        sky_rgb.append(rgb[np.isposinf(depth)])
+        valid = img.valid_mask[ij[:, 0], ij[:, 1]] if img.valid_mask is not None else np.ones(depth.shape, bool)
+        finite = np.isfinite(depth) & (depth > 0) & valid
+        sky = np.isposinf(depth) & valid  # nan = no measurement: neither surface nor sky
+        sky_dirs.append(dirs[sky])
+        sky_rgb.append(rgb[sky])
         pts = img.cam_to_world[:3, 3] + dirs[finite] * depth[finite, None]
         inst_f, rgb_f, nrm_f = inst[finite], rgb[finite], nrm[finite]
         footprint = depth[finite] / float(img.K[0, 0])
@@ -289,6 +292,8 @@ def colors_from_images(points: np.ndarray, images: list[CameraImage], max_images
         u = img.K[0, 0] * cam[:, 0] / safe + img.K[0, 2]
         v = img.K[1, 1] * cam[:, 1] / safe + img.K[1, 2]
         ok = (~done) & (z > 0.5) & (u >= 0) & (u < img.width) & (v >= 0) & (v < img.height)
+        if img.valid_mask is not None:  # the ego car's body is not the colour of the scene behind it
+            ok[ok] = img.valid_mask[v[ok].astype(int), u[ok].astype(int)]
         rgb[ok] = img.image[v[ok].astype(int), u[ok].astype(int)]
         done |= ok
     return rgb
@@ -375,11 +380,11 @@ def _gaussians(cloud: PointCloud, cfg: InitConfig, device: torch.device, max_sca
 def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: int = 0,
                   device: torch.device | str = "cpu") -> SceneGraph:
     """The initial scene graph of ``log`` (see the module docstring); ``train_frames`` are the frames
-    whose images may be used (held-out frames never are)."""
+    whose images may be used (held-out frames and held-out views never are)."""
     device = torch.device(device)
     rng = np.random.default_rng(seed)
     frames = np.arange(log.num_frames, dtype=np.int64)
-    train_images = [img for img in log.images if img.frame_idx in train_frames]
+    train_images = [img for img in log.images if img.frame_idx in train_frames and img.split == "train"]
     objects = sorted(log.objects, key=lambda o: o.object_id)
     center, scene_scale = scene_frame(log, train_images)
     poses = {}

@@ -7,6 +7,8 @@ Images are float tensors in ``[0, 1]`` laid out channels-last, ``[H, W, C]`` or 
   window fits inside the image (``[H - 10, W - 10]``, scikit-image's convention); ``padding="same"``
   zero-pads (the 3DGS training convention) so every pixel gets a value.
 * **D-SSIM** loss ``= 1 - SSIM`` (``"same"`` padding, mean over the batch and pixels).
+* ``valid_mean``: the mean over the valid pixels of a ``[B, H, W]`` validity mask (every pixel when ``None``);
+  the photometric losses take the same mask, so masked pixels (e.g. the ego car's body) never pull.
 * ``psnr_from_mse``: ``10 log10(1 / MSE)`` (data range 1), the trainer's running figure.
 
 These live with the trainer that minimises them; :mod:`simsplat_core.scene.image_metrics` builds the
@@ -99,9 +101,21 @@ def ssim_map(pred: Tensor, target: Tensor, padding: Padding = "valid", window_si
     return (num / den).mean(dim=1)  # [B, H', W']
 
 
-def dssim_loss(pred: Tensor, target: Tensor) -> Tensor:
-    """Training loss ``1 - SSIM`` (``"same"`` padding, mean over the batch and pixels), a scalar."""
-    return 1.0 - ssim_map(pred, target, padding="same").mean()
+def valid_mean(values: Tensor, valid: Tensor | None) -> Tensor:
+    """Mean of ``values`` (``[B, H, W]`` or ``[B, H, W, C]``) over the pixels where ``valid`` (``[B, H, W]`` bool)
+    holds, over every pixel when ``valid`` is ``None``; 0 when no pixel is valid (a scalar)."""
+    if valid is None:
+        return values.mean()
+    weight = valid.to(values.dtype)
+    if values.dim() == weight.dim() + 1:
+        weight = weight[..., None].expand_as(values)
+    return (values * weight).sum() / weight.sum().clamp(min=1.0)
+
+
+def dssim_loss(pred: Tensor, target: Tensor, valid: Tensor | None = None) -> Tensor:
+    """Training loss ``1 - SSIM`` (``"same"`` padding, mean over the batch and the ``valid`` pixels), a scalar."""
+    smap = ssim_map(pred, target, padding="same")  # [B, H, W]
+    return 1.0 - valid_mean(smap, None if valid is None else valid.reshape(smap.shape))
 
 
 __all__ = [
@@ -115,5 +129,6 @@ __all__ = [
     "dssim_loss",
     "gaussian_window",
     "psnr_from_mse",
+    "valid_mean",
     "ssim_map",
 ]

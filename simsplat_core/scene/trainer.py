@@ -26,7 +26,7 @@ from simsplat_core.scene.densify import DensifyState, DensifyStrategy
 from simsplat_core.scene.evaluate import TestFrameRender, render_views, summarise
 from simsplat_core.scene.graph import SceneGraph
 from simsplat_core.scene.init import initial_graph
-from simsplat_core.scene.losses import dssim_loss, psnr_from_mse
+from simsplat_core.scene.losses import dssim_loss, psnr_from_mse, valid_mean
 from simsplat_core.scene.nodes import BACKGROUND_ID, NonRigidNode, ObjectNode, RigidNode
 from simsplat_core.scene.optim import build_optimizer, set_means_lr
 from simsplat_core.scene.render import SceneRender, render_composed
@@ -90,27 +90,29 @@ def regularisers(graph: SceneGraph, config: ReconstructionConfig) -> Tensor:
 def image_loss(render: SceneRender, batch: ViewBatch, config: ReconstructionConfig) -> tuple[Tensor, Tensor]:
     """``(loss, mse)`` of one rendered batch against its ground truth (see :class:`LossWeights`):
     weighted L1 + D-SSIM on colour, object-coverage L1 (``render.extra``) against ``instance > 0``,
-    inverse-depth L1 where the ground-truth depth is finite."""
-    rgb, gt, instance, w = render.rgb, batch.rgb, batch.instance, config.loss
+    inverse-depth L1 where the ground-truth depth is finite; every term over ``batch.valid`` pixels only."""
+    rgb, gt, instance, w, valid = render.rgb, batch.rgb, batch.instance, config.loss, batch.valid
     if gt is None:
         raise ValueError(f"image_loss: the view batch of frame {batch.frame_idx} has no pixels to compare with")
     lam = w.dssim
     err = (rgb - gt).abs()
     objects = None if instance is None else (instance > 0).to(err.dtype)  # [C, H, W]
     if w.object_weight > 1 and objects is not None:
-        l1 = (err * (1.0 + (w.object_weight - 1.0) * objects[..., None])).mean()
+        l1 = valid_mean(err * (1.0 + (w.object_weight - 1.0) * objects[..., None]), valid)
     else:
-        l1 = err.mean()
-    loss = (1.0 - lam) * l1 + (lam * dssim_loss(rgb, gt) if lam > 0 else 0.0)
+        l1 = valid_mean(err, valid)
+    loss = (1.0 - lam) * l1 + (lam * dssim_loss(rgb, gt, valid) if lam > 0 else 0.0)
     if w.object_mask > 0 and objects is not None and render.extra is not None:
-        loss = loss + w.object_mask * (render.extra[..., 0] - objects).abs().mean()
+        loss = loss + w.object_mask * valid_mean((render.extra[..., 0] - objects).abs(), valid)
     if w.depth > 0 and batch.depth is not None:
-        valid = torch.isfinite(batch.depth) & (batch.depth > 0)
-        if bool(valid.any()):
-            inv_gt = 1.0 / batch.depth[valid]
-            inv = 1.0 / render.depth[..., 0][valid].clamp(min=1e-3)
+        measured = torch.isfinite(batch.depth) & (batch.depth > 0)
+        if valid is not None:
+            measured = measured & valid
+        if bool(measured.any()):
+            inv_gt = 1.0 / batch.depth[measured]
+            inv = 1.0 / render.depth[..., 0][measured].clamp(min=1e-3)
             loss = loss + w.depth * (inv - inv_gt).abs().mean()
-    return loss, (rgb.detach() - gt).square().mean()
+    return loss, valid_mean((rgb.detach() - gt).square(), valid)
 
 
 def train_step(graph: SceneGraph, optimizer: torch.optim.Optimizer, strategy: DensifyStrategy, state: DensifyState,

@@ -1,7 +1,8 @@
-"""Camera views of a ``SceneLog`` grouped for rendering: all images of one frame with the same size.
+"""Camera views of a ``SceneLog`` grouped for rendering: all images of one frame with the same size and split.
 
 The rasterizer renders a batch of cameras of one size in one call, so a frame whose cameras differ in
-size (real logs) yields one :class:`ViewBatch` per size.
+size (real logs) yields one :class:`ViewBatch` per size; a frame whose held-out view is one camera (DGP)
+yields a train batch and a test batch.
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ class ViewBatch:
         rgb: ``[C, H, W, 3]`` float32 ground truth in ``[0, 1]`` or ``None``.
         depth: ``[C, H, W]`` float32 z-depth (``inf`` = nothing hit) or ``None``.
         instance: ``[C, H, W]`` int32 instance ids (0 = background) or ``None``.
+        valid: ``[C, H, W]`` bool, ``True`` where pixels count (``CameraImage.valid_mask``), or ``None`` when
+            every pixel does.
     """
 
     frame_idx: int
@@ -41,6 +44,7 @@ class ViewBatch:
     rgb: Tensor | None
     depth: Tensor | None
     instance: Tensor | None
+    valid: Tensor | None = None
 
     @property
     def num_cameras(self) -> int:
@@ -51,12 +55,13 @@ class ViewBatch:
         pick = lambda t: None if t is None else t[index]  # noqa: E731
         return ViewBatch(self.frame_idx, self.split, tuple(self.cameras[i] for i in index), self.cam_to_world[index],
                          self.Ks[index], self.width, self.height, pick(self.rgb), pick(self.depth),
-                         pick(self.instance))
+                         pick(self.instance), pick(self.valid))
 
     def to(self, device: torch.device | str) -> ViewBatch:
         mv = lambda t: None if t is None else t.to(device)  # noqa: E731
         return ViewBatch(self.frame_idx, self.split, self.cameras, self.cam_to_world.to(device), self.Ks.to(device),
-                         self.width, self.height, mv(self.rgb), mv(self.depth), mv(self.instance))
+                         self.width, self.height, mv(self.rgb), mv(self.depth), mv(self.instance),
+                         mv(self.valid))
 
 
 def _stack(images: list[CameraImage], attr: str, dtype: DTypeLike) -> Tensor | None:
@@ -66,23 +71,33 @@ def _stack(images: list[CameraImage], attr: str, dtype: DTypeLike) -> Tensor | N
     return torch.from_numpy(np.stack([np.asarray(a, dtype=dtype) for a in arrays]))
 
 
+def _stack_valid(images: list[CameraImage]) -> Tensor | None:
+    """``[C, H, W]`` bool validity of ``images`` (all-true for an image without a mask), ``None`` without masks."""
+    if all(img.valid_mask is None for img in images):
+        return None
+    return torch.from_numpy(np.stack([
+        np.ones((img.height, img.width), bool) if img.valid_mask is None else np.asarray(img.valid_mask, bool)
+        for img in images]))
+
+
 def view_batches(log: SceneLog, split: str | None = None) -> list[ViewBatch]:
-    """Every (frame, image size) group of ``log``'s images, frame-major, cameras in first-seen order.
+    """Every (frame, image size, split) group of ``log``'s images, frame-major, cameras in first-seen order.
 
     ``split`` keeps only frames of that split (``None``: all).
     """
-    groups: dict[tuple[int, int, int], list[CameraImage]] = {}
+    groups: dict[tuple[int, int, int, str], list[CameraImage]] = {}
     for img in log.images:
         if split is not None and img.split != split:
             continue
-        groups.setdefault((img.frame_idx, img.width, img.height), []).append(img)
+        groups.setdefault((img.frame_idx, img.width, img.height, img.split), []).append(img)
     out = []
-    for (frame, width, height), images in sorted(groups.items()):
+    for (frame, width, height, image_split), images in sorted(groups.items()):
         out.append(ViewBatch(
-            frame_idx=frame, split=images[0].split, cameras=tuple(img.camera for img in images),
+            frame_idx=frame, split=image_split, cameras=tuple(img.camera for img in images),
             cam_to_world=torch.from_numpy(np.stack([img.cam_to_world for img in images]).astype(np.float32)),
             Ks=torch.from_numpy(np.stack([img.K for img in images]).astype(np.float32)),
             width=width, height=height, rgb=_stack(images, "image", np.float32),
             depth=_stack(images, "depth", np.float32), instance=_stack(images, "instance", np.int32),
+            valid=_stack_valid(images),
         ))
     return out

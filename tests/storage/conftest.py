@@ -166,8 +166,8 @@ def assert_logs_equal(expected: SceneLog, actual: SceneLog, *, exact: bool = Tru
         where = f"{e.camera}/{e.frame_idx}"
         for name in ("frame_idx", "timestamp_us", "camera", "width", "height", "split"):
             assert getattr(a, name) == getattr(e, name), f"{where}: {name}"
-        for name in ("K", "cam_to_world", "image", "depth", "instance"):
-            exact_field = exact or name in ("image", "depth", "instance")
+        for name in ("K", "cam_to_world", "image", "depth", "instance", "valid_mask"):
+            exact_field = exact or name in ("image", "depth", "instance", "valid_mask")
             assert _same(getattr(e, name), getattr(a, name), exact_field), f"{where}: {name}"
     assert [t.object_id for t in actual.tracks] == [t.object_id for t in expected.tracks]
     for e, a in zip(expected.tracks, actual.tracks):

@@ -116,3 +116,13 @@ def test_half_float_keeps_ids_exact_and_colours_close(tmp_path) -> None:
     header = read_exr_header(store, "half.exr")
     assert header["format"] == ["float", "half"]
     assert store.size("half.exr") < store.size("full.exr")
+
+
+def test_valid_mask_is_a_mask_channel_read_back_as_written(store: ArtifactStore) -> None:
+    valid = np.ones((5, 7), bool)
+    valid[3:, 2:5] = False
+    channels = render_channels(rgb=np.zeros((5, 7, 3), np.float32), valid_mask=valid)
+    assert list(channels) == ["R", "G", "B", "mask"]
+    write_exr(store, "images/cam/000000.exr", channels)
+    back = read_exr(store, "images/cam/000000.exr")
+    assert np.array_equal(back["mask"] > 0.5, valid) and set(np.unique(back["mask"])) == {0.0, 1.0}

@@ -157,3 +157,18 @@ def test_round_trip_through_file_uri(tmp_path: Path, make_log, logs_equal) -> No
     log = make_log("uri_seq")
     write_scene_log(uri_store, log)
     logs_equal(log, read_scene_log(ArtifactStore(tmp_path / "artifacts"), "uri_seq"))
+
+
+def test_valid_mask_round_trips_and_keys_only_change_with_a_mask(store: ArtifactStore, make_log, logs_equal) -> None:
+    log = make_log()
+    key_without = scene_log_key(log)
+    first = log.images[0]
+    valid = np.ones((first.height, first.width), bool)
+    valid[-2:] = False
+    masked = dataclasses.replace(log, images=(dataclasses.replace(first, valid_mask=valid), *log.images[1:]))
+    assert scene_log_key(masked) != key_without
+    assert scene_log_key(dataclasses.replace(log, images=tuple(log.images))) == key_without
+    write_scene_log(store, masked)
+    back = read_scene_log(store, "seq0")
+    logs_equal(masked, back)
+    assert np.array_equal(back.images[0].valid_mask, valid) and back.images[1].valid_mask is None

@@ -23,7 +23,7 @@ from tests.simsplat_core.data.forecasting_files import SCENARIO_ID, write_scenar
 
 
 def test_sources_are_registered_once_with_descriptions() -> None:
-    assert source_names() == ("waymo-frame", "waymo-scenario", "av2", "av2-forecasting", "kitti-raw")
+    assert source_names() == ("waymo-frame", "waymo-scenario", "av2", "av2-forecasting", "kitti-raw", "dgp")
     assert AUTO_SOURCE not in source_names()
     assert all(s.description and callable(s.detect) and callable(s.load) for s in LOG_SOURCES)
     assert log_source("waymo-frame").options == ("image_scale",) and log_source("av2").options == ()

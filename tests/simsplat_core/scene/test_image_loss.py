@@ -9,6 +9,7 @@ import torch
 
 from simsplat_core.scene import ReconstructionConfig
 from simsplat_core.scene.config import LossWeights
+from simsplat_core.scene.losses import valid_mean
 from simsplat_core.scene.render import SceneRender
 from simsplat_core.scene.trainer import image_loss
 from simsplat_core.scene.views import ViewBatch, view_batches
@@ -68,3 +69,27 @@ def test_no_coverage_term_without_instance_masks(batch: ViewBatch) -> None:
     wrong = _render(batch, torch.ones(batch.instance.shape))
     loss, _ = image_loss(wrong, no_masks, _config(1.0))
     assert float(loss) == pytest.approx(0.0, abs=1e-6)
+
+
+def test_masked_pixels_do_not_count_in_the_colour_loss(batch: ViewBatch) -> None:
+    valid = torch.ones(batch.rgb.shape[:3], dtype=torch.bool)
+    valid[:, : valid.shape[1] // 2] = False  # the top half is, say, the ego car's body
+    rgb = batch.rgb.clone()
+    rgb[:, : valid.shape[1] // 2] = 1.0 - rgb[:, : valid.shape[1] // 2]  # wrong only where masked
+    render = SceneRender(rgb=rgb, alpha=torch.ones(*valid.shape, 1), depth=torch.zeros(*valid.shape, 1),
+                         node_id=None, extra=None)
+    config = dataclasses.replace(ReconstructionConfig(), loss=LossWeights(object_mask=0.0, depth=0.0))
+    masked = dataclasses.replace(batch, valid=valid)
+    loss_masked, mse_masked = image_loss(render, masked, config)
+    loss_all, mse_all = image_loss(render, batch, config)
+    assert float(mse_masked) == pytest.approx(0.0, abs=1e-9) and float(mse_all) > 0.01
+    assert float(loss_all) > 0.05
+    assert float(loss_masked) < 0.2 * float(loss_all)  # D-SSIM windows at the mask border still see both halves
+
+
+def test_valid_mean_averages_over_valid_pixels_only() -> None:
+    values = torch.tensor([[[1.0, 3.0], [5.0, 100.0]]])  # [1, 2, 2]
+    valid = torch.tensor([[[True, True], [True, False]]])
+    assert float(valid_mean(values, valid)) == pytest.approx(3.0)
+    assert float(valid_mean(values[..., None].expand(1, 2, 2, 3), valid)) == pytest.approx(3.0)
+    assert float(valid_mean(values, None)) == pytest.approx(27.25)
