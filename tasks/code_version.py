@@ -1,11 +1,14 @@
-"""The version of the code that made an artifact: ``git describe`` of the checkout, else the installed package's."""
+"""The version of the code that made an artifact: ``git describe`` of the checkout, else the installed package's;
+and ``source_digest``, the digest of the modules whose code determines a cached result."""
 
 from __future__ import annotations
 
+import hashlib
 import logging
 import subprocess
 from importlib import metadata
 from pathlib import Path
+from types import ModuleType
 
 logger = logging.getLogger(__name__)
 
@@ -24,3 +27,22 @@ def code_version(root: Path | None = None) -> str:
         return metadata.version("simsplat")
     except metadata.PackageNotFoundError:
         return "unknown"
+
+
+def source_digest(*modules: ModuleType) -> str:
+    """A digest of the source text of ``modules`` (in the order given): a cache whose rows these modules compute
+    stamps it, so editing any of them invalidates the cache.
+
+    Raises:
+        ValueError: a module has no readable source file (named).
+    """
+    if not modules:
+        raise ValueError("source_digest: no modules given")
+    digest = hashlib.sha256()
+    for module in modules:
+        path = getattr(module, "__file__", None)
+        if not path:
+            raise ValueError(f"source_digest: module {module.__name__} has no source file")
+        digest.update(module.__name__.encode())
+        digest.update(Path(path).read_bytes())
+    return digest.hexdigest()[:16]
