@@ -30,7 +30,7 @@ def frames_to_table(objects: dict[str, ObjectFrames]) -> pa.Table:
         return [v for v, n in zip(values, frames) for _ in range(n)]
 
     def joined(name: str, dtype: type) -> np.ndarray:
-        parts = [np.asarray(getattr(o, name), dtype=dtype).reshape(len(o.present), -1) for o in items]
+        parts: list[np.ndarray] = [np.asarray(getattr(o, name), dtype=dtype).reshape(len(o.present), -1) for o in items]
         return np.concatenate(parts) if parts else np.zeros((0, 1), dtype)
 
     xy, xy_ego = joined("xy", np.float64), joined("xy_ego", np.float64)
@@ -77,6 +77,7 @@ def table_to_frames(table: pa.Table) -> dict[str, ObjectFrames]:
             sector[rows].copy(), flags[rows].copy(),
             np.stack([floats["x"][rows], floats["y"][rows]], axis=1),
             np.stack([floats["x_ego"][rows], floats["y_ego"][rows]], axis=1),
-            *(floats[n][rows].copy() for n in _FLOATS), frame_s=steps[start])
+            floats["heading"][rows].copy(), floats["speed"][rows].copy(), floats["lane_along"][rows].copy(),
+            floats["lane_offset"][rows].copy(), frame_s=steps[start])
         start = stop
     return out

@@ -30,8 +30,8 @@ def code_version(root: Path | None = None) -> str:
 
 
 def source_digest(*modules: ModuleType) -> str:
-    """A digest of the source text of ``modules`` (in the order given): a cache whose rows these modules compute
-    stamps it, so editing any of them invalidates the cache.
+    """A digest of the source text of ``modules`` (in the order given; a package counts with every ``.py`` file
+    under it): a cache whose rows these modules compute stamps it, so editing any of them invalidates the cache.
 
     Raises:
         ValueError: a module has no readable source file (named).
@@ -43,6 +43,8 @@ def source_digest(*modules: ModuleType) -> str:
         path = getattr(module, "__file__", None)
         if not path:
             raise ValueError(f"source_digest: module {module.__name__} has no source file")
-        digest.update(module.__name__.encode())
-        digest.update(Path(path).read_bytes())
+        files = sorted(Path(path).parent.rglob("*.py")) if hasattr(module, "__path__") else [Path(path)]
+        for file in files:
+            digest.update(f"{module.__name__}:{file.name}".encode())
+            digest.update(file.read_bytes())
     return digest.hexdigest()[:16]

@@ -3,8 +3,8 @@
 Not a Prefect task: interactive, like ``simsplat query`` (``saved_search_seeds``, the seed proposals of a mining
 configuration's saved searches, runs in a flow as ``tasks.mine.saved_search_seeds_task``). Per log: read the log
 (tracks, map; no images), its newest language scene when it is aligned (captions for colours and subtypes, node-id
-maps for the picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``; cached per log in
-``cache/search_frames/``, ``storage.search_frames``, so a grown store derives only its new logs' facts) and answer
+maps for the picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``; cached per log
+in ``cache/search_frames/``, ``storage.search_frames``, so a grown store derives only its new logs' facts) and answer
 the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
 objects' masks outlined (``viz.grounding_view.grounding_picture``) for aligned logs with camera images,
 else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``) with the matched objects outlined and
@@ -29,13 +29,13 @@ from simsplat_core.mining.search_seeds import hit_variants
 from simsplat_core.scenario import geometry as scenario_geometry
 from simsplat_core.scenario import map_context, trajectory, vocabulary
 from simsplat_core.scenario.agents import EGO_ID
-from simsplat_core.search.engine import SearchConfig, SearchHit
 from simsplat_core.search import frames as search_frames_module
+from simsplat_core.search.engine import SearchConfig, SearchHit
 from simsplat_core.search.frames import ObjectFrames, log_frames
 from simsplat_core.search.logs import SearchableLog, StoreSearch, search_logs
+from simsplat_core.types import SceneLog
 from simsplat_core.viz.contact_sheet import bev_panel
 from simsplat_core.viz.grounding_view import grounding_picture
-from simsplat_core.types import SceneLog
 from storage import ArtifactStore, read_scene_log
 from storage import search_frames as search_frames_storage
 from storage.errors import StoreNotWritableError

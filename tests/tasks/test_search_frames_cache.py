@@ -38,7 +38,7 @@ def derived(monkeypatch: pytest.MonkeyPatch) -> list[str]:
     """The seq_ids whose facts ``tasks.search`` derives (not read from the cache), in call order."""
     calls: list[str] = []
 
-    def counting(log, *args, **kwargs):  # type: ignore[no-untyped-def]
+    def counting(log, *args, **kwargs):
         calls.append(log.seq_id)
         return log_frames(log, *args, **kwargs)
 
