@@ -3,7 +3,8 @@
 Not a Prefect task: interactive, like ``simsplat query`` (``saved_search_seeds``, the seed proposals of a mining
 configuration's saved searches, runs in a flow as ``tasks.mine.saved_search_seeds_task``). Per log: read the log
 (tracks, map; no images), its newest language scene when it is aligned (captions for colours and subtypes, node-id
-maps for the picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``) and answer
+maps for the picture), compute per-frame object facts once (``simsplat_core.search.frames.log_frames``; cached per log
+in ``cache/search_frames/``, ``storage.search_frames``, so a grown store derives only its new logs' facts) and answer
 the description (``search_log``). Pictures: the hit's middle frame over every camera with the matched
 objects' masks outlined (``viz.grounding_view.grounding_picture``) for aligned logs with camera images,
 else a bird's-eye view of that frame (``viz.contact_sheet.bev_panel``) with the matched objects outlined and
@@ -12,6 +13,7 @@ their paths (and the ego's, when it is one of them) drawn over the hit's window.
 
 from __future__ import annotations
 
+import functools
 import logging
 import re
 from collections.abc import Sequence
@@ -19,33 +21,71 @@ from dataclasses import replace
 
 import numpy as np
 
+from simsplat_core import geometry
+from simsplat_core.language import motion_labels
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.mining.rule_proposals import Proposal
 from simsplat_core.mining.search_seeds import hit_variants
+from simsplat_core.scenario import geometry as scenario_geometry
+from simsplat_core.scenario import map_context, trajectory, vocabulary
 from simsplat_core.scenario.agents import EGO_ID
+from simsplat_core.search import frames as search_frames_module
 from simsplat_core.search.engine import SearchConfig, SearchHit
-from simsplat_core.search.frames import log_frames
+from simsplat_core.search.frames import ObjectFrames, log_frames
 from simsplat_core.search.logs import SearchableLog, StoreSearch, search_logs
+from simsplat_core.types import SceneLog
 from simsplat_core.viz.contact_sheet import bev_panel
 from simsplat_core.viz.grounding_view import grounding_picture
 from storage import ArtifactStore, read_scene_log
+from storage import search_frames as search_frames_storage
+from storage.errors import StoreNotWritableError
 from storage.inventory import require_sequences
+from storage.keys import content_key
 from storage.language_scenes import read_language_scene
-from storage.logs import read_image_rgb
+from storage.logs import read_image_rgb, require_log_manifest
 from storage.pictures import write_png
+from storage.search_frames import frames_to_table, search_frames_cache, table_to_frames
+from tasks.code_version import source_digest
 
 logger = logging.getLogger(__name__)
 
 
-def load_searchable(store: ArtifactStore, seq_id: str) -> SearchableLog:
-    """Read ``seq_id`` and compute its per-frame facts; the language scene is optional (captions, masks)."""
+@functools.cache
+def search_facts_digest() -> str:
+    """The digest of the code that derives a log's search facts (``log_frames`` and what it calls)."""
+    return source_digest(*(m.__name__ for m in (search_frames_module, motion_labels, map_context, trajectory,
+                                                 scenario_geometry, vocabulary, geometry, search_frames_storage)))
+
+
+def cached_log_frames(store: ArtifactStore, log: SceneLog, *, write_cache: bool = True) -> dict[str, ObjectFrames]:
+    """``log_frames(log)`` from the store's cache when computed for the stored log's content (its manifest key) and
+    this code, else computed and cached (a stale or corrupt entry is recomputed, with a warning; a store that cannot
+    be written, or ``write_cache`` False (read-only callers such as the dashboard), is searched without caching)."""
+    cache = search_frames_cache(store)
+    key = content_key(require_log_manifest(store, log.seq_id, "to search")["key"], search_facts_digest())
+    cached = cache.load(log.seq_id, key)
+    if cached is not None:
+        return table_to_frames(cached)
+    frames = log_frames(log)
+    if not write_cache:
+        return frames
+    try:
+        cache.save(log.seq_id, key, frames_to_table(frames))
+    except StoreNotWritableError as exc:
+        logger.warning("search facts of %s not cached: %s", log.seq_id, exc)
+    return frames
+
+
+def load_searchable(store: ArtifactStore, seq_id: str, *, write_cache: bool = True) -> SearchableLog:
+    """Read ``seq_id`` and its per-frame facts (cached per log content, ``cached_log_frames``); the language scene
+    is optional (captions, masks)."""
     log = read_scene_log(store, seq_id, load_images=False)
     try:
         scene: LanguageScene | None = read_language_scene(store, seq_id, with_records=False).scene
     except FileNotFoundError:
         scene = None
         logger.info("%s: not aligned; searching tracks and map only (no colours, BEV pictures)", seq_id)
-    return SearchableLog(log, scene, log_frames(log))
+    return SearchableLog(log, scene, cached_log_frames(store, log, write_cache=write_cache))
 
 
 def load_store(store_root: str, seq_ids: list[str] | None = None) -> list[SearchableLog]:

@@ -101,7 +101,7 @@ class SearchView:
 def _prepared(store_root: str, seq_id: str, log_key: str, language: tuple[str, str] | None) -> SearchableLog:
     """A log prepared for search, once per content key (``log_key``, ``language``: a rewritten log or a new
     alignment is prepared again)."""
-    return load_searchable(ArtifactStore(store_root), seq_id)
+    return load_searchable(ArtifactStore(store_root), seq_id, write_cache=False)  # the dashboard writes nothing
 
 
 def searchable(store: ArtifactStore, seq_id: str) -> SearchableLog:
