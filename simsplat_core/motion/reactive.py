@@ -76,6 +76,45 @@ class _Driven:
     profiles: OffsetProfiles
 
 
+#: Codes of :attr:`LimitTrace.rule`: what set a driven agent's acceleration at a step.
+RULE_FREE, RULE_LEADER, RULE_GAP = 0, 1, 2
+#: Names of the rule codes, by code.
+RULE_NAMES: tuple[str, ...] = ("free road", "leader", "gap acceptance")
+
+
+@dataclass(frozen=True)
+class LimitTrace:
+    """What held each driven agent back at each step of a rollout (filled by ``ReactivePredictor.traced_rollout``).
+
+    Attributes:
+        rows: ``[N]`` the driven agents' rows in the request's states.
+        rule: ``[N, T]`` :data:`RULE_FREE` / :data:`RULE_LEADER` / :data:`RULE_GAP` (free road before ``start``).
+        other: ``[N, T]`` row of the leader or of the agent given way to (``-1``: none).
+        gap: ``[N, T]`` metres from the agent's front to that leader or stop point (``inf``: none).
+    """
+
+    rows: np.ndarray
+    rule: np.ndarray
+    other: np.ndarray
+    gap: np.ndarray
+
+    @classmethod
+    def empty(cls, rows: np.ndarray, steps: int) -> LimitTrace:
+        """A trace of ``rows`` over ``steps`` steps with nobody held back."""
+        n = len(rows)
+        return cls(rows, np.zeros((n, steps), np.int8), np.full((n, steps), -1, np.int64), np.full((n, steps), np.inf))
+
+    def record(self, t: int, a_free: np.ndarray, a_lead: np.ndarray, a_yield: np.ndarray, leader: np.ndarray,
+               lead_gap: np.ndarray, yielded_to: np.ndarray, yield_gap: np.ndarray) -> None:
+        """Step ``t``'s limiting rule per agent (the smallest of the three ``[N]`` accelerations)."""
+        held = np.minimum(a_lead, a_yield) < a_free - 1e-9
+        by_leader = held & (a_lead <= a_yield)
+        by_gap = held & ~by_leader
+        self.rule[:, t] = np.where(by_leader, RULE_LEADER, np.where(by_gap, RULE_GAP, RULE_FREE))
+        self.other[:, t] = np.where(by_leader, leader, np.where(by_gap, yielded_to, -1))
+        self.gap[:, t] = np.where(by_leader, lead_gap, np.where(by_gap, yield_gap, np.inf))
+
+
 @dataclass
 class ReactivePredictor:
     """IDM+ car following, gap acceptance, pedestrian waiting and MOBIL detours along per-agent routes.
@@ -90,20 +129,25 @@ class ReactivePredictor:
 
     def rollout(self, request: RolloutRequest) -> Rollout:
         """The request's agents with the free ones driven from ``request.start_step`` on."""
+        return self.traced_rollout(request)[0]
+
+    def traced_rollout(self, request: RolloutRequest) -> tuple[Rollout, LimitTrace]:
+        """:meth:`rollout` plus what held each driven agent back at each step (:class:`LimitTrace`)."""
         states, start = request.states, request.start_step
         plan = plan_routes(request, self.params.route, self.params.pedestrian)
         replayed = {states.object_ids[r]: reason for r, reason in plan.replayed.items()}
         if not plan.routes:
-            return Rollout(states, replayed, self.name)
+            return Rollout(states, replayed, self.name), LimitTrace.empty(np.zeros(0, np.int64), states.num_steps)
         xy, heading, speed = states.xy.copy(), states.heading.copy(), states.speed.copy()
         valid, z = states.valid.copy(), states.z.copy()
         drv = self._driven(request, plan)
         grid = self._grid(request, plan, drv)
-        self._simulate(request, drv, grid, xy, heading, speed, valid, z)
+        trace = LimitTrace.empty(drv.rows.copy(), states.num_steps)
+        self._simulate(request, drv, grid, xy, heading, speed, valid, z, trace)
         sources = self._sources(states, drv, xy, start)
         out = replace(states, xy=xy, heading=heading, speed=speed, valid=valid, z=z, sources=sources)
         logger.debug("reactive rollout: %d driven, %d replayed", len(drv.rows), len(replayed))
-        return Rollout(out, replayed, self.name)
+        return Rollout(out, replayed, self.name), trace
 
     # ------------------------------------------------------------------ set-up
     def _driven(self, request: RolloutRequest, plan: RoutePlan) -> _Driven:
@@ -136,8 +180,9 @@ class ReactivePredictor:
 
     # ------------------------------------------------------------------ the step loop
     def _simulate(self, request: RolloutRequest, drv: _Driven, grid: RouteGrid, xy: np.ndarray, heading: np.ndarray,
-                  speed: np.ndarray, valid: np.ndarray, z: np.ndarray) -> None:
-        """Fill the driven rows of ``xy / heading / speed / valid / z [A, T]`` from ``start_step`` on, in place."""
+                  speed: np.ndarray, valid: np.ndarray, z: np.ndarray, trace: LimitTrace) -> None:
+        """Fill the driven rows of ``xy / heading / speed / valid / z [A, T]`` from ``start_step`` on, in place,
+        and ``trace`` with what limited each agent."""
         p = self.params
         states, start = request.states, request.start_step
         t_count, n = states.num_steps, len(drv.rows)
@@ -198,6 +243,7 @@ class ReactivePredictor:
             a_yield = interaction_accel(drv.v, np.zeros(n), y_gap, drv.idm)
             a_free = free_accel(drv.v, drv.v_ref[:, t], drv.v_ref[:, t - 1], dt, drv.idm)
             accel = np.minimum(np.minimum(a_free, a_lead), a_yield)
+            trace.record(t, a_free, a_lead, a_yield, lead.other, lead.gap, y_other, y_gap)
             if logger.isEnabledFor(logging.DEBUG):
                 self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
             self._lane_change(drv, pairs, follows, cur_valid[pairs.j], lead, a_lead)
