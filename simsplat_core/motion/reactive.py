@@ -36,7 +36,7 @@ from simsplat_core.motion.longitudinal import IDMArrays, free_accel, interaction
 from simsplat_core.motion.predictor import Rollout, RolloutRequest
 from simsplat_core.motion.route_grid import RouteGrid
 from simsplat_core.motion.routes import RoutePlan, plan_routes
-from simsplat_core.motion.traffic_params import ReactiveParams
+from simsplat_core.motion.traffic_params import CorridorParams, ReactiveParams
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.geometry import points_in_polygon
 from simsplat_core.scenario.metrics import kind_of
@@ -54,6 +54,40 @@ def _given_velocity(states: AgentStates) -> np.ndarray:
     both = states.valid[:, 1:] & states.valid[:, :-1]
     vel[:, 1:] = np.where(both[..., None], diff, vel[:, 1:])
     return vel
+
+
+def parked_in_log(states: AgentStates, move_m: float) -> np.ndarray:
+    """``[A]`` bool: the agent's logged box never moves farther than ``move_m`` from its first valid position."""
+    out = np.zeros(states.num_agents, dtype=bool)
+    for r in range(states.num_agents):
+        steps = np.flatnonzero(states.valid[r])
+        if steps.size:
+            out[r] = float(np.linalg.norm(states.xy[r, steps] - states.xy[r, steps[0]], axis=1).max()) < move_m
+    return out
+
+
+def in_company(states: AgentStates, rows: np.ndarray, step: int, is_log: np.ndarray,
+               params: CorridorParams) -> np.ndarray:
+    """``[N, A]`` bool: driven agent ``rows[n]`` and agent ``a`` travel in company at ``step`` (both unedited,
+    valid, moving, centres within ``company_gap_m``, speeds and headings alike; ``CorridorParams``)."""
+    v = states.speed[:, step]
+    ok = states.valid[:, step] & is_log & (np.abs(v) >= params.company_speed_mps)
+    d = np.linalg.norm(states.xy[rows, step][:, None] - states.xy[None, :, step], axis=-1)  # [N, A]
+    dv = np.abs(v[rows][:, None] - v[None])
+    dh = np.abs(wrap_angle(states.heading[rows, step][:, None] - states.heading[None, :, step]))
+    out = ok[rows][:, None] & ok[None] & (d < params.company_gap_m) & (dv < params.company_speed_mps) \
+        & (dh < np.deg2rad(params.company_heading_deg))
+    out[np.arange(len(rows)), rows] = False
+    return out
+
+
+def mutual_leaders(leader: np.ndarray, driven_of: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``[N]`` bool: driven agent ``n`` follows driven agent ``m`` while ``m`` follows ``n`` and ``n < m`` (one of
+    each mutual pair, the first in row order)."""
+    other = np.where(leader >= 0, driven_of[np.maximum(leader, 0)], -1)  # [N] driven index of the leader
+    has = other >= 0
+    back = np.where(has, leader[np.maximum(other, 0)], -1)
+    return has & (back == rows) & (np.arange(len(rows)) < other)
 
 
 @dataclass
@@ -74,6 +108,7 @@ class _Driven:
     shift_left: np.ndarray
     shift_right: np.ndarray
     profiles: OffsetProfiles
+    log_end: np.ndarray  # [N] arc length where the logged route ends (0: lane-graph route)
 
 
 #: Codes of :attr:`LimitTrace.rule`: what set a driven agent's acceleration at a step.
@@ -163,13 +198,19 @@ class ReactivePredictor:
         profiles = OffsetProfiles(start=s0.copy(), length=length, origin=np.array([r.offset0 for r in plan.routes]),
                                   target=np.zeros(len(rows)))
         idm = IDMArrays.per_agent([p.pedestrian.following if k else p.idm for k in ped])
+        dt = np.maximum(np.diff(states.times[last_obs:]), 1e-6)
+        log_accel = np.percentile(np.diff(v_ref[:, last_obs:], axis=1) / dt, 95, axis=1) if dt.size \
+            else np.zeros(len(rows))
+        idm = replace(idm, max_accel=np.where(ped, idm.max_accel,
+                                              np.clip(log_accel, idm.max_accel, p.idm.log_accel_cap_mps2)))
         size = states.size[rows]
         return _Driven(rows=rows, s=s0, v=v0, v_ref=v_ref, last_valid=np.array([r.last_valid for r in plan.routes]),
                        half_length=size[:, 0] / 2.0, half_width=size[:, 1] / 2.0, is_pedestrian=ped, idm=idm,
                        critical_s=np.where(ped, p.pedestrian.time_to_conflict_s, p.gap.critical_gap_s),
                        lookahead_m=np.where(ped, p.pedestrian.wait_radius_m, p.corridor.ahead_m),
                        shift_left=np.array([r.lane_shift[0] for r in plan.routes]),
-                       shift_right=np.array([r.lane_shift[1] for r in plan.routes]), profiles=profiles)
+                       shift_right=np.array([r.lane_shift[1] for r in plan.routes]), profiles=profiles,
+                       log_end=np.array([r.log_end for r in plan.routes]))
 
     def _grid(self, request: RolloutRequest, plan: RoutePlan, drv: _Driven) -> RouteGrid:
         c = self.params.corridor
@@ -203,6 +244,9 @@ class ReactivePredictor:
         cos_cross = np.cos(np.deg2rad(p.gap.crossing_deg))
         crosswalks = request.map.context.crosswalks
         last_z = z[drv.rows, start - 1].copy()
+        unedited = is_log[drv.rows] & (drv.log_end > 0.0)
+        parked = given & parked_in_log(states, p.corridor.parked_move_m)
+        company = in_company(states, drv.rows, start - 1, is_log, p.corridor)
         for t in range(start, t_count):
             dt = float(states.times[t] - states.times[t - 1])
             cur_xy, cur_heading, cur_valid = xy[:, t - 1], heading[:, t - 1], valid[:, t - 1]
@@ -223,8 +267,13 @@ class ReactivePredictor:
             crossing = np.where(walkers, np.abs(cos_rel), cos_rel) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
             follows = ~(crossing & moving) & cur_valid[pairs.j]  # moving crossing agents: gap acceptance
+            # an unedited agent's logged route went past a parked car or kerb obstacle: no leader; nor is a
+            # companion walking or driving alongside
+            follows &= ~(parked[pairs.j] & unedited[pairs.i] & (pairs.along < drv.log_end[pairs.i]))
+            follows &= ~company[pairs.i, pairs.j]
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
                                  mask=follows)
+            lead = self._break_deadlocks(pairs, drv, driven_of, lead, offset, follows)
             if t == start:  # the log's own following distances (behind unedited agents only)
                 log_leader = (lead.other >= 0) & is_log[np.maximum(lead.other, 0)]
                 drv.idm = drv.idm.calibrated(drv.v, lead.speed, np.where(log_leader, lead.gap, np.inf))
@@ -258,6 +307,19 @@ class ReactivePredictor:
             log_ok = states.valid[drv.rows, t]
             last_z = np.where(log_ok, states.z[drv.rows, t], last_z)
             z[drv.rows, t] = last_z
+
+    def _break_deadlocks(self, pairs: Pairs, drv: _Driven, driven_of: np.ndarray, lead: Nearest, offset: np.ndarray,
+                         follows: np.ndarray) -> Nearest:
+        """``lead`` with mutual leaders (``i`` follows ``j`` and ``j`` follows ``i``: both would wait for ever)
+        resolved: the first of each pair in row order
+        ignores the other."""
+        mutual = mutual_leaders(lead.other, driven_of, drv.rows)
+        if not mutual.any():
+            return lead
+        drop = mutual[pairs.i] & (pairs.j == lead.other[pairs.i])
+        logger.debug("mutual leaders: %d agents ignore each other", int(mutual.sum()))
+        return nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset,
+                             self.params.corridor.lateral_margin_m, mask=follows & ~drop)
 
     @staticmethod
     def _log_limits(states: AgentStates, t: int, drv: _Driven, a_free: np.ndarray, a_lead: np.ndarray,
