@@ -202,7 +202,8 @@ class ReactivePredictor:
         log_accel = np.percentile(np.diff(v_ref[:, last_obs:], axis=1) / dt, 95, axis=1) if dt.size \
             else np.zeros(len(rows))
         idm = replace(idm, max_accel=np.where(ped, idm.max_accel,
-                                              np.clip(log_accel, idm.max_accel, p.idm.log_accel_cap_mps2)))
+                                              np.clip(log_accel, idm.max_accel,
+                                                      np.maximum(idm.max_accel, p.idm.log_accel_cap_mps2))))
         size = states.size[rows]
         return _Driven(rows=rows, s=s0, v=v0, v_ref=v_ref, last_valid=np.array([r.last_valid for r in plan.routes]),
                        half_length=size[:, 0] / 2.0, half_width=size[:, 1] / 2.0, is_pedestrian=ped, idm=idm,
