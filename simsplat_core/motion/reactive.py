@@ -32,11 +32,12 @@ from simsplat_core.geometry import wrap_angle
 from simsplat_core.motion.conflicts import DrivenAgents, Predictions, yield_gaps
 from simsplat_core.motion.corridor import Nearest, Pairs, nearest_ahead, nearest_behind, route_pairs
 from simsplat_core.motion.lateral import OffsetProfiles, change_length, mobil_gain
+from simsplat_core.motion.leader_filters import IgnoredLeaders, mutual_leaders
 from simsplat_core.motion.longitudinal import IDMArrays, free_accel, interaction_accel, next_speed
 from simsplat_core.motion.predictor import Rollout, RolloutRequest
 from simsplat_core.motion.route_grid import RouteGrid
 from simsplat_core.motion.routes import RoutePlan, plan_routes
-from simsplat_core.motion.traffic_params import CorridorParams, ReactiveParams
+from simsplat_core.motion.traffic_params import ReactiveParams
 from simsplat_core.scenario.agents import AgentStates
 from simsplat_core.scenario.geometry import points_in_polygon
 from simsplat_core.scenario.metrics import kind_of
@@ -54,40 +55,6 @@ def _given_velocity(states: AgentStates) -> np.ndarray:
     both = states.valid[:, 1:] & states.valid[:, :-1]
     vel[:, 1:] = np.where(both[..., None], diff, vel[:, 1:])
     return vel
-
-
-def parked_in_log(states: AgentStates, move_m: float) -> np.ndarray:
-    """``[A]`` bool: the agent's logged box never moves farther than ``move_m`` from its first valid position."""
-    out = np.zeros(states.num_agents, dtype=bool)
-    for r in range(states.num_agents):
-        steps = np.flatnonzero(states.valid[r])
-        if steps.size:
-            out[r] = float(np.linalg.norm(states.xy[r, steps] - states.xy[r, steps[0]], axis=1).max()) < move_m
-    return out
-
-
-def in_company(states: AgentStates, rows: np.ndarray, step: int, is_log: np.ndarray,
-               params: CorridorParams) -> np.ndarray:
-    """``[N, A]`` bool: driven agent ``rows[n]`` and agent ``a`` travel in company at ``step`` (both unedited,
-    valid, moving, centres within ``company_gap_m``, speeds and headings alike; ``CorridorParams``)."""
-    v = states.speed[:, step]
-    ok = states.valid[:, step] & is_log & (np.abs(v) >= params.company_speed_mps)
-    d = np.linalg.norm(states.xy[rows, step][:, None] - states.xy[None, :, step], axis=-1)  # [N, A]
-    dv = np.abs(v[rows][:, None] - v[None])
-    dh = np.abs(wrap_angle(states.heading[rows, step][:, None] - states.heading[None, :, step]))
-    out = ok[rows][:, None] & ok[None] & (d < params.company_gap_m) & (dv < params.company_speed_mps) \
-        & (dh < np.deg2rad(params.company_heading_deg))
-    out[np.arange(len(rows)), rows] = False
-    return out
-
-
-def mutual_leaders(leader: np.ndarray, driven_of: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``[N]`` bool: driven agent ``n`` follows driven agent ``m`` while ``m`` follows ``n`` and ``n < m`` (one of
-    each mutual pair, the first in row order)."""
-    other = np.where(leader >= 0, driven_of[np.maximum(leader, 0)], -1)  # [N] driven index of the leader
-    has = other >= 0
-    back = np.where(has, leader[np.maximum(other, 0)], -1)
-    return has & (back == rows) & (np.arange(len(rows)) < other)
 
 
 @dataclass
@@ -245,9 +212,7 @@ class ReactivePredictor:
         cos_cross = np.cos(np.deg2rad(p.gap.crossing_deg))
         crosswalks = request.map.context.crosswalks
         last_z = z[drv.rows, start - 1].copy()
-        unedited = is_log[drv.rows] & (drv.log_end > 0.0)
-        parked = given & parked_in_log(states, p.corridor.parked_move_m)
-        company = in_company(states, drv.rows, start - 1, is_log, p.corridor)
+        ignored = IgnoredLeaders.of(states, drv.rows, start - 1, given, is_log, drv.log_end, p.corridor)
         for t in range(start, t_count):
             dt = float(states.times[t] - states.times[t - 1])
             cur_xy, cur_heading, cur_valid = xy[:, t - 1], heading[:, t - 1], valid[:, t - 1]
@@ -268,10 +233,7 @@ class ReactivePredictor:
             crossing = np.where(walkers, np.abs(cos_rel), cos_rel) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
             follows = ~(crossing & moving) & cur_valid[pairs.j]  # moving crossing agents: gap acceptance
-            # an unedited agent's logged route went past a parked car or kerb obstacle: no leader; nor is a
-            # companion walking or driving alongside
-            follows &= ~(parked[pairs.j] & unedited[pairs.i] & (pairs.along < drv.log_end[pairs.i]))
-            follows &= ~company[pairs.i, pairs.j]
+            follows &= ~ignored.pairs(pairs)  # parked obstacles the log passes, companions
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
                                  mask=follows)
             lead = self._break_deadlocks(pairs, drv, driven_of, lead, offset, follows)
@@ -293,9 +255,7 @@ class ReactivePredictor:
             a_yield = interaction_accel(drv.v, np.zeros(n), y_gap, drv.idm)
             a_free = free_accel(drv.v, drv.v_ref[:, t], drv.v_ref[:, t - 1], dt, drv.idm)
             accel = np.minimum(np.minimum(a_free, a_lead), a_yield)
-            trace.record(t, a_free, a_lead, a_yield, lead.other, lead.gap, y_other, y_gap)
-            if logger.isEnabledFor(logging.DEBUG):
-                self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
+            self._note_limits(trace, states, t, drv, (a_free, a_lead, a_yield), lead, y_other, y_gap)
             self._lane_change(drv, pairs, follows, cur_valid[pairs.j], lead, a_lead)
             # the positional bound holds against real obstacles only: a give-way line is no wall, an agent that
             # finds it too late brakes at the hard-brake limit and stops a little past it
@@ -321,6 +281,16 @@ class ReactivePredictor:
         logger.debug("mutual leaders: %d agents ignore each other", int(mutual.sum()))
         return nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset,
                              self.params.corridor.lateral_margin_m, mask=follows & ~drop)
+
+    def _note_limits(self, trace: LimitTrace, states: AgentStates, t: int, drv: _Driven,
+                     accels: tuple[np.ndarray, np.ndarray, np.ndarray], lead: Nearest, yielded_to: np.ndarray,
+                     yield_gap: np.ndarray) -> None:
+        """Record step ``t``'s limits (``accels``: free, leader and give-way terms ``[N]``) into ``trace``; log
+        them at debug level."""
+        a_free, a_lead, a_yield = accels
+        trace.record(t, a_free, a_lead, a_yield, lead.other, lead.gap, yielded_to, yield_gap)
+        if logger.isEnabledFor(logging.DEBUG):
+            self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, yielded_to)
 
     @staticmethod
     def _log_limits(states: AgentStates, t: int, drv: _Driven, a_free: np.ndarray, a_lead: np.ndarray,
