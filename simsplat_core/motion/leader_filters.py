@@ -1,8 +1,9 @@
 """Agents that are no leader although they stand in a driven agent's corridor, and mutual-leader deadlocks.
 
-* parked obstacles the log passes: a given agent whose logged box never moves farther than
+* parked obstacles the log passes: an unedited given agent whose logged box never moves farther than
   ``CorridorParams.parked_move_m`` (a parked car, a kerb obstacle) is no leader of an unedited agent whose
-  logged route runs past it (the log drove by it; a labelled box often reaches into the lane);
+  logged route runs past it without touching it (the log drove by it; a labelled box often reaches into the
+  lane); a log that drives into it (a scene built around an obstacle) keeps it a leader;
 * companions: two unedited agents moving side by side or one just behind the other at the same speed and
   heading at the last observed step (pedestrians walking together, a cyclist beside a car) travel in company:
   neither is the other's leader (``CorridorParams.company_*``);
@@ -56,18 +57,40 @@ def mutual_leaders(leader: np.ndarray, driven_of: np.ndarray, rows: np.ndarray) 
     return has & (back == rows) & (np.arange(len(rows)) < other)
 
 
+def passes_clear(states: AgentStates, rows: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """``[N, A]`` bool: the logged boxes of driven ``rows [N]`` never overlap agent ``a``'s box at its first
+    valid pose (only the ``others [A]`` columns are computed, the rest ``False``); the overlap test is in that
+    box's frame with both boxes aligned to it (a parked obstacle's extent, not a full collision check)."""
+    out = np.zeros((len(rows), states.num_agents), dtype=bool)
+    for a in np.flatnonzero(others).tolist():
+        steps = np.flatnonzero(states.valid[a])
+        if not steps.size:
+            continue
+        c, h = states.xy[a, steps[0]], states.heading[a, steps[0]]
+        rel = states.xy[rows] - c  # [N, T, 2]
+        along = rel[..., 0] * np.cos(h) + rel[..., 1] * np.sin(h)
+        across = -rel[..., 0] * np.sin(h) + rel[..., 1] * np.cos(h)
+        reach_l = (states.size[rows, 0] + states.size[a, 0])[:, None] / 2.0
+        reach_w = (states.size[rows, 1] + states.size[a, 1])[:, None] / 2.0
+        touch = (np.abs(along) < reach_l) & (np.abs(across) < reach_w) & states.valid[rows]
+        out[:, a] = ~touch.any(axis=1)
+    return out
+
+
 @dataclass(frozen=True)
 class IgnoredLeaders:
     """Which (driven agent, other agent) pairs are no leader (module docstring).
 
     Attributes:
-        parked: ``[A]`` given agents parked in the log.
+        parked: ``[A]`` unedited given agents parked in the log (an inserted obstacle always counts).
+        clear: ``[N, A]`` the driven agent's logged boxes never touch that parked agent.
         unedited: ``[N]`` driven agents that follow their own logged route.
         log_end: ``[N]`` arc length where each driven agent's logged route ends.
         company: ``[N, A]`` pairs travelling in company.
     """
 
     parked: np.ndarray
+    clear: np.ndarray
     unedited: np.ndarray
     log_end: np.ndarray
     company: np.ndarray
@@ -77,14 +100,16 @@ class IgnoredLeaders:
            log_end: np.ndarray, params: CorridorParams) -> IgnoredLeaders:
         """The filters of driven ``rows [N]`` (``log_end [N]``, 0 for lane-graph routes) at the last observed
         ``step``; ``given`` / ``is_log`` ``[A]``: agents not driven / unedited."""
-        return cls(parked=given & parked_in_log(states, params.parked_move_m),
+        parked = given & is_log & parked_in_log(states, params.parked_move_m)
+        return cls(parked=parked, clear=passes_clear(states, rows, parked),
                    unedited=is_log[rows] & (log_end > 0.0), log_end=log_end,
                    company=in_company(states, rows, step, is_log, params))
 
     def pairs(self, pairs: Pairs) -> np.ndarray:
         """``[P]`` bool: the pair's other agent is no leader of its driven agent."""
-        passed = self.parked[pairs.j] & self.unedited[pairs.i] & (pairs.along < self.log_end[pairs.i])
+        passed = self.parked[pairs.j] & self.clear[pairs.i, pairs.j] & self.unedited[pairs.i] \
+            & (pairs.along < self.log_end[pairs.i])
         return passed | self.company[pairs.i, pairs.j]
 
 
-__all__ = ["IgnoredLeaders", "in_company", "mutual_leaders", "parked_in_log"]
+__all__ = ["IgnoredLeaders", "in_company", "mutual_leaders", "parked_in_log", "passes_clear"]
