@@ -3,16 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 
 import numpy as np
 import pytest
 
-from simsplat_core.eval.refinement.diagnosis import NO_BLOCKER, STALLS_SPEC, diagnose, stalls_table
+from simsplat_core.eval.refinement.diagnosis import STALLS_SPEC, diagnose, stalls_table
 from simsplat_core.eval.refinement.real import RealScenario, real_rows
 from simsplat_core.eval.refinement.windows import WINDOW_STEPS, slice_steps, window_starts, windows_of
 from simsplat_core.motion.predictor import RolloutRequest
-from simsplat_core.motion.reactive import ReactivePredictor
+from simsplat_core.motion.reactive import RULE_FREE, ReactivePredictor
 from simsplat_core.scenario.agents import EGO_ID
 from tests.simsplat_core.motion.scenes import CAR, START, TIMES, T, road, states, track
 
@@ -39,7 +38,8 @@ def test_slice_restarts_time_and_drops_absent_agents() -> None:
 def test_a_long_log_gives_one_scenario_per_window_and_pooled_rows() -> None:
     n = 121
     times = np.arange(n) * 0.1
-    base = states([(EGO_ID, "vehicle", track(10.0 * TIMES, 0.0), CAR), ("car", "vehicle", track(8.0 * TIMES, 3.5), CAR)])
+    base = states([(EGO_ID, "vehicle", track(10.0 * TIMES, 0.0), CAR),
+                   ("car", "vehicle", track(8.0 * TIMES, 3.5), CAR)])
     st = dataclasses.replace(base, frame_idx=np.arange(n), times=times, xy=np.stack([
         np.stack([10.0 * times, np.zeros(n)], 1), np.stack([8.0 * times, np.full(n, 3.5)], 1)]),
         z=np.zeros((2, n)), heading=np.zeros((2, n)), speed=np.stack([np.full(n, 10.0), np.full(n, 8.0)]),
@@ -83,4 +83,4 @@ def test_an_agent_that_moves_like_its_log_is_not_listed() -> None:
     req = RolloutRequest(st, START, np.array([0]), road())
     rollout, trace = ReactivePredictor().traced_rollout(req)
     assert diagnose(st, rollout, trace, START) == []
-    assert NO_BLOCKER and math.isfinite(trace.gap[0, START]) is False
+    assert (trace.rule[0, START:] == RULE_FREE).all() and not np.isfinite(trace.gap[0, START:]).any()
