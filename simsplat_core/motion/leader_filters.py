@@ -4,8 +4,8 @@
   ``CorridorParams.parked_move_m`` (a parked car, a kerb obstacle) is no leader of an unedited agent whose
   logged route runs past it without touching it (the log drove by it; a labelled box often reaches into the
   lane); a log that drives into it (a scene built around an obstacle) keeps it a leader;
-* companions: two unedited agents moving side by side or one just behind the other at the same speed and
-  heading at the last observed step (pedestrians walking together, a cyclist beside a car) travel in company:
+* companions: two unedited agents of one category moving side by side or one just behind the other at the same
+  speed and heading at the last observed step (pedestrians walking together) travel in company:
   neither is the other's leader (``CorridorParams.company_*``);
 * mutual leaders: two driven agents each the other's leader would wait for ever; the first in row order
   ignores the other (``mutual_leaders``).
@@ -36,7 +36,8 @@ def parked_in_log(states: AgentStates, move_m: float) -> np.ndarray:
 def in_company(states: AgentStates, rows: np.ndarray, step: int, is_log: np.ndarray,
                params: CorridorParams) -> np.ndarray:
     """``[N, A]`` bool: driven agent ``rows[n]`` and agent ``a`` travel in company at ``step`` (both unedited,
-    valid, moving, centres within ``company_gap_m``, speeds and headings alike; ``CorridorParams``)."""
+    valid, moving, of the same category, centres within ``company_gap_m``, speeds and headings alike;
+    ``CorridorParams``): a cyclist riding at walking pace among pedestrians is no companion of theirs."""
     v = states.speed[:, step]
     ok = states.valid[:, step] & is_log & (np.abs(v) >= params.company_speed_mps)
     d = np.linalg.norm(states.xy[rows, step][:, None] - states.xy[None, :, step], axis=-1)  # [N, A]
@@ -44,6 +45,8 @@ def in_company(states: AgentStates, rows: np.ndarray, step: int, is_log: np.ndar
     dh = np.abs(wrap_angle(states.heading[rows, step][:, None] - states.heading[None, :, step]))
     out = ok[rows][:, None] & ok[None] & (d < params.company_gap_m) & (dv < params.company_speed_mps) \
         & (dh < np.deg2rad(params.company_heading_deg))
+    category = np.array(states.categories)
+    out &= category[rows][:, None] == category[None]
     out[np.arange(len(rows)), rows] = False
     return out
 
