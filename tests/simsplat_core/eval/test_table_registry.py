@@ -13,8 +13,8 @@ from simsplat_core.eval.editing.outcomes import completion_table, fidelity_table
 from simsplat_core.eval.grounding.metrics import CategoryScore, GroundingResults
 from simsplat_core.eval.grounding.tables import ablation_table, grounding_outcomes_table, grounding_table
 from simsplat_core.eval.mining import mining_by_category_table, mining_stages_table, mining_table
-from simsplat_core.eval.refinement.table import MOTION_COLUMNS, motion_table
 from simsplat_core.eval.refinement.diagnosis import Stall, stalls_table
+from simsplat_core.eval.refinement.table import MOTION_COLUMNS, motion_table
 from simsplat_core.eval.refinement.table import outcomes_table as motion_outcomes_table
 from simsplat_core.eval.search.evaluate import SEARCH_SPEC
 from simsplat_core.eval.store_tables import SceneMetrics, StageTiming, reconstruction_table, throughput_table
