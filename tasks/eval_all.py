@@ -162,7 +162,7 @@ def _runners(store_root: str, out_root: str, rel: str, config: EvalAllConfig,
     from tasks.editing_eval import evaluate_editing_run
     from tasks.grounding_eval import evaluate_grounding_run
     from tasks.mining_eval import evaluate_mining_run
-    from tasks.motion_eval import evaluate_motion_run
+    from tasks.motion_eval import RealOptions, evaluate_motion_run
     from tasks.search_eval import search_run_table
 
     store = ArtifactStore(store_root)
@@ -185,7 +185,8 @@ def _runners(store_root: str, out_root: str, rel: str, config: EvalAllConfig,
 
     def motion(step: EvalStep) -> None:
         evaluate_motion_run.fn(out_root, [], [], store_root=store_root, out_relpath=rel, seq_ids=step.seq_ids,
-                               real_edits=False, per_category=config.per_category, per_kind=config.per_kind)
+                               options=RealOptions(edits=False), per_category=config.per_category,
+                               per_kind=config.per_kind)
 
     def mining(step: EvalStep) -> None:
         evaluate_mining_run.fn(store_root, step.seq_ids, out_root, rel, clients=config.clients,

@@ -7,13 +7,16 @@ Thin: load inputs, call ``simsplat_core.eval.refinement``, write the tables into
 * the synthetic (edit-based) rows on the store's aligned scenes (:func:`synthetic_rows`): the editing
   benchmark's insert / modify prompts and the interaction prompts, applied by the editor in every refinement
   mode (``eval.refinement.synthetic``), plus the scenes' log row;
-* the real-data rows: every chosen predictor rolled out on each real log (``eval.refinement.real``: method
-  ``full``, the ego on its log), next to the log's own row;
+* the real-data rows: every chosen predictor rolled out on every 9.1 s window of each real log
+  (``eval.refinement.windows``, ``window_stride`` steps apart; ``eval.refinement.real``: method ``full``, the ego
+  on its log), next to the log's own row;
 * the scripted edits of the real logs (``eval.refinement.real_edits``, dataset ``"<dataset>+edits"``) in every
   mode with the edit predictor, the ego reacting too.
 
 ``motion_outcomes`` has one row per (edit case, mode) of the synthetic and real edits, with the failing agents and
-what happened to each; its Markdown lists the failed and refused ones.
+what happened to each; its Markdown lists the failed and refused ones. With ``diagnose``, ``motion_stalls`` too
+(``eval.refinement.diagnosis``): one row per agent stopped in a real rollout but moving in the log, with what
+stopped it.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ from prefect import task
 from prefect.cache_policies import NO_CACHE
 
 from simsplat_core.eval.editing.prompts import PromptConfig, build_prompt_set
+from simsplat_core.eval.refinement.diagnosis import STALLS_SPEC, Stall, stalls_table
 from simsplat_core.eval.refinement.interactions import build_interactions
 from simsplat_core.eval.refinement.real import load_real_log, real_rows, replayed_summary, scenario_of_log
 from simsplat_core.eval.refinement.real_edits import edits_dataset, evaluate_real_edits
@@ -50,6 +54,7 @@ from simsplat_core.eval.refinement.table import (
     motion_table,
     outcomes_table,
 )
+from simsplat_core.eval.refinement.windows import DEFAULT_STRIDE, windows_of
 from simsplat_core.language.grounding.engine import QueryEngine
 from simsplat_core.language.text import default_text_encoder
 from simsplat_core.motion.registry import DEFAULT_PREDICTOR, make_predictor
@@ -93,6 +98,8 @@ class MotionEvaluation:
         seconds: wall time.
         sequences: the store's scenes evaluated.
         real_edits: ``{seq_id: {edit: "" when applied, else why not}}``.
+        stalls: the stalled agents of the real rollouts (``diagnose`` only).
+        stalls_table: Parquet URI of ``tables/motion_stalls.parquet`` (``""``: not diagnosed).
     """
 
     real: tuple[str, ...]
@@ -102,6 +109,23 @@ class MotionEvaluation:
     seconds: float
     sequences: tuple[str, ...] = ()
     real_edits: dict[str, dict[str, str]] = field(default_factory=dict)
+    stalls: list[Stall] = field(default_factory=list)
+    stalls_table: str = ""
+
+
+@dataclass(frozen=True)
+class RealOptions:
+    """How the real logs are evaluated.
+
+    Attributes:
+        window_stride: steps between the starts of each log's 9.1 s windows (``eval.refinement.windows``).
+        diagnose: also write ``motion_stalls`` (``eval.refinement.diagnosis``).
+        edits: also evaluate the scripted edits of the real logs (``eval.refinement.real_edits``).
+    """
+
+    window_stride: int = DEFAULT_STRIDE
+    diagnose: bool = False
+    edits: bool = True
 
 
 def synthetic_rows(store_root: str, seq_ids: Sequence[str], predictor: str = DEFAULT_PREDICTOR, *,
@@ -134,10 +158,11 @@ def synthetic_rows(store_root: str, seq_ids: Sequence[str], predictor: str = DEF
 @task(name="evaluate-motion", retries=0, cache_policy=NO_CACHE)
 def evaluate_motion_run(out_root: str, real: Sequence[str | Path], predictors: Sequence[str],
                         store_root: str | None = None, out_relpath: str = "", *, seq_ids: Sequence[str] = (),
-                        edit_predictor: str = DEFAULT_PREDICTOR, real_edits: bool = True,
-                        per_category: int = 30, per_kind: int = 3) -> MotionEvaluation:
+                        edit_predictor: str = DEFAULT_PREDICTOR,
+                        per_category: int = 30, per_kind: int = 3,
+                        options: RealOptions = RealOptions()) -> MotionEvaluation:
     """Evaluate refinement and write the motion tables (module docstring); ``seq_ids`` are the store's scenes (none:
-    no synthetic rows).
+    no synthetic rows); ``options``: the real logs' windows and diagnosis.
 
     Raises:
         KeyError: an unknown or unavailable predictor.
@@ -157,8 +182,10 @@ def evaluate_motion_run(out_root: str, real: Sequence[str | Path], predictors: S
         synthetic = synthetic_rows(store_root, seq_ids, edit_predictor, per_category=per_category, per_kind=per_kind,
                                    progress=lambda done, total, label: bar(done, total))
     real_bar = StepProgress("eval motion (real logs)", headline="")
-    evaluation = real_rows(scenarios, chosen, progress=lambda done, total, label: real_bar(done, total))
-    edited = evaluate_real_edits(scenarios, editor_predictor) if real_edits and scenarios else None
+    windows = [w for s in scenarios for w in windows_of(s, options.window_stride)]
+    evaluation = real_rows(windows, chosen, progress=lambda done, total, label: real_bar(done, total),
+                           diagnose=options.diagnose)
+    edited = evaluate_real_edits(scenarios, editor_predictor) if options.edits and scenarios else None
     rows = motion_rows(synthetic.rows, evaluation.rows, edited.rows if edited is not None else [])
     table = motion_table(rows)
     outcome_rows = [outcome_row(o) for o in synthetic.outcomes]
@@ -170,17 +197,25 @@ def evaluate_motion_run(out_root: str, real: Sequence[str | Path], predictors: S
                 "synthetic_cases": synthetic.cases,
                 "scenarios": [{"dataset": s.dataset, "seq_id": s.seq_id, "steps": s.states.num_steps,
                                "agents": s.states.num_agents, "start_step": s.start_step, "resampled": s.resampled,
-                               "lanes": len(s.map.lanes), "road_edges": len(s.map.road_edges)} for s in scenarios],
+                               "lanes": len(s.map.lanes), "road_edges": len(s.map.road_edges),
+                               "windows": sum(w.seq_id.split("@")[0] == s.seq_id for w in windows)}
+                              for s in scenarios],
+                "window_stride": options.window_stride,
                 "real_edits": edited.applied if edited is not None else {},
                 "per_type": evaluation.per_type, "replayed": replayed_summary(evaluation.scores),
                 "seconds": round(time.perf_counter() - started, 3)}
-    tables = {spec.name: run_table(spec, t) for spec, t in ((MOTION_SPEC, table), (OUTCOMES_SPEC, outcomes))}
-    uri = write_run_tables(ArtifactStore(out_root), out_relpath, tables, manifest)[MOTION_SPEC.name]
+    specs = [(MOTION_SPEC, table), (OUTCOMES_SPEC, outcomes)]
+    if options.diagnose:
+        specs.append((STALLS_SPEC, stalls_table(evaluation.stalls)))
+    tables = {spec.name: run_table(spec, t) for spec, t in specs}
+    written = write_run_tables(ArtifactStore(out_root), out_relpath, tables, manifest)
+    uri = written[MOTION_SPEC.name]
     seconds = round(time.perf_counter() - started, 3)
     logger.info("motion on %d scenes, %d real logs, predictors %s: %s (%.1f s)", len(synthetic.seq_ids),
                 len(scenarios), list(predictors), uri, seconds)
     return MotionEvaluation(tuple(str(p) for p in real), rows, evaluation.per_type, uri, seconds,
-                            synthetic.seq_ids, edited.applied if edited is not None else {})
+                            synthetic.seq_ids, edited.applied if edited is not None else {}, evaluation.stalls,
+                            written.get(STALLS_SPEC.name, ""))
 
 
-__all__ = ["MotionEvaluation", "SyntheticMotion", "evaluate_motion_run", "synthetic_rows"]
+__all__ = ["MotionEvaluation", "RealOptions", "SyntheticMotion", "evaluate_motion_run", "synthetic_rows"]

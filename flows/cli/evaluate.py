@@ -7,7 +7,7 @@ Every command prints the tables it wrote as their declarations (``TableSpec``) p
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -149,7 +149,8 @@ def eval_mining(
 
 
 #: Real driving-log samples beside the repository (``../shared/data``), the default of ``eval motion --real``.
-SHARED_REAL_LOGS: tuple[str, ...] = ("waymo/motion_data_one_scenario.tfrecord", "av2/sensor-log-7fab2350")
+SHARED_REAL_LOGS: tuple[str, ...] = ("waymo/motion_data_one_scenario.tfrecord", "av2/sensor-log-7fab2350",
+                                     "av2/forecasting-0a1e6f0a")
 
 
 def default_real_logs(root: Path | None = None) -> list[Path]:
@@ -179,6 +180,11 @@ def eval_motion(
     per_category: Annotated[int, typer.Option(min=1, help="Editing-benchmark prompts per category (insert / "
                                               "modify), over all scenes.")] = 30,
     per_kind: Annotated[int, typer.Option(min=0, help="Interaction prompts of each kind per scene.")] = 3,
+    window_stride: Annotated[int, typer.Option(min=1, help="Steps between the starts of the 9.1 s windows each "
+                                               "real log is cut into (its rows average over them).")] = 10,
+    diagnose: Annotated[bool, typer.Option("--diagnose", help="Also list every agent stopped in a real rollout "
+                                           "but moving in the log, with its blocker, the rule that stopped it and "
+                                           "the distance (tables/motion_stalls).")] = False,
     as_json: JsonOption = False,
 ) -> None:
     """Multi-agent refinement: the ``motion`` table. Synthetic rows: the editing benchmark's insert /
@@ -190,7 +196,7 @@ def eval_motion(
     from flows.progress import StepBars
     from simsplat_core.data.errors import CorruptLogError
     from simsplat_core.motion.registry import available_predictors
-    from tasks.motion_eval import evaluate_motion_run
+    from tasks.motion_eval import RealOptions, evaluate_motion_run
 
     names = option_names(predictor) or [n for n in available_predictors() if n != "log"]
     seq_ids = stored_sequences(store, seq, "language") if store is not None else []
@@ -202,15 +208,26 @@ def eval_motion(
     try:
         with StepBars(headline=""):
             result = evaluate_motion_run.fn(out, paths, names, store_root=store, seq_ids=seq_ids,
-                                            edit_predictor=edit_predictor, real_edits=not no_real_edits,
-                                            per_category=per_category, per_kind=per_kind)
+                                            edit_predictor=edit_predictor,
+                                            per_category=per_category, per_kind=per_kind,
+                                            options=RealOptions(window_stride, diagnose, not no_real_edits))
     except CorruptLogError as exc:
         raise typer.BadParameter(f"damaged log: {exc}", param_hint="--real") from exc
     except KeyError as exc:
         raise typer.BadParameter(str(exc.args[0]) if exc.args else str(exc), param_hint="--predictor") from exc
     except (FileNotFoundError, ValueError) as exc:
         raise typer.BadParameter(str(exc), param_hint="--real") from exc
-    report(result, as_json, lambda r: _show(out, motion_notes(r)))
+    report(result, as_json, lambda r: _show_motion(out, r))
+
+
+def _show_motion(out: str, result: Any) -> None:
+    """The motion tables and notes, then the stalled agents when diagnosed."""
+    _show(out, motion_notes(result))
+    if result.stalls_table:
+        from flows.cli.printers import print_tables
+        from simsplat_core.eval.refinement.diagnosis import STALLS_SPEC, stalls_table
+
+        print_tables([(STALLS_SPEC, stalls_table(result.stalls))])
 
 
 @commands.command("search")

@@ -15,6 +15,7 @@ from simsplat_core.eval.editing.outcomes import EDITING_SPECS
 from simsplat_core.eval.grounding.tables import ABLATION_SPEC, GROUNDING_SPEC
 from simsplat_core.eval.grounding.tables import OUTCOMES_SPEC as GROUNDING_OUTCOMES_SPEC
 from simsplat_core.eval.mining import MINING_SPECS
+from simsplat_core.eval.refinement.diagnosis import STALLS_SPEC as MOTION_STALLS_SPEC
 from simsplat_core.eval.refinement.table import MOTION_SPEC
 from simsplat_core.eval.refinement.table import OUTCOMES_SPEC as MOTION_OUTCOMES_SPEC
 from simsplat_core.eval.search.evaluate import SEARCH_SPEC
@@ -24,7 +25,7 @@ from simsplat_core.eval.table_spec import TableSpec
 #: Every evaluation table, by name, in the order summaries list them.
 EVAL_TABLES: dict[str, TableSpec] = {spec.name: spec for spec in (
     RECONSTRUCTION_SPEC, THROUGHPUT_SPEC, GROUNDING_SPEC, ABLATION_SPEC, GROUNDING_OUTCOMES_SPEC, *EDITING_SPECS,
-    MOTION_SPEC, MOTION_OUTCOMES_SPEC, *MINING_SPECS, SEARCH_SPEC)}
+    MOTION_SPEC, MOTION_OUTCOMES_SPEC, MOTION_STALLS_SPEC, *MINING_SPECS, SEARCH_SPEC)}
 
 
 def table_spec(name: str) -> TableSpec:

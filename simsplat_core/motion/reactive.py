@@ -32,6 +32,7 @@ from simsplat_core.geometry import wrap_angle
 from simsplat_core.motion.conflicts import DrivenAgents, Predictions, yield_gaps
 from simsplat_core.motion.corridor import Nearest, Pairs, nearest_ahead, nearest_behind, route_pairs
 from simsplat_core.motion.lateral import OffsetProfiles, change_length, mobil_gain
+from simsplat_core.motion.leader_filters import IgnoredLeaders, mutual_leaders
 from simsplat_core.motion.longitudinal import IDMArrays, free_accel, interaction_accel, next_speed
 from simsplat_core.motion.predictor import Rollout, RolloutRequest
 from simsplat_core.motion.route_grid import RouteGrid
@@ -74,6 +75,46 @@ class _Driven:
     shift_left: np.ndarray
     shift_right: np.ndarray
     profiles: OffsetProfiles
+    log_end: np.ndarray  # [N] arc length where the logged route ends (0: lane-graph route)
+
+
+#: Codes of :attr:`LimitTrace.rule`: what set a driven agent's acceleration at a step.
+RULE_FREE, RULE_LEADER, RULE_GAP = 0, 1, 2
+#: Names of the rule codes, by code.
+RULE_NAMES: tuple[str, ...] = ("free road", "leader", "gap acceptance")
+
+
+@dataclass(frozen=True)
+class LimitTrace:
+    """What held each driven agent back at each step of a rollout (filled by ``ReactivePredictor.traced_rollout``).
+
+    Attributes:
+        rows: ``[N]`` the driven agents' rows in the request's states.
+        rule: ``[N, T]`` :data:`RULE_FREE` / :data:`RULE_LEADER` / :data:`RULE_GAP` (free road before ``start``).
+        other: ``[N, T]`` row of the leader or of the agent given way to (``-1``: none).
+        gap: ``[N, T]`` metres from the agent's front to that leader or stop point (``inf``: none).
+    """
+
+    rows: np.ndarray
+    rule: np.ndarray
+    other: np.ndarray
+    gap: np.ndarray
+
+    @classmethod
+    def empty(cls, rows: np.ndarray, steps: int) -> LimitTrace:
+        """A trace of ``rows`` over ``steps`` steps with nobody held back."""
+        n = len(rows)
+        return cls(rows, np.zeros((n, steps), np.int8), np.full((n, steps), -1, np.int64), np.full((n, steps), np.inf))
+
+    def record(self, t: int, a_free: np.ndarray, a_lead: np.ndarray, a_yield: np.ndarray, leader: np.ndarray,
+               lead_gap: np.ndarray, yielded_to: np.ndarray, yield_gap: np.ndarray) -> None:
+        """Step ``t``'s limiting rule per agent (the smallest of the three ``[N]`` accelerations)."""
+        held = np.minimum(a_lead, a_yield) < a_free - 1e-9
+        by_leader = held & (a_lead <= a_yield)
+        by_gap = held & ~by_leader
+        self.rule[:, t] = np.where(by_leader, RULE_LEADER, np.where(by_gap, RULE_GAP, RULE_FREE))
+        self.other[:, t] = np.where(by_leader, leader, np.where(by_gap, yielded_to, -1))
+        self.gap[:, t] = np.where(by_leader, lead_gap, np.where(by_gap, yield_gap, np.inf))
 
 
 @dataclass
@@ -90,20 +131,25 @@ class ReactivePredictor:
 
     def rollout(self, request: RolloutRequest) -> Rollout:
         """The request's agents with the free ones driven from ``request.start_step`` on."""
+        return self.traced_rollout(request)[0]
+
+    def traced_rollout(self, request: RolloutRequest) -> tuple[Rollout, LimitTrace]:
+        """:meth:`rollout` plus what held each driven agent back at each step (:class:`LimitTrace`)."""
         states, start = request.states, request.start_step
         plan = plan_routes(request, self.params.route, self.params.pedestrian)
         replayed = {states.object_ids[r]: reason for r, reason in plan.replayed.items()}
         if not plan.routes:
-            return Rollout(states, replayed, self.name)
+            return Rollout(states, replayed, self.name), LimitTrace.empty(np.zeros(0, np.int64), states.num_steps)
         xy, heading, speed = states.xy.copy(), states.heading.copy(), states.speed.copy()
         valid, z = states.valid.copy(), states.z.copy()
         drv = self._driven(request, plan)
         grid = self._grid(request, plan, drv)
-        self._simulate(request, drv, grid, xy, heading, speed, valid, z)
+        trace = LimitTrace.empty(drv.rows.copy(), states.num_steps)
+        self._simulate(request, drv, grid, xy, heading, speed, valid, z, trace)
         sources = self._sources(states, drv, xy, start)
         out = replace(states, xy=xy, heading=heading, speed=speed, valid=valid, z=z, sources=sources)
         logger.debug("reactive rollout: %d driven, %d replayed", len(drv.rows), len(replayed))
-        return Rollout(out, replayed, self.name)
+        return Rollout(out, replayed, self.name), trace
 
     # ------------------------------------------------------------------ set-up
     def _driven(self, request: RolloutRequest, plan: RoutePlan) -> _Driven:
@@ -119,13 +165,20 @@ class ReactivePredictor:
         profiles = OffsetProfiles(start=s0.copy(), length=length, origin=np.array([r.offset0 for r in plan.routes]),
                                   target=np.zeros(len(rows)))
         idm = IDMArrays.per_agent([p.pedestrian.following if k else p.idm for k in ped])
+        dt = np.maximum(np.diff(states.times[last_obs:]), 1e-6)
+        log_accel = np.percentile(np.diff(v_ref[:, last_obs:], axis=1) / dt, 95, axis=1) if dt.size \
+            else np.zeros(len(rows))
+        idm = replace(idm, max_accel=np.where(ped, idm.max_accel,
+                                              np.clip(log_accel, idm.max_accel,
+                                                      np.maximum(idm.max_accel, p.idm.log_accel_cap_mps2))))
         size = states.size[rows]
         return _Driven(rows=rows, s=s0, v=v0, v_ref=v_ref, last_valid=np.array([r.last_valid for r in plan.routes]),
                        half_length=size[:, 0] / 2.0, half_width=size[:, 1] / 2.0, is_pedestrian=ped, idm=idm,
                        critical_s=np.where(ped, p.pedestrian.time_to_conflict_s, p.gap.critical_gap_s),
                        lookahead_m=np.where(ped, p.pedestrian.wait_radius_m, p.corridor.ahead_m),
                        shift_left=np.array([r.lane_shift[0] for r in plan.routes]),
-                       shift_right=np.array([r.lane_shift[1] for r in plan.routes]), profiles=profiles)
+                       shift_right=np.array([r.lane_shift[1] for r in plan.routes]), profiles=profiles,
+                       log_end=np.array([r.log_end for r in plan.routes]))
 
     def _grid(self, request: RolloutRequest, plan: RoutePlan, drv: _Driven) -> RouteGrid:
         c = self.params.corridor
@@ -136,8 +189,9 @@ class ReactivePredictor:
 
     # ------------------------------------------------------------------ the step loop
     def _simulate(self, request: RolloutRequest, drv: _Driven, grid: RouteGrid, xy: np.ndarray, heading: np.ndarray,
-                  speed: np.ndarray, valid: np.ndarray, z: np.ndarray) -> None:
-        """Fill the driven rows of ``xy / heading / speed / valid / z [A, T]`` from ``start_step`` on, in place."""
+                  speed: np.ndarray, valid: np.ndarray, z: np.ndarray, trace: LimitTrace) -> None:
+        """Fill the driven rows of ``xy / heading / speed / valid / z [A, T]`` from ``start_step`` on, in place,
+        and ``trace`` with what limited each agent."""
         p = self.params
         states, start = request.states, request.start_step
         t_count, n = states.num_steps, len(drv.rows)
@@ -158,6 +212,7 @@ class ReactivePredictor:
         cos_cross = np.cos(np.deg2rad(p.gap.crossing_deg))
         crosswalks = request.map.context.crosswalks
         last_z = z[drv.rows, start - 1].copy()
+        ignored = IgnoredLeaders.of(states, drv.rows, start - 1, given, is_log, drv.log_end, p.corridor)
         for t in range(start, t_count):
             dt = float(states.times[t] - states.times[t - 1])
             cur_xy, cur_heading, cur_valid = xy[:, t - 1], heading[:, t - 1], valid[:, t - 1]
@@ -178,8 +233,10 @@ class ReactivePredictor:
             crossing = np.where(walkers, np.abs(cos_rel), cos_rel) < cos_cross
             moving = np.hypot(vel[pairs.j, 0], vel[pairs.j, 1]) >= p.lane_change.blocked_speed_mps
             follows = ~(crossing & moving) & cur_valid[pairs.j]  # moving crossing agents: gap acceptance
+            follows &= ~ignored.pairs(pairs)  # parked obstacles the log passes, companions
             lead = nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset, p.corridor.lateral_margin_m,
                                  mask=follows)
+            lead = self._break_deadlocks(pairs, drv, driven_of, lead, offset, follows)
             if t == start:  # the log's own following distances (behind unedited agents only)
                 log_leader = (lead.other >= 0) & is_log[np.maximum(lead.other, 0)]
                 drv.idm = drv.idm.calibrated(drv.v, lead.speed, np.where(log_leader, lead.gap, np.inf))
@@ -198,8 +255,7 @@ class ReactivePredictor:
             a_yield = interaction_accel(drv.v, np.zeros(n), y_gap, drv.idm)
             a_free = free_accel(drv.v, drv.v_ref[:, t], drv.v_ref[:, t - 1], dt, drv.idm)
             accel = np.minimum(np.minimum(a_free, a_lead), a_yield)
-            if logger.isEnabledFor(logging.DEBUG):
-                self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, y_other)
+            self._note_limits(trace, states, t, drv, (a_free, a_lead, a_yield), lead, y_other, y_gap)
             self._lane_change(drv, pairs, follows, cur_valid[pairs.j], lead, a_lead)
             # the positional bound holds against real obstacles only: a give-way line is no wall, an agent that
             # finds it too late brakes at the hard-brake limit and stops a little past it
@@ -212,6 +268,29 @@ class ReactivePredictor:
             log_ok = states.valid[drv.rows, t]
             last_z = np.where(log_ok, states.z[drv.rows, t], last_z)
             z[drv.rows, t] = last_z
+
+    def _break_deadlocks(self, pairs: Pairs, drv: _Driven, driven_of: np.ndarray, lead: Nearest, offset: np.ndarray,
+                         follows: np.ndarray) -> Nearest:
+        """``lead`` with mutual leaders (``i`` follows ``j`` and ``j`` follows ``i``: both would wait for ever)
+        resolved: the first of each pair in row order
+        ignores the other."""
+        mutual = mutual_leaders(lead.other, driven_of, drv.rows)
+        if not mutual.any():
+            return lead
+        drop = mutual[pairs.i] & (pairs.j == lead.other[pairs.i])
+        logger.debug("mutual leaders: %d agents ignore each other", int(mutual.sum()))
+        return nearest_ahead(pairs, drv.s, drv.half_length, drv.half_width, offset,
+                             self.params.corridor.lateral_margin_m, mask=follows & ~drop)
+
+    def _note_limits(self, trace: LimitTrace, states: AgentStates, t: int, drv: _Driven,
+                     accels: tuple[np.ndarray, np.ndarray, np.ndarray], lead: Nearest, yielded_to: np.ndarray,
+                     yield_gap: np.ndarray) -> None:
+        """Record step ``t``'s limits (``accels``: free, leader and give-way terms ``[N]``) into ``trace``; log
+        them at debug level."""
+        a_free, a_lead, a_yield = accels
+        trace.record(t, a_free, a_lead, a_yield, lead.other, lead.gap, yielded_to, yield_gap)
+        if logger.isEnabledFor(logging.DEBUG):
+            self._log_limits(states, t, drv, a_free, a_lead, a_yield, lead.other, yielded_to)
 
     @staticmethod
     def _log_limits(states: AgentStates, t: int, drv: _Driven, a_free: np.ndarray, a_lead: np.ndarray,

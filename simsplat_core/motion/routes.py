@@ -36,10 +36,11 @@ NOT_OBSERVED = "not observed at start"
 SHORT_HISTORY = "history too short"
 STATIC_OBJECT = "static object"
 STATIONARY = "stationary in the log"
+PARKED_JITTER = "parked in the log (its box jitters)"
 REVERSES = "reverses in the log"
 NO_LANE = "no lane near the vehicle (and no logged route to follow)"
-REASONS: tuple[str, ...] = (APPEARS_LATER, NOT_OBSERVED, SHORT_HISTORY, STATIC_OBJECT, STATIONARY, REVERSES,
-                            NO_LANE)
+REASONS: tuple[str, ...] = (APPEARS_LATER, NOT_OBSERVED, SHORT_HISTORY, STATIC_OBJECT, STATIONARY, PARKED_JITTER,
+                            REVERSES, NO_LANE)
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,7 @@ class AgentRoute:
         from_log: the route follows the logged positions.
         lane_shift: ``(left, right)`` signed lateral shift to the neighbour lanes' centre lines, ``nan`` where
             there is none (vehicles; pedestrians always ``nan``).
+        log_end: arc length of the last logged position on a logged route (0 for lane-graph routes).
     """
 
     row: int
@@ -68,6 +70,7 @@ class AgentRoute:
     last_valid: int
     from_log: bool
     lane_shift: tuple[float, float]
+    log_end: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -199,8 +202,11 @@ def _route_of(request: RolloutRequest, row: int, kind: str, last_obs: int, lanes
     steps = np.flatnonzero(valid)
     xy, speed = states.xy[row], states.speed[row]
     moved = float(np.linalg.norm(xy[steps] - xy[steps[0]], axis=1).max())
-    if np.all(np.abs(speed[steps]) < params.stationary_speed_mps) and moved < params.stationary_move_m:
-        return STATIONARY, None
+    if np.all(np.abs(speed[steps]) < params.stationary_speed_mps):
+        if moved < params.stationary_move_m:
+            return STATIONARY, None
+        if moved < params.parked_jitter_m:
+            return PARKED_JITTER, None
     future = steps[steps >= last_obs]
     if np.any(speed[future] < -params.reverse_speed_mps):
         return REVERSES, None
@@ -224,7 +230,8 @@ def _route_of(request: RolloutRequest, row: int, kind: str, last_obs: int, lanes
             s_all, lat = project_points(path, xy[steps])
             v_ref = np.minimum(_speeds_from_arc(times, steps, s_all, t_count), cap)
             k = int(np.flatnonzero(steps == last_obs)[0])
-            return "", AgentRoute(row, kind, path, float(s_all[k]), float(lat[k]), v_ref, last_valid, True, shift)
+            return "", AgentRoute(row, kind, path, float(s_all[k]), float(lat[k]), v_ref, last_valid, True, shift,
+                                  float(s_all.max()))
     v_ref = np.minimum(_speeds_from_log(times, steps[steps >= last_obs], speed), cap)
     direction = np.array([np.cos(heading0), np.sin(heading0)])
     if kind == PEDESTRIAN:

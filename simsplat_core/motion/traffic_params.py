@@ -38,6 +38,8 @@ class IDMParams:
             ``s0`` at the first predicted step keeps its own (logged) headway, never below these.
         standstill_clearance_m: last-resort positional bound: an agent never advances closer than this to
             the obstacle ahead within one step, whatever the deceleration it takes.
+        log_accel_cap_mps2: ``a`` of a vehicle is raised to the acceleration its logged speed profile shows
+            (95th percentile), up to this: a driver who accelerates briskly in the log catches up as briskly.
     """
 
     desired_time_headway_s: float = 1.5
@@ -49,6 +51,7 @@ class IDMParams:
     min_time_headway_s: float = 0.6
     min_standstill_gap_m: float = 1.0
     standstill_clearance_m: float = 0.5
+    log_accel_cap_mps2: float = 3.0
 
 
 @dataclass(frozen=True)
@@ -130,12 +133,21 @@ class CorridorParams:
         ahead_m: look-ahead along the route.
         behind_m: look-behind (new followers of a lane change).
         grid_step_m: spacing of the arc-length grid the routes are sampled on.
+        parked_move_m: a given agent whose logged box never moves farther than this from its first position is
+            parked: an unedited agent whose logged route passes it does not take it as a leader.
+        company_gap_m, company_speed_mps, company_heading_deg: two unedited agents whose centres are closer
+            than this at the last observed step, both moving with speeds within ``company_speed_mps`` and
+            headings within ``company_heading_deg``, travel in company: neither is the other's leader.
     """
 
     lateral_margin_m: float = 0.3
     ahead_m: float = 70.0
     behind_m: float = 30.0
     grid_step_m: float = 1.0
+    parked_move_m: float = 2.0
+    company_gap_m: float = 3.0
+    company_speed_mps: float = 0.5
+    company_heading_deg: float = 30.0
 
 
 @dataclass(frozen=True)
@@ -152,6 +164,8 @@ class RouteParams:
         route_length_m: how far lane-graph routes (and extensions of logged ones) reach.
         stationary_speed_mps: agents whose logged speed stays below this over the whole log ...
         stationary_move_m: ... and whose box moves less than this are parked: kept as logged.
+        parked_jitter_m: agents whose logged speed stays below ``stationary_speed_mps`` but whose box wanders
+            (label jitter) less than this from its first position are parked too: replayed.
         reverse_speed_mps: a logged speed below minus this means the agent reverses: replayed.
         extension_blend_m: a logged route continues on the lane graph from this far past its last point.
         min_history_steps: valid observed steps an agent without a logged route needs to be driven (one with
@@ -169,6 +183,7 @@ class RouteParams:
     route_length_m: float = 300.0
     stationary_speed_mps: float = 0.3
     stationary_move_m: float = 1.0
+    parked_jitter_m: float = 5.0
     reverse_speed_mps: float = 0.5
     extension_blend_m: float = 5.0
     min_history_steps: int = 2

@@ -36,18 +36,21 @@ def test_unknown_predictor_and_missing_path(tmp_path: Path) -> None:
 
 
 def test_eval_motion_on_the_samples(shared_data: Path, tmp_path: Path) -> None:
-    assert len(default_real_logs()) == 2  # the samples beside the repository
+    assert len(default_real_logs()) == 3  # the samples beside the repository
     out = tmp_path / "out"
     result = runner.invoke(app, ["eval", "motion", "--out", str(out), "--predictor", "constant-velocity,log",
-                                 "--no-real-edits", "--json"])
+                                 "--no-real-edits", "--diagnose", "--json"])
     assert result.exit_code == 0, result.output
     data = json.loads(result.output.strip().splitlines()[-1])
     assert [(r["dataset"], r["method"], r["predictor"]) for r in data["rows"]] == [
         ("waymo-motion", "log", ""), ("waymo-motion", "full", "constant-velocity"), ("av2", "log", ""),
-        ("av2", "full", "constant-velocity")]
+        ("av2", "full", "constant-velocity"), ("av2-forecasting", "log", ""),
+        ("av2-forecasting", "full", "constant-velocity")]
+    assert [r["scenarios"] for r in data["rows"]] == [1, 1, 7, 7, 2, 2]  # 9.1 s windows 10 steps apart
     table = pq.read_table(out / "tables" / "motion.parquet")
-    assert table.num_rows == 4 and (out / "tables" / "motion.md").exists() and (out / "manifest.json").exists()
+    assert table.num_rows == 6 and (out / "tables" / "motion.md").exists() and (out / "manifest.json").exists()
     assert pq.read_table(out / "tables" / "motion_outcomes.parquet").num_rows == 0  # no edits evaluated
+    assert pq.read_table(out / "tables" / "motion_stalls.parquet").num_rows == 0  # constant velocity is not traced
 
 
 def test_seq_needs_a_store_and_an_aligned_scene(tmp_path: Path) -> None:

@@ -30,12 +30,13 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from simsplat_core.eval.refinement.diagnosis import Stall, diagnose
 from simsplat_core.eval.refinement.scoring import score_agents
 from simsplat_core.motion.motion_map import motion_map_of
 from simsplat_core.motion.predictor import MotionMap, MotionPredictor, Rollout, RolloutRequest
@@ -226,10 +227,20 @@ def score_rollout(scenario: RealScenario, rollout: Rollout | None) -> RolloutSco
                         predictor="" if rollout is None else rollout.predictor)
 
 
-def roll_out(scenario: RealScenario, predictor: MotionPredictor) -> Rollout:
-    """``predictor`` on ``scenario`` (the ego fixed); checks that the answer keeps the agents and steps."""
+def roll_out(scenario: RealScenario, predictor: MotionPredictor, stalls: list[Stall] | None = None) -> Rollout:
+    """``predictor`` on ``scenario`` (the ego fixed); checks that the answer keeps the agents and steps. With
+    ``stalls`` and a predictor that traces its limits (``traced_rollout``), the rollout's stalled agents
+    (``eval.refinement.diagnosis``) are appended to it."""
     request = scenario.request()
-    rollout = predictor.rollout(request)
+    traced = getattr(predictor, "traced_rollout", None)
+    if stalls is not None and traced is not None:
+        rollout, trace = traced(request)
+        seq_id, _, window = scenario.seq_id.rpartition("@")
+        stalls += diagnose(scenario.states, rollout, trace, scenario.start_step, dataset=scenario.dataset,
+                           seq_id=seq_id if window.isdigit() else scenario.seq_id,
+                           window=int(window) if window.isdigit() else 0)
+    else:
+        rollout = predictor.rollout(request)
     got = rollout.states
     if got.object_ids != request.states.object_ids or got.num_steps != request.states.num_steps:
         raise ValueError(f"predictor {predictor.name!r} changed the agents or steps of {scenario.seq_id}")
@@ -293,28 +304,32 @@ class RealEvaluation:
             predictor's rollout (method :data:`ROLLOUT_METHOD`).
         per_type: ``{dataset: {predictor: per_type_errors}}`` (the side output).
         scores: every :class:`RolloutScore`.
+        stalls: agents stopped in a rollout but moving in the log (``diagnose=True`` only).
     """
 
     rows: list[dict[str, Any]]
     per_type: dict[str, dict[str, dict[str, dict[str, float | None]]]]
     scores: list[RolloutScore]
+    stalls: list[Stall] = field(default_factory=list)
 
 
 def real_rows(scenarios: Sequence[RealScenario], predictors: Sequence[MotionPredictor],
-              progress: Callable[[int, int, str], None] | None = None) -> RealEvaluation:
-    """The log row and one row per predictor for each dataset of ``scenarios`` (module docstring).
+              progress: Callable[[int, int, str], None] | None = None, *, diagnose: bool = False) -> RealEvaluation:
+    """The log row and one row per predictor for each dataset of ``scenarios`` (module docstring); with
+    ``diagnose``, the stalled agents of every traced rollout too.
 
     A predictor named :data:`LOG_METHOD` (``LogReplayPredictor``) adds no row: replaying the log is the log
     row (its ADE undefined).
     """
     scores: list[RolloutScore] = []
+    stalls: list[Stall] | None = [] if diagnose else None
     rolled = [p for p in predictors if p.name != LOG_METHOD]  # the log replay's row is the log row
     total = len(scenarios) * len(rolled)
     done = 0
     for scenario in scenarios:
         scores.append(score_rollout(scenario, None))
         for predictor in rolled:
-            scores.append(score_rollout(scenario, roll_out(scenario, predictor)))
+            scores.append(score_rollout(scenario, roll_out(scenario, predictor, stalls)))
             done += 1
             if progress is not None:
                 progress(done, total, f"{scenario.seq_id} {predictor.name}")
@@ -326,7 +341,7 @@ def real_rows(scenarios: Sequence[RealScenario], predictors: Sequence[MotionPred
     for (dataset, method, name), group in groups.items():
         if method != LOG_METHOD or any(s.errors is not None for s in group):
             per_type.setdefault(dataset, {})[name or method] = per_type_errors(group)
-    return RealEvaluation(rows=rows, per_type=per_type, scores=scores)
+    return RealEvaluation(rows=rows, per_type=per_type, scores=scores, stalls=stalls or [])
 
 
 def replayed_summary(scores: Sequence[RolloutScore]) -> Mapping[str, Any]:

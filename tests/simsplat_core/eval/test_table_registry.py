@@ -13,6 +13,7 @@ from simsplat_core.eval.editing.outcomes import completion_table, fidelity_table
 from simsplat_core.eval.grounding.metrics import CategoryScore, GroundingResults
 from simsplat_core.eval.grounding.tables import ablation_table, grounding_outcomes_table, grounding_table
 from simsplat_core.eval.mining import mining_by_category_table, mining_stages_table, mining_table
+from simsplat_core.eval.refinement.diagnosis import Stall, stalls_table
 from simsplat_core.eval.refinement.table import MOTION_COLUMNS, motion_table
 from simsplat_core.eval.refinement.table import outcomes_table as motion_outcomes_table
 from simsplat_core.eval.search.evaluate import SEARCH_SPEC
@@ -39,6 +40,8 @@ BUILDERS: dict[str, Callable[[], pa.Table]] = {
     "editing_outcomes": lambda: outcomes_table([]),
     "motion": lambda: motion_table([_MOTION_ROW]),
     "motion_outcomes": lambda: motion_outcomes_table([]),
+    "motion_stalls": lambda: stalls_table([Stall("waymo-motion", "s", 0, "7", "vehicle", 12, 20, "leader",
+                                                 "9 (parked vehicle)", 3.5, 0.6)]),
     "mining": lambda: mining_table([], {}, {"rule": "", "openai": "not run: no endpoint"}),
     "mining_by_category": lambda: mining_by_category_table([], ["rule"]),
     "mining_stages": lambda: mining_stages_table({"rule": {"propose": 2.0, "judge": 1.0}}, {"rule": 1}, cores=2),
