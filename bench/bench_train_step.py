@@ -39,8 +39,13 @@ from torch.utils._python_dispatch import TorchDispatchMode
 from simsplat_core.scene import BackgroundNode, GaussianSet, NonRigidNode, RigidNode, SceneGraph
 from simsplat_core.scene.composed import ComposedGaussians
 from simsplat_core.scene.nodes import OFFSETS, ObjectNode
-from simsplat_core.scene.transforms import interpolate_transforms, poses_from_boxes, quat_multiply, rotmat_to_quat, \
-    se3_delta
+from simsplat_core.scene.transforms import (
+    interpolate_transforms,
+    poses_from_boxes,
+    quat_multiply,
+    rotmat_to_quat,
+    se3_delta,
+)
 
 logger = logging.getLogger("bench_train_step")
 RESULTS = Path(__file__).parent / "results" / "train_step.json"
@@ -90,7 +95,7 @@ def make_graph(frames: int, vehicles: int, pedestrians: int, bg_gaussians: int, 
     def gaussians(n: int) -> GaussianSet:
         gs = GaussianSet.create(torch.randn((n, 3), generator=g), torch.rand(n, generator=g) * 0.3 + 0.05,
                                 torch.rand((n, 3), generator=g), 0.5, quats=torch.randn((n, 4), generator=g))
-        for name, tensor in gs.named_tensors():
+        for _name, tensor in gs.named_tensors():
             tensor.requires_grad_(True)
         return gs
 
