@@ -18,9 +18,10 @@ from torch import Tensor
 
 from simsplat_core.render.binning import tile_grid
 from simsplat_core.render.cpu_backend import project_and_bin, rasterize_to_pixels
+from simsplat_core.render.depth import finish_channels
 from simsplat_core.render.gsplat_backend import gsplat_available, rasterize_gsplat
 from simsplat_core.render.reference import composite_reference, project_reference
-from simsplat_core.render.types import BACKENDS, ED_EPS, RENDER_MODES, RasterMeta
+from simsplat_core.render.types import BACKENDS, RENDER_MODES, RasterMeta
 
 logger = logging.getLogger(__name__)
 
@@ -77,14 +78,6 @@ def render_channels(
         return depth, zeros
     bgs = torch.cat([backgrounds, zeros], dim=-1)  # [C, D + 1]
     return torch.cat([colors, depth], dim=-1), bgs
-
-
-def finish_channels(render: Tensor, alphas: Tensor, render_mode: str) -> Tensor:
-    """Turn the composited depth channel into expected depth ``sum(w z) / max(sum(w), 1e-10)``."""
-    if render_mode == "RGB":
-        return render
-    depth = render[..., -1:] / alphas.clamp(min=ED_EPS)  # [C, H, W, 1]
-    return torch.cat([render[..., :-1], depth], dim=-1)
 
 
 def rasterization(

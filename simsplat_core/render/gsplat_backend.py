@@ -3,7 +3,9 @@
 gsplat is an optional extra (``pip install gsplat==1.5.3``); nothing here imports it at module load.
 Differences to keep in mind (the compositing rules are the same):
 
-* our ``render_mode="D"`` (expected depth) is gsplat's ``"ED"``; ``"RGB"`` and ``"RGB+ED"`` map 1:1;
+* depth is asked of gsplat as accumulated depth (``"D"`` / ``"RGB+D"``) and turned into expected depth
+  by :func:`simsplat_core.render.depth.finish_channels`, as for the other backends (gsplat's ``"ED"``
+  divides by an alpha floor of 1e-10, which blows up float32 rounding at nearly empty pixels);
 * gsplat >= 1.5 bounds each Gaussian by per-axis radii ``ceil(3.33 sqrt(Sigma_xx))`` / ``sigma_yy``
   tightened by the opacity, returned as ``[C, N, 2]``; we report ``max`` of the two as ``[C, N]``
   (0 when culled), so images may differ from the CPU backend at the edges of a Gaussian's tile range.
@@ -17,9 +19,10 @@ import torch
 from torch import Tensor
 
 from simsplat_core.render.binning import tile_grid
+from simsplat_core.render.depth import finish_channels
 from simsplat_core.render.types import RasterMeta
 
-_GSPLAT_MODES = {"RGB": "RGB", "D": "ED", "RGB+ED": "RGB+ED"}
+_GSPLAT_MODES = {"RGB": "RGB", "D": "D", "RGB+ED": "RGB+D"}
 
 
 def gsplat_available() -> bool:
@@ -81,4 +84,4 @@ def rasterize_gsplat(
         isect_offsets=info.get("isect_offsets"),
         flatten_ids=info.get("flatten_ids"),
     )
-    return render, alphas, meta
+    return finish_channels(render, alphas, render_mode), alphas, meta

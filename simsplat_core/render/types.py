@@ -27,8 +27,9 @@ TRANSMITTANCE_MIN = 1e-4
 #: The camera-space x/y used in the projection Jacobian are clamped to the field of view widened by
 #: this fraction of tan(fov/2) on each side (gsplat: 0.3, i.e. 1.3x tan(fov/2) for a centred camera).
 FOV_MARGIN = 0.3
-#: Expected depth is ``sum(w z) / max(sum(w), ED_EPS)`` (gsplat clamps the alpha at 1e-10).
-ED_EPS = 1e-10
+#: Expected depth is ``sum(w z) / max(sum(w), ED_EPS)`` for every backend (see ``render.depth``: a
+#: smaller floor turns float32 rounding of a nearly empty pixel's alpha into metres of depth).
+ED_EPS = 1e-4
 
 
 @dataclass(frozen=True)

@@ -24,6 +24,7 @@ maps) can tell which graph it was computed for.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import logging
 from collections.abc import Iterable, Sequence
@@ -286,21 +287,20 @@ class SceneGraph:
         frames around ``t`` instead of those stored at ``t`` (``NonRigidNode.offsets_at``).
         """
         exclude = set(int(e) for e in exclude)
-        objs, poses, alive = self.object_poses_at(t)
-        offsets = self.node_offsets()
+        objs, poses, _ = self.object_poses_at(t)
+        alive_host = self._alive_host(t, objs)  # [K] bool, read from host mirrors (no device sync)
         device = self.device
         blocks: list[tuple[SceneNode, int]] = []  # (node, index into objs or -1)
         bg = self.background
         if bg is not None and BACKGROUND_ID not in exclude:
             blocks.append((bg, -1))
-        alive_list = alive.tolist()
         for k, obj in enumerate(objs):
-            if alive_list[k] and obj.node_id not in exclude:
+            if alive_host[k] and obj.node_id not in exclude:
                 blocks.append((obj, k))
         if not blocks:
             return _empty_composed(float(t), device)
 
-        counts = [len(n.gaussians) for n, _ in blocks]
+        counts = np.array([len(n.gaussians) for n, _ in blocks], dtype=np.int64)
         means_local = []
         for n, _ in blocks:
             m = n.gaussians.means
@@ -313,35 +313,58 @@ class SceneGraph:
         opacity_logits = torch.cat([n.gaussians.opacity_logits for n, _ in blocks])
 
         # batched rigid transform of the object blocks (background block stays in world coordinates)
-        n_bg = counts[0] if blocks[0][1] < 0 else 0
-        obj_blocks = [(n, k) for n, k in blocks if k >= 0]
+        n_bg = int(counts[0]) if blocks[0][1] < 0 else 0
+        obj_ks = np.array([k for _, k in blocks if k >= 0], dtype=np.int64)
         means = torch.cat(means_local)
         quats = torch.nn.functional.normalize(quats_local, dim=-1)
-        if obj_blocks:
-            obj_counts = torch.tensor([len(n.gaussians) for n, _ in obj_blocks], device=device)
-            pose_idx = torch.repeat_interleave(torch.tensor([k for _, k in obj_blocks], device=device), obj_counts)
-            rot = poses[:, :3, :3]  # [K, 3, 3]
-            trans = poses[:, :3, 3]  # [K, 3]
-            q_pose = rotmat_to_quat(rot)  # [K, 4]
+        if obj_ks.size:
+            # row -> pose index built on the host and sent once (no repeat_interleave on device counts)
+            obj_counts = counts[len(counts) - obj_ks.size:]
+            used = poses if obj_ks.size == len(objs) else poses[torch.as_tensor(obj_ks, device=device)]
+            local_idx = torch.as_tensor(np.repeat(np.arange(obj_ks.size), obj_counts), device=device)  # [M]
+            rot = used[:, :3, :3]  # [K', 3, 3]
+            q_pose = rotmat_to_quat(rot)  # [K', 4]
             m_obj = means[n_bg:]
-            m_world = torch.einsum("nij,nj->ni", rot[pose_idx], m_obj) + trans[pose_idx]  # [M, 3]
-            q_world = quat_multiply(q_pose[pose_idx], quats[n_bg:])  # [M, 4]
-            means = torch.cat([means[:n_bg], m_world])
-            quats = torch.cat([quats[:n_bg], q_world])
+            m_world = (rot[local_idx] @ m_obj[:, :, None])[:, :, 0] + used[local_idx, :3, 3]  # [M, 3]
+            q_world = quat_multiply(q_pose[local_idx], quats[n_bg:])  # [M, 4]
+            means = torch.cat([means[:n_bg], m_world]) if n_bg else m_world
+            quats = torch.cat([quats[:n_bg], q_world]) if n_bg else q_world
 
-        features = _compose_features([n for n, _ in blocks], counts, device)
-        node_ids = torch.repeat_interleave(
-            torch.tensor([n.node_id for n, _ in blocks], dtype=torch.int32, device=device),
-            torch.tensor(counts, device=device))
-        gaussian_ids = torch.cat([torch.arange(offsets[n.node_id][0], offsets[n.node_id][1], device=device)
-                                  for n, _ in blocks])
+        features = _compose_features([n for n, _ in blocks], counts.tolist(), device)
+        node_id_host = np.array([n.node_id for n, _ in blocks], dtype=np.int32)
+        offsets = self.node_offsets()
+        canonical = np.concatenate([np.arange(*offsets[n.node_id], dtype=np.int64) for n, _ in blocks])
         starts = np.concatenate([[0], np.cumsum(counts)])
         slices = tuple((n.node_id, int(starts[i]), int(starts[i + 1])) for i, (n, _) in enumerate(blocks))
         return ComposedGaussians(
             t=float(t), means=means, quats=quats, scales=torch.exp(log_scales),
             opacities=torch.sigmoid(opacity_logits), colors=torch.sigmoid(colors), features=features,
-            node_ids=node_ids, gaussian_ids=gaussian_ids, node_slices=slices,
+            node_ids=torch.as_tensor(np.repeat(node_id_host, counts), device=device),
+            gaussian_ids=torch.as_tensor(canonical, device=device), node_slices=slices,
         )
+
+    def _alive_host(self, t: float, objs: Sequence[ObjectNode]) -> np.ndarray:
+        """``[K]`` bool: which object nodes exist at ``t`` (as :meth:`object_poses_at`'s ``present``),
+        from host mirrors of the presence masks so that composing never waits on the device. Nodes with
+        a pose track of their own are asked on it (a host read: edited graphs only)."""
+        ft = self.resolve_time(t)
+        present = self._present_host  # [K, F]
+        alive = present[:, ft.i0] & present[:, ft.i1] if len(objs) else np.zeros(0, dtype=bool)
+        for k, n in enumerate(objs):
+            if not ft.inside and n.extrapolation is Extrapolation.ABSENT:
+                alive[k] = False
+            if n.track is not None:
+                alive[k] = n.track.sample(ft.t)[1]
+        return alive
+
+    @functools.cached_property
+    def _present_host(self) -> np.ndarray:
+        """``[K, F]`` bool host copy of the object nodes' presence masks (read once per graph: presence is
+        part of the graph's structure, which only derived graphs change)."""
+        objs = self.object_nodes
+        if not objs:
+            return np.zeros((0, self.frame_indices.size), dtype=bool)
+        return torch.stack([n.present for n in objs]).cpu().numpy().astype(bool)
 
     def render(
         self,

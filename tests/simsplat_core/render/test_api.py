@@ -87,7 +87,7 @@ def test_gsplat_mapping_with_stub(monkeypatch: pytest.MonkeyPatch) -> None:
     scene = random_scene(3, n_cams=2)
     _, _, meta = gsplat_backend.rasterize_gsplat(*scene.args(), near_plane=0.1, far_plane=50.0, render_mode="D",
                                                  backgrounds=None, tile_size=16, eps2d=0.3, radius_clip=0.5)
-    assert calls["render_mode"] == "ED" and calls["packed"] is False and calls["rasterize_mode"] == "classic"
+    assert calls["render_mode"] == "D" and calls["packed"] is False and calls["rasterize_mode"] == "classic"
     assert (calls["near_plane"], calls["far_plane"], calls["radius_clip"]) == (0.1, 50.0, 0.5)
     assert meta.radii.tolist() == [[4, 0, 5], [4, 0, 5]] and meta.backend == "gsplat" and meta.n_isects == 4
 
