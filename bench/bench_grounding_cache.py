@@ -4,8 +4,8 @@ one log to a store whose other logs were evaluated before (``storage.grounding_o
     .venv/bin/python bench/bench_grounding_cache.py [--logs 10] [--frames 20] [--width 120] [--height 80]
 
 The store holds n synthetic logs, each with a ground-truth language scene (node-id maps from the log's instance
-masks, as ``tests/small_store.py`` writes them; nothing is trained, the benchmark's work is the same). Three
-timings: all n from scratch, the same n again (every answer kept), and n + 1 after one more log landed. Checks that
+masks, written by ``tests/small_store.py``; nothing is trained, the benchmark's work is the same). Three timings:
+all n from scratch, the same n again (every answer kept), and n + 1 after one more log landed. Checks that
 the n + 1 tables equal a fresh evaluation of the n + 1 logs (timings aside). Writes
 ``bench/results/grounding_cache.json``.
 """
@@ -13,45 +13,33 @@ the n + 1 tables equal a fresh evaluation of the n + 1 logs (timings aside). Wri
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import logging
+import sys
 import tempfile
 import time
 from pathlib import Path
 
 from run_info import load_average, machine_info, write_json_result
 
-from simsplat_core.eval.grounding.gt_scene import language_scene_from_log
 from simsplat_core.eval.grounding.tables import GROUNDING_SPEC, OUTCOMES_SPEC
-from simsplat_core.language.text import default_text_encoder
-from simsplat_core.scene import InitConfig
-from simsplat_core.scene.init import initial_graph
 from simsplat_core.world import WorldConfig
 from simsplat_core.world.generate import generate_log
-from storage import ArtifactStore, write_scene, write_scene_log
+from storage import ArtifactStore
 from storage.grounding_outcomes import CACHE_DIR
-from storage.language_scenes import write_language_scene
 from storage.runs import read_run_table
 from tasks.grounding_eval import evaluate_grounding_run
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository root: the tests' store writer
+from tests.small_store import write_small_store  # noqa: E402
 
 logger = logging.getLogger("bench.grounding_cache")
 MODEL_HASH = "be9c" + "0" * 60
 
 
-def _add_log(store: ArtifactStore, seed: int, config: WorldConfig) -> str:
+def _add_log(root: str, seed: int, config: WorldConfig) -> str:
     """A synthetic log with its initial graph as the scene and a ground-truth language scene; returns its id."""
     log = generate_log(seed, config)
-    write_scene_log(store, log)
-    scene_hash = f"{seed:064x}"
-    graph = initial_graph(log, InitConfig(), set(range(log.num_frames)))
-    records = graph.to_records(f"{log.seq_id}/{scene_hash}")
-    write_scene(store, log.seq_id, scene_hash, records, {})
-    language = language_scene_from_log(log, default_text_encoder(), appearance="ground_truth")
-    node_of = {n.object_id: n.node_id for n in graph.object_nodes}
-    nodes = tuple(sorted((dataclasses.replace(n, node_id=node_of[n.object_id]) for n in language.nodes),
-                         key=lambda n: n.node_id))
-    write_language_scene(store, MODEL_HASH, f"{seed + 1:064x}",
-                         dataclasses.replace(language, nodes=nodes, scene_hash=scene_hash), records)
+    write_small_store(root, log, scene_hash=f"{seed:064x}", model_hash=MODEL_HASH, language_hash=f"{seed + 1:064x}")
     return log.seq_id
 
 
@@ -83,10 +71,10 @@ def main() -> None:
     load_before = load_average()
     with tempfile.TemporaryDirectory() as root:
         store = ArtifactStore(root)
-        seq_ids = [_add_log(store, seed, config) for seed in range(args.logs)]
+        seq_ids = [_add_log(root, seed, config) for seed in range(args.logs)]
         scratch, _ = _timed_run(root, seq_ids, "from-scratch")
         unchanged, _ = _timed_run(root, seq_ids, "nothing-new")
-        seq_ids.append(_add_log(store, args.logs, config))
+        seq_ids.append(_add_log(root, args.logs, config))
         grown, evaluated = _timed_run(root, seq_ids, "one-new-log")
         store.delete(CACHE_DIR)
         scratch_grown, _ = _timed_run(root, seq_ids, "from-scratch-grown")
