@@ -95,13 +95,11 @@ def make_task_runner(kind: RunnerKind, num_cpus: int | None = None):
 # Ray starts its workers at niceness 15 so that they yield to its own daemons on a shared node. On a local run the
 # workers are the job: at niceness 15 any nice-0 process on the machine (the Prefect API server answering the
 # workers' state and log updates, the driver polling, whatever else runs there) takes the cores first, and a
-# reconstruction slows down several-fold on a loaded 2-core machine (bench/bench_ray_niceness.py).
-LOCAL_WORKER_NICENESS = 0
-
-
+# reconstruction slows down several-fold on a loaded machine (bench/bench_ray_niceness.py). Ray adds the setting to the
+# niceness the workers inherit from the driver, so 0 gives them the driver's: a run started with `nice` stays niced.
 def local_worker_env() -> dict[str, str]:
     """Environment of the workers of a local Ray instance this process starts: they run at the driver's priority."""
-    return {"RAY_worker_niceness": str(LOCAL_WORKER_NICENESS)}
+    return {"RAY_worker_niceness": "0"}
 
 
 @contextlib.contextmanager
