@@ -16,13 +16,14 @@ A scene folder (``scene_<hash>.json``, ``calibration/``, ``rgb/<camera>/``, ``po
 * boxes: the 3D boxes of the lidar datum (lidar frame) moved to the world frame; heading = world yaw of
   the box x axis; speed by finite differences; ``visible`` = projects into a camera of that frame and has
   lidar points; categories by ``DGP_CATEGORIES`` on the ontology's class names (unknown -> ``"other"``);
-* ``lidar_depth`` turns a lidar sweep into a camera's sparse z-depth: ``nan`` where no point lands (no
-  measurement, never sky).
+* depth: each camera image carries the sparse z-depth of its sample's lidar sweep (``lidar_depth``): ``nan``
+  where no point lands or on the ego body (no measurement, never sky); it initialises the background.
 """
 
 from __future__ import annotations
 
 import collections
+import dataclasses
 import json
 import logging
 import time
@@ -45,6 +46,7 @@ from simsplat_core.data.dgp_format import (
 )
 from simsplat_core.data.ego_mask import DDAD_EGO_BODY, EgoPolygons, polygon_valid_mask
 from simsplat_core.data.errors import CorruptLogError
+from simsplat_core.data.sparse_depth import project_to_depth
 from simsplat_core.geometry import invert_transform, transform_points, yaw_of_rotation
 from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, node_type_for_category
 
@@ -83,16 +85,16 @@ def lidar_depth(points_world: np.ndarray, K: np.ndarray, cam_to_world: np.ndarra
     Points closer than ``near`` metres or behind the camera are dropped.
     """
     cam = transform_points(invert_transform(cam_to_world), points_world)
-    cam = cam[cam[:, 2] > near]
-    uv = cam @ K.T
-    u = np.floor(uv[:, 0] / uv[:, 2]).astype(np.int64)
-    v = np.floor(uv[:, 1] / uv[:, 2]).astype(np.int64)
-    inside = (u >= 0) & (u < width) & (v >= 0) & (v < height)
-    u, v, z = u[inside], v[inside], cam[inside, 2]
-    depth = np.full(height * width, np.inf)
-    np.minimum.at(depth, v * width + u, z)
-    depth[np.isinf(depth)] = np.nan
-    return depth.reshape(height, width).astype(np.float32)
+    return project_to_depth(cam[cam[:, 2] > near], K, width, height)
+
+
+def with_lidar_depth(image: CameraImage, points_world: np.ndarray) -> CameraImage:
+    """``image`` with the sparse depth of ``points_world`` ``[N, 3]`` (``nan`` where no point lands or where the
+    image's valid mask is off: the ego body is not scenery)."""
+    depth = lidar_depth(points_world, image.K, image.cam_to_world, image.width, image.height)
+    if image.valid_mask is not None:
+        depth[~image.valid_mask] = np.nan
+    return dataclasses.replace(image, depth=depth)
 
 
 def read_lidar_points(path: Path) -> np.ndarray:
@@ -250,8 +252,11 @@ def load_dgp_scene(path: str | Path, image_scale: float = 1.0, seq_id: str | Non
                           polygons.get(datum.sensor, ()))
             for datum in sorted((d for d in sample.datums if d.kind == "image"), key=lambda d: d.sensor)
         ]
-        images.extend(frame_images)
         lidar = _lidar_datum(scene_file, frame_idx, sample)
+        sweep = transform_points(world_from_global @ lidar.world_from_sensor,
+                                 read_lidar_points(root / lidar.filename))
+        frame_images = [with_lidar_depth(image, sweep) for image in frame_images]
+        images.extend(frame_images)
         for oid, observation, class_id in _frame_boxes(root, lidar, frame_idx, world_from_global, frame_images):
             observations[oid].append(observation)
             class_votes[oid][class_id] += 1

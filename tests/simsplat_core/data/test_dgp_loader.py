@@ -80,6 +80,20 @@ def test_lidar_depth_agrees_across_frames_with_the_right_pose(scene_dir: Path, l
     assert right < 0.03 and wrong > 2 * right
 
 
+def test_every_image_carries_its_sweeps_sparse_depth_off_the_ego_body(scene_dir: Path, log: SceneLog) -> None:
+    for img in log.images:
+        assert img.depth is not None and img.depth.shape == (img.height, img.width)
+        measured = np.isfinite(img.depth)
+        assert 0.01 < measured.mean() < 0.9 and not np.isposinf(img.depth).any()  # sparse; no sky claimed
+        if img.valid_mask is not None:
+            assert not measured[~img.valid_mask].any()  # the ego body is not scenery
+    first = log.images[0]
+    expected = lidar_depth(sweep_points_world(scene_dir, first.frame_idx), first.K, first.cam_to_world,
+                           first.width, first.height)
+    assert np.array_equal(np.isfinite(first.depth), np.isfinite(expected) & (
+        first.valid_mask if first.valid_mask is not None else True))
+
+
 def test_side_cameras_mask_the_ego_body(log: SceneLog) -> None:
     for img in log.images:
         if img.camera == "CAMERA_01":
