@@ -33,10 +33,11 @@ PROPOSED = "Delete the white sedan from the scene."
 
 
 def _stored_paths(root: str) -> set[str]:
-    """Every path of the store ``root`` but the edits and the commit locks (``.locks/``: lock files, not
-    artifacts)."""
+    """Every path of the store ``root`` but the edits, the commit locks (``.locks/``: lock files, not
+    artifacts) and the derived caches (``cache/``: search facts and grounding answers, which any reader may
+    fill and which are recomputed when missing)."""
     return {str(p.relative_to(root)) for p in Path(root).rglob("*")
-            if not {"edits", ".locks"} & set(p.relative_to(root).parts)}
+            if not {"edits", ".locks", "cache"} & set(p.relative_to(root).parts)}
 
 
 @pytest.fixture(scope="module")
