@@ -12,7 +12,8 @@ every method) and over every agent:
 
 * the failures of ``scenario.rollout_metrics.scenario_failures`` (a scenario fails when any agent fails);
   rollouts and the log itself are checked the same way, without a baseline (every overlap counts, the labels'
-  own included), so that "a rollout's rate is at most twice the log's" compares like with like;
+  own included) and on the same steps, those the log observed each agent at (as Waymo's sim-agents metrics
+  take validity from the log), so that "a rollout's rate is at most twice the log's" compares like with like;
 * per agent: the share of agents that collide with anyone (``agent_collision``) / leave the road at some
   step (``agent_offroad``), since one scenario's rates are 0 or 1;
 * ADE / FDE at 3 s and 8 s (``displacement_errors`` from the last history step), per agent type too, and
@@ -212,8 +213,12 @@ def score_rollout(scenario: RealScenario, rollout: Rollout | None) -> RolloutSco
     without a baseline (module docstring)."""
     log = scenario.states
     states = log if rollout is None else rollout.states
-    failures = scenario_failures(states, scenario.map.context)
-    agents = score_agents(states, scenario.map.context)
+    # failures are checked on the steps the log observed, for the log and a rollout alike: a predictor fills
+    # an agent's gaps, and a gap is often one object tracked under two ids that take turns (a cyclist and its
+    # rider labelled a pedestrian), which would collide only in the filled-in rollout
+    observed = replace(states, valid=states.valid & log.valid)
+    failures = scenario_failures(observed, scenario.map.context)
+    agents = score_agents(observed, scenario.map.context)
     # ADE and progress over the agents observed at the last history step (as Waymo motion scores them): an
     # agent that appears later is replayed by every predictor and would only dilute the means.
     seen = np.flatnonzero(log.valid[:, scenario.last_given])

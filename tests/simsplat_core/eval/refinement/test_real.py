@@ -137,6 +137,35 @@ def test_log_and_rollouts_are_scored_the_same_way() -> None:
         assert rows[name]["collision_vehicle"] == 1.0 and rows[name]["agent_collision"] == pytest.approx(2 / 4)
 
 
+def test_rollouts_are_checked_on_the_steps_the_log_observed() -> None:
+    """One object tracked under two ids that take turns: a predictor that fills both ids' gaps makes them
+    overlap, but only on steps the log never observed, so neither the log nor the rollout collides."""
+    scenario = _scenario()
+    states = scenario.states
+    xy, valid = states.xy.copy(), states.valid.copy()
+    xy[2] = xy[1]  # "b" is "a" under another id ...
+    valid[1, 1::2] = False  # ... observed on the even steps as "a"
+    valid[2, 0::2] = False  # and on the odd ones as "b"
+    scenario = replace(scenario, states=replace(states, xy=xy, valid=valid))
+
+    class GapFiller:
+        name = "gap-filler"
+
+        def rollout(self, request):
+            from simsplat_core.motion.predictor import Rollout
+
+            filled = request.states.valid.copy()
+            filled[1:3] = True
+            return Rollout(replace(request.states, valid=filled), {}, self.name)
+
+    rows = {r["predictor"] or r["method"]: r for r in R.real_rows([scenario], [GapFiller()]).rows}
+    for name in ("log", "gap-filler"):
+        assert rows[name]["collision_vehicle"] == 0.0 and rows[name]["agent_collision"] == 0.0
+    # the same rollout scored on every step it fills in would collide
+    filled = replace(scenario.states, valid=scenario.states.valid | np.isin(np.arange(4), [1, 2])[:, None])
+    assert R.scenario_failures(filled, scenario.map.context).collision_vehicle
+
+
 def test_resample_to_10_hz() -> None:
     fast = _states(hz=20.0, steps=2 * T)
     grid, resampled = R.on_step_grid(fast)
