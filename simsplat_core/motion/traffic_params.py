@@ -173,6 +173,9 @@ class RouteParams:
             reacted to from the second step).
         max_speed_mps: desired speeds are capped at this.
         refined_m: an agent whose predicted path leaves its log by more than this is ``"refined"``.
+        max_curvature_per_m: a vehicle's (or cyclist's) heading turns by at most this many radians per metre
+            it travels (a bicycle model's steering limit, about a 4 m turning radius): one that barely moves
+            keeps its heading while its route eases it into the lane. Pedestrians turn freely.
     """
 
     min_route_m: float = 2.0
@@ -189,6 +192,7 @@ class RouteParams:
     min_history_steps: int = 2
     max_speed_mps: float = 40.0
     refined_m: float = 0.5
+    max_curvature_per_m: float = 0.25
 
 
 @dataclass(frozen=True)

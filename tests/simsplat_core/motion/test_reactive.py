@@ -258,3 +258,22 @@ def test_an_oncoming_car_that_has_passed_is_no_leader_of_a_left_turn() -> None:
     out = rollout(st, ["oncoming"])
     assert not collides(out.states, 0) and feasible(out.states, 0)
     assert out.states.speed[0, START:].min() > 0.75 * v  # never braked for it
+
+
+# ------------------------------------------------------------------------------------------ (i) steering
+def test_a_waiting_car_keeps_its_heading_until_it_moves() -> None:
+    """A car waiting askew to its lane (a heading the log gives, not its route's) turns into the lane only as
+    it drives, at most ``max_curvature_per_m`` radians per metre: standing, it does not spin on the spot."""
+    x = np.where(TIMES < 5.0, 0.0, 2.5 * (TIMES - 5.0) ** 2)  # waits, then pulls away at 5 m/s2
+    waiting = track(x, 0.8)
+    waiting["heading"] = np.full(T, -0.3)
+    st = states([("ego", "vehicle", track(-80.0 + 10.0 * TIMES, 3.5), CAR), ("c", "vehicle", waiting, CAR)])
+    out = rollout(st, ["ego"]).states
+    heading, xy = out.heading[1, START - 1:], out.xy[1, START - 1:]
+    travelled = np.linalg.norm(np.diff(xy, axis=0), axis=1)
+    limit = ReactivePredictor().params.route.max_curvature_per_m
+    turned = np.abs(np.angle(np.exp(1j * np.diff(heading))))
+    assert (turned <= limit * travelled + 1e-9).all()
+    still = np.cumsum(travelled) < 0.05
+    assert still.sum() > 10 and np.abs(heading[1:][still] + 0.3).max() < 0.02  # standing: as logged
+    assert abs(heading[-1]) < 0.05  # driving: along the lane
