@@ -173,6 +173,10 @@ class InitConfig:
         random_object_points: random points per object without depth (uniform in its box).
         random_ground_radius: radius (metres) around the ego path of the random ground points.
         knn: neighbours averaged for the initial scale (``sqrt(mean d^2)`` of the ``knn`` nearest).
+        box_margin: without instance masks (lidar depth and 3D boxes), a depth point within this many metres
+            of an object's box at that frame belongs to the object ...
+        box_ground_clearance: ... unless it lies less than this above the box's bottom (the road under and
+            around it stays background).
     """
 
     pixel_stride: int = 1
@@ -190,8 +194,13 @@ class InitConfig:
     random_object_points: int = 300
     random_ground_radius: float = 40.0
     knn: int = 3
+    box_margin: float = 0.2
+    box_ground_clearance: float = 0.15
 
     def validate(self, prefix: str) -> None:
+        _check(self.box_margin >= 0, f"{prefix}.box_margin", "must be >= 0", self.box_margin)
+        _check(self.box_ground_clearance >= 0, f"{prefix}.box_ground_clearance", "must be >= 0",
+               self.box_ground_clearance)
         _positive(self, prefix, ("pixel_stride", "background_voxel_pixels", "background_voxel_min",
                                  "background_voxel_max", "object_voxel_pixels", "object_voxel_min",
                                  "object_voxel_max", "sky_radius", "sky_step_deg", "random_background_points",

@@ -5,10 +5,12 @@ node type follows ``ObjectInfo.node_type`` (vehicles rigid, pedestrians non-rigi
 rigid with the constant pose of their first track row). Object poses are the track boxes on the log's
 frame axis.
 
-**With depth** (every training image has ``depth``; ``instance`` when there are objects): each
-training pixel (``InitConfig.pixel_stride``) is back-projected. Pixels whose instance id belongs to an
-object go to that node's box frame (inverse pose of that frame); the rest go to the background. Points
-are merged in voxels (mean position and colour): background voxels are ``background_voxel_pixels``
+**With depth** (every training image has ``depth``): each training pixel (``InitConfig.pixel_stride``) is
+back-projected. Pixels whose instance id belongs to an object go to that node's box frame (inverse pose of
+that frame); the rest go to the background. Without instance masks (lidar depth and 3D boxes: DGP) a point
+belongs to the object whose box at that frame holds it (``InitConfig.box_margin``; the road under the box
+stays background), so that the background does not learn the object and a removed car leaves with its node.
+Points are merged in voxels (mean position and colour): background voxels are ``background_voxel_pixels``
 pixel footprints at the distance of the nearest training camera (quantised to powers of two, so a
 surface gets the same voxel size whichever view saw it), object voxels are a fixed size per object.
 Pixels outside ``valid_mask`` and ``nan`` depth (no measurement) are skipped. **Sky** pixels (``+inf``
@@ -219,6 +221,29 @@ def _sky_cloud(dirs: np.ndarray, rgb: np.ndarray, center: np.ndarray, cfg: InitC
     return PointCloud(pts, mean(rgb), np.full(pts.shape[0], cfg.sky_radius * step), -d)
 
 
+def box_instances(points: np.ndarray, log: SceneLog, objects: list[ObjectInfo], poses: dict[str, np.ndarray],
+                  frame_idx: int, pos: int, cfg: InitConfig) -> np.ndarray:
+    """``[M]`` int32 instance id of the object whose box (at frame ``frame_idx``, position ``pos`` of ``poses``, grown by
+    ``cfg.box_margin`` but for its bottom, raised by ``cfg.box_ground_clearance``) holds each world point
+    ``[M, 3]``; 0 for none, the nearest box centre where boxes overlap."""
+    inst = np.zeros(points.shape[0], np.int32)
+    best = np.full(points.shape[0], np.inf)
+    for obj in objects:
+        track = log.track(obj.object_id)
+        rows = np.flatnonzero(track.frame_idx == frame_idx) if len(track) else np.zeros(0, np.int64)
+        if not rows.size:  # not in this frame
+            continue
+        half = 0.5 * np.asarray(track.size[rows[0]], np.float64)
+        to_local = invert_transform(poses[obj.object_id][pos])
+        local = points @ to_local[:3, :3].T + to_local[:3, 3]
+        inside = (np.abs(local[:, :2]) <= half[:2] + cfg.box_margin).all(axis=1) \
+            & (local[:, 2] >= -half[2] + cfg.box_ground_clearance) & (local[:, 2] <= half[2] + cfg.box_margin)
+        dist = np.linalg.norm(local, axis=1)
+        take = inside & (dist < best)
+        inst[take], best[take] = obj.instance_id, dist[take]
+    return inst
+
+
 def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[ObjectInfo], frames: np.ndarray,
                  poses: dict[str, np.ndarray], center: np.ndarray, cfg: InitConfig
                  ) -> tuple[PointCloud, PointCloud, dict[str, PointCloud]]:
@@ -233,20 +258,23 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
         depth = img.depth[ij[:, 0], ij[:, 1]].astype(np.float64)
         rgb = img.image[ij[:, 0], ij[:, 1]].astype(np.float64)
         nrm = normal_map(img)[ij[:, 0], ij[:, 1]]
-        inst = img.instance[ij[:, 0], ij[:, 1]] if img.instance is not None else np.zeros(depth.shape, np.int32)
         valid = img.valid_mask[ij[:, 0], ij[:, 1]] if img.valid_mask is not None else np.ones(depth.shape, bool)
         finite = np.isfinite(depth) & (depth > 0) & valid
         sky = np.isposinf(depth) & valid  # nan = no measurement: neither surface nor sky
         sky_dirs.append(dirs[sky])
         sky_rgb.append(rgb[sky])
         pts = img.cam_to_world[:3, 3] + dirs[finite] * depth[finite, None]
-        inst_f, rgb_f, nrm_f = inst[finite], rgb[finite], nrm[finite]
+        pos = int(np.searchsorted(frames, img.frame_idx))
+        if img.instance is not None:
+            inst_f = img.instance[ij[:, 0], ij[:, 1]][finite]
+        else:  # no instance masks: an object's points are those in its box (else the background learns it)
+            inst_f = box_instances(pts, log, objects, poses, img.frame_idx, pos, cfg)
+        rgb_f, nrm_f = rgb[finite], nrm[finite]
         footprint = depth[finite] / float(img.K[0, 0])
         is_obj = np.isin(inst_f, list(inst_to_obj)) if inst_to_obj else np.zeros(inst_f.shape, bool)
         bg_pts.append(pts[~is_obj])
         bg_rgb.append(rgb_f[~is_obj])
         bg_nrm.append(nrm_f[~is_obj])
-        pos = int(np.searchsorted(frames, img.frame_idx))
         for iid in np.unique(inst_f[is_obj]):
             obj = inst_to_obj[int(iid)]
             sel = inst_f == iid

@@ -127,3 +127,29 @@ def test_random_init_without_depth(tiny_log: SceneLog) -> None:
         assert bool((node.gaussians.means.abs() <= size / 2 + 1e-5).all())  # inside the box
     rgb = graph.nodes[0].gaussians.rgb
     assert float((rgb - 0.5).abs().max()) > 0.05  # coloured from the images, not all grey
+
+
+def test_depth_without_instance_masks_assigns_points_by_box(tiny_log: SceneLog) -> None:
+    """Lidar depth and 3D boxes but no instance masks (a DGP scene): an object's depth points initialise its
+    node, not the background, so that removing the node removes the object."""
+    images = tuple(dataclasses.replace(img, instance=None) for img in tiny_log.images)
+    log = dataclasses.replace(tiny_log, images=images)
+    cfg = InitConfig()
+    train = {img.frame_idx for img in log.images if img.split == "train"}
+    graph = initial_graph(log, cfg, train)
+    assert graph.metadata["init"] == "depth"
+    bg = graph.nodes[0].gaussians.means.double().numpy()
+    seen = 0
+    for node in graph.nodes[1:]:
+        track = tiny_log.track(node.object_id)
+        size = track.size[0]
+        means = node.gaussians.means.double().numpy()
+        if len(means) != cfg.random_object_points:  # initialised from depth: in the grown box
+            seen += 1
+            assert (np.abs(means) <= size / 2 + cfg.box_margin + 1e-6).all()
+        for f in sorted(train & set(track.frame_idx.tolist())):
+            to_local = np.linalg.inv(node.poses[f].double().numpy())
+            local = bg @ to_local[:3, :3].T + to_local[:3, 3]
+            deep = (np.abs(local) < size / 2 - 0.3).all(axis=1) & (local[:, 2] > -size[2] / 2 + 0.3)
+            assert int(deep.sum()) == 0, (node.object_id, f)
+    assert seen >= 2
