@@ -3,7 +3,9 @@
 * parked obstacles the log passes: an unedited given agent whose logged box never moves farther than
   ``CorridorParams.parked_move_m`` (a parked car, a kerb obstacle) is no leader of an unedited agent whose
   logged route runs past it without touching it (the log drove by it; a labelled box often reaches into the
-  lane); a log that drives into it (a scene built around an obstacle) keeps it a leader;
+  lane); a log that drives into it (a scene built around an obstacle) keeps it a leader; a pedestrian standing
+  still is no leader of an unedited pedestrian whose logged route runs past it even where their boxes touch
+  (people squeeze past each other);
 * companions: two unedited agents of one category moving side by side or one just behind the other at the same
   speed and heading at the last observed step (pedestrians walking together) travel in company:
   neither is the other's leader (``CorridorParams.company_*``);
@@ -21,6 +23,8 @@ from simsplat_core.geometry import wrap_angle
 from simsplat_core.motion.corridor import Pairs
 from simsplat_core.motion.traffic_params import CorridorParams
 from simsplat_core.scenario.agents import AgentStates
+from simsplat_core.scenario.metrics import kind_of
+from simsplat_core.scenario.vocabulary import PEDESTRIAN
 
 
 def parked_in_log(states: AgentStates, move_m: float) -> np.ndarray:
@@ -90,6 +94,7 @@ class IgnoredLeaders:
         unedited: ``[N]`` driven agents that follow their own logged route.
         log_end: ``[N]`` arc length where each driven agent's logged route ends.
         company: ``[N, A]`` pairs travelling in company.
+        walkers: ``[N, A]`` pairs of pedestrians.
     """
 
     parked: np.ndarray
@@ -97,6 +102,7 @@ class IgnoredLeaders:
     unedited: np.ndarray
     log_end: np.ndarray
     company: np.ndarray
+    walkers: np.ndarray
 
     @classmethod
     def of(cls, states: AgentStates, rows: np.ndarray, step: int, given: np.ndarray, is_log: np.ndarray,
@@ -104,13 +110,16 @@ class IgnoredLeaders:
         """The filters of driven ``rows [N]`` (``log_end [N]``, 0 for lane-graph routes) at the last observed
         ``step``; ``given`` / ``is_log`` ``[A]``: agents not driven / unedited."""
         parked = given & is_log & parked_in_log(states, params.parked_move_m)
+        walking = np.array([kind_of(c) == PEDESTRIAN for c in states.categories])
         return cls(parked=parked, clear=passes_clear(states, rows, parked),
                    unedited=is_log[rows] & (log_end > 0.0), log_end=log_end,
-                   company=in_company(states, rows, step, is_log, params))
+                   company=in_company(states, rows, step, is_log, params),
+                   walkers=walking[rows][:, None] & walking[None])
 
     def pairs(self, pairs: Pairs) -> np.ndarray:
         """``[P]`` bool: the pair's other agent is no leader of its driven agent."""
-        passed = self.parked[pairs.j] & self.clear[pairs.i, pairs.j] & self.unedited[pairs.i] \
+        passable = self.clear[pairs.i, pairs.j] | self.walkers[pairs.i, pairs.j]
+        passed = self.parked[pairs.j] & passable & self.unedited[pairs.i] \
             & (pairs.along < self.log_end[pairs.i])
         return passed | self.company[pairs.i, pairs.j]
 

@@ -262,9 +262,8 @@ class ReactivePredictor:
             v_new = next_speed(drv.v, accel, dt, lead.gap, drv.idm)
             drv.s = drv.s + v_new * dt
             drv.v = v_new
-            pos, yaw = self._pose(grid, drv)
-            yaw = self._steered(yaw, heading[drv.rows, t - 1], cur_valid[drv.rows] & ~drv.is_pedestrian,
-                                v_new * dt)
+            pos, yaw = self._steered_pose(grid, drv, heading[drv.rows, t - 1], cur_valid[drv.rows] & ~drv.is_pedestrian,
+                                          v_new * dt)
             xy[drv.rows, t], heading[drv.rows, t], speed[drv.rows, t] = pos, yaw, v_new
             valid[drv.rows, t] = t <= drv.last_valid
             log_ok = states.valid[drv.rows, t]
@@ -323,12 +322,14 @@ class ReactivePredictor:
         heading[rows] = states.heading[rows, t - 1 + first[rows]]
         return xy, heading, cur_valid | appear
 
-    def _steered(self, yaw: np.ndarray, previous: np.ndarray, limited: np.ndarray, travelled: np.ndarray) -> np.ndarray:
-        """``[N]`` route headings ``yaw`` turned from ``previous`` by at most ``max_curvature_per_m`` times the
+    def _steered_pose(self, grid: RouteGrid, drv: _Driven, previous: np.ndarray, limited: np.ndarray,
+                      travelled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_pose`, its heading turned from ``previous [N]`` by at most ``max_curvature_per_m`` times the
         distance ``travelled [N]`` where ``limited [N]`` (vehicles observed at the previous step)."""
+        pos, yaw = self._pose(grid, drv)
         limit = self.params.route.max_curvature_per_m * np.abs(travelled)
         turned = previous + np.clip(wrap_angle(yaw - previous), -limit, limit)
-        return np.where(limited, wrap_angle(turned), yaw)
+        return pos, np.where(limited, wrap_angle(turned), yaw)
 
     def _pose(self, grid: RouteGrid, drv: _Driven) -> tuple[np.ndarray, np.ndarray]:
         """``([N, 2] centre, [N] yaw)`` of the driven agents: route point plus lateral offset."""

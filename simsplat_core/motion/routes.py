@@ -8,7 +8,9 @@
 * Pedestrians without a logged path walk straight along their heading.
 
 Desired speed ``v_ref [T]``: the speed along the route the log implies (differences of the logged
-positions' arc lengths; the logged speed on lane-graph routes), held after the last valid step.
+positions' arc lengths; the logged speed on lane-graph routes), held after the last valid step and averaged
+over ``RouteParams.speed_window_s`` (box jitter); without a logged route, scaled to cover no more than the log's
+displacement by its last valid step (a box jittering in place, its velocity field noise, stays in place).
 
 Agents that cannot be driven get a reason instead (:data:`REASONS`): replayed, never silently dropped.
 """
@@ -172,6 +174,29 @@ def _speeds_from_log(times: np.ndarray, steps: np.ndarray, speed: np.ndarray) ->
     return np.interp(times, times[steps], np.abs(speed[steps]))
 
 
+def smoothed_speeds(v: np.ndarray, times: np.ndarray, window_s: float) -> np.ndarray:
+    """``[T]`` speeds ``v [T]`` averaged over a centred window of ``window_s`` seconds (the ends held: the
+    distance covered inside the log is kept)."""
+    dt = float(np.median(np.diff(times))) if len(times) > 1 else 0.0
+    half = int(round(0.5 * window_s / dt)) if dt > 0 else 0
+    if half < 1 or len(v) < 2:
+        return v
+    padded = np.concatenate([np.full(half, v[0]), v, np.full(half, v[-1])])
+    return np.convolve(padded, np.full(2 * half + 1, 1.0 / (2 * half + 1)), mode="valid")
+
+
+def _within_logged_displacement(v_ref: np.ndarray, times: np.ndarray, xy: np.ndarray, last_obs: int,
+                                last_valid: int) -> np.ndarray:
+    """``v_ref [T]`` scaled down so that by ``last_valid`` it covers no more than the logged displacement from
+    ``last_obs`` (``xy [T, 2]``): an agent whose logged future is too short to follow (a box jittering in place)
+    keeps the logged speeds' shape, not the noise of its velocity field."""
+    if last_valid <= last_obs:
+        return v_ref
+    planned = float(np.sum(v_ref[last_obs + 1:last_valid + 1] * np.diff(times[last_obs:last_valid + 1])))
+    net = float(np.linalg.norm(xy[last_valid] - xy[last_obs]))
+    return v_ref * (net / planned) if planned > net else v_ref
+
+
 def plan_routes(request: RolloutRequest, params: RouteParams, pedestrian: PedestrianParams) -> RoutePlan:
     """Routes of the request's free agents (see the module docstring)."""
     states, start = request.states, request.start_step
@@ -228,11 +253,15 @@ def _route_of(request: RolloutRequest, row: int, kind: str, last_obs: int, lanes
                 else np.zeros((0, 2))
             path = Path.from_points(np.concatenate([pts, ext])) if len(ext) else base
             s_all, lat = project_points(path, xy[steps])
-            v_ref = np.minimum(_speeds_from_arc(times, steps, s_all, t_count), cap)
+            v_ref = np.minimum(smoothed_speeds(_speeds_from_arc(times, steps, s_all, t_count), times,
+                                               params.speed_window_s), cap)
             k = int(np.flatnonzero(steps == last_obs)[0])
             return "", AgentRoute(row, kind, path, float(s_all[k]), float(lat[k]), v_ref, last_valid, True, shift,
                                   float(s_all.max()))
-    v_ref = np.minimum(_speeds_from_log(times, steps[steps >= last_obs], speed), cap)
+    v_ref = np.minimum(smoothed_speeds(_speeds_from_log(times, steps[steps >= last_obs], speed), times,
+                                       params.speed_window_s), cap)
+    if request.use_log_routes:
+        v_ref = _within_logged_displacement(v_ref, times, xy, last_obs, last_valid)
     direction = np.array([np.cos(heading0), np.sin(heading0)])
     if kind == PEDESTRIAN:
         path = Path.from_points(np.stack([xy[last_obs], xy[last_obs] + params.route_length_m * direction]))

@@ -173,6 +173,9 @@ class RouteParams:
             reacted to from the second step).
         max_speed_mps: desired speeds are capped at this.
         refined_m: an agent whose predicted path leaves its log by more than this is ``"refined"``.
+        speed_window_s: desired speeds are the logged ones averaged over this window (centred): a box that
+            jitters from step to step gives speeds that jump by metres per second, and an agent that follows
+            every drop but speeds up only at its comfortable rate falls behind its log.
         max_curvature_per_m: a vehicle's (or cyclist's) heading turns by at most this many radians per metre
             it travels (a bicycle model's steering limit, about a 4 m turning radius): one that barely moves
             keeps its heading while its route eases it into the lane. Pedestrians turn freely.
@@ -192,6 +195,7 @@ class RouteParams:
     min_history_steps: int = 2
     max_speed_mps: float = 40.0
     refined_m: float = 0.5
+    speed_window_s: float = 1.0
     max_curvature_per_m: float = 0.25
 
 

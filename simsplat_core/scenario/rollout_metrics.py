@@ -44,6 +44,8 @@ PROGRESS_CLIP: tuple[float, float] = (0.0, 2.0)
 STOP_SPEED_MPS = 0.5
 #: An agent is stopped for good when it is stopped over this many last steps of the rollout.
 STOP_STEPS = 10
+#: Steps over which a stopped agent's speed is measured (box jitter averages out).
+STOP_BASELINE_STEPS = 5
 #: Columns of :func:`rates` (the ``motion`` table's failure rates), in table order.
 FAILURE_COLUMNS: tuple[str, ...] = ("collision_vehicle", "collision_pedestrian", "offroad", "kinematic", "failure")
 
@@ -281,14 +283,17 @@ def _path_lengths(xy: np.ndarray, valid: np.ndarray) -> np.ndarray:
 
 
 def _stopped_at_end(states: AgentStates, rows: np.ndarray) -> np.ndarray:
-    """``[N]`` bool: valid over the last ``STOP_STEPS + 1`` steps and slower than ``STOP_SPEED_MPS`` on each
-    of the last ``STOP_STEPS`` (speed from the box centres' displacement)."""
-    if states.num_steps < STOP_STEPS + 1:
+    """``[N]`` bool: valid over the last ``STOP_STEPS + STOP_BASELINE_STEPS`` steps and slower than
+    ``STOP_SPEED_MPS`` on each of the last ``STOP_STEPS``, the speed measured by the box centre's displacement
+    over ``STOP_BASELINE_STEPS`` steps (a stopped box that jitters by a few centimetres a step is stopped, an
+    agent walking slowly is not, whether in the log or a rollout)."""
+    k = STOP_BASELINE_STEPS
+    if states.num_steps < STOP_STEPS + k:
         return np.zeros(len(rows), dtype=bool)
-    tail = slice(states.num_steps - STOP_STEPS - 1, states.num_steps)
-    xy, valid = states.xy[rows, tail], states.valid[rows, tail]  # [N, S+1, 2], [N, S+1]
-    dt = np.maximum(np.diff(states.times[tail]), 1e-9)  # [S]
-    speed = np.linalg.norm(np.diff(xy, axis=1), axis=-1) / dt  # [N, S]
+    tail = slice(states.num_steps - STOP_STEPS - k, states.num_steps)
+    xy, valid, times = states.xy[rows, tail], states.valid[rows, tail], states.times[tail]  # [N, S+k, 2], [N, S+k]
+    dt = np.maximum(times[k:] - times[:-k], 1e-9)  # [S]
+    speed = np.linalg.norm(xy[:, k:] - xy[:, :-k], axis=-1) / dt  # [N, S]
     return valid.all(axis=1) & (speed < STOP_SPEED_MPS).all(axis=1)
 
 

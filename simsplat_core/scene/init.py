@@ -223,9 +223,9 @@ def _sky_cloud(dirs: np.ndarray, rgb: np.ndarray, center: np.ndarray, cfg: InitC
 
 def box_instances(points: np.ndarray, log: SceneLog, objects: list[ObjectInfo], poses: dict[str, np.ndarray],
                   frame_idx: int, pos: int, cfg: InitConfig) -> np.ndarray:
-    """``[M]`` int32 instance id of the object whose box (at frame ``frame_idx``, position ``pos`` of ``poses``, grown by
-    ``cfg.box_margin`` but for its bottom, raised by ``cfg.box_ground_clearance``) holds each world point
-    ``[M, 3]``; 0 for none, the nearest box centre where boxes overlap."""
+    """``[M]`` int32 instance id of the object whose box (at frame ``frame_idx``, position ``pos`` of ``poses``,
+    grown by ``cfg.box_margin`` but for its bottom, raised by ``cfg.box_ground_clearance``) holds each world
+    point ``[M, 3]``; 0 for none, the nearest box centre where boxes overlap."""
     inst = np.zeros(points.shape[0], np.int32)
     best = np.full(points.shape[0], np.inf)
     for obj in objects:

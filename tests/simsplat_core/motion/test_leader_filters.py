@@ -96,6 +96,18 @@ def test_a_pedestrian_standing_ahead_still_stops_the_walker() -> None:
     assert out.xy[rear, -1, 0] < -5.0 - PERSON[0]  # never walks through the standing one
 
 
+def test_a_walker_squeezes_past_the_standing_pedestrian_its_log_passes() -> None:
+    """The walker's logged path runs through a person standing on the kerb line (their boxes touch as it
+    passes): an unedited walker passes as logged, where a parked car in the same place would stop it."""
+    walker = ("walker", "pedestrian", track(-20.0 + 1.4 * TIMES, 6.0), PERSON)
+    st = states([EGO, walker, ("standing", "pedestrian", track(np.full(T, -14.0), 6.2), PERSON)])
+    log_path = travelled(st, "walker")
+    assert travelled(run(st, NO_PASSING), "walker") < 0.6 * log_path
+    assert travelled(run(st), "walker") > 0.95 * log_path
+    car = states([EGO, walker, ("parked", "vehicle", track(np.full(T, -14.0), 6.2), CAR)])
+    assert travelled(run(car), "walker") < 0.6 * log_path
+
+
 # ------------------------------------------------------------------------------------------ mutual leaders
 def test_mutual_leaders_release_one_of_the_pair_only() -> None:
     rows = np.array([3, 5, 7])  # driven agents' rows

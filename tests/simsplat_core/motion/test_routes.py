@@ -79,12 +79,41 @@ def test_a_logged_route_keeps_the_logged_positions_and_speeds() -> None:
     assert np.isnan(left[0]) and left[1] == pytest.approx(-3.5)
 
 
+def test_desired_speeds_average_out_box_jitter() -> None:
+    """A box that jitters 0.2 m along the road from step to step: the logged speed jumps by 4 m/s, the desired
+    speed stays near the true 8 m/s and the distance it covers is the log's."""
+    jitter = 0.2 * (np.arange(T) % 2)
+    plan = _plan([("car", "vehicle", track(8.0 * TIMES + jitter, 0.0), CAR)])
+    car = _route(plan, 1)
+    raw = np.diff(8.0 * TIMES + jitter) / np.diff(TIMES)
+    assert np.ptp(raw[START:]) > 3.0
+    future = np.arange(START, T - 6)
+    np.testing.assert_allclose(car.v_ref[future], 8.0, atol=0.25)
+    travelled = float(np.sum(car.v_ref[START:] * np.diff(TIMES)[START - 1:]))
+    assert travelled == pytest.approx(8.0 * (TIMES[-1] - TIMES[START - 1]), rel=0.03)
+
+
+def test_an_agent_the_log_keeps_in_place_stays_in_place() -> None:
+    """A pedestrian whose box jitters in place while its velocity field says 0.6 m/s (no route to follow): its
+    desired speeds cover no more than the log's displacement by its last step."""
+    jitter = 0.05 * (np.arange(T) % 2)
+    person = track(5.0 + jitter, -4.0)
+    person["speed"] = np.full(T, 0.6)
+    plan = _plan([("p", "pedestrian", person, PERSON)])
+    walker = _route(plan, 1)
+    assert not walker.from_log
+    covered = float(np.sum(walker.v_ref[START:] * np.diff(TIMES)[START - 1:]))
+    assert covered <= abs(jitter[-1] - jitter[START - 1]) + 1e-9
+    unbound = _plan([("p", "pedestrian", person, PERSON)], use_log_routes=False)
+    assert float(unbound.routes[0].v_ref[START:].mean()) == pytest.approx(0.6)  # no log intent: the speed field
+
+
 def test_a_logged_route_continues_past_the_end_of_the_log() -> None:
     plan = _plan([("car", "vehicle", track(10.0 * TIMES, 0.0), CAR)], valid={"car": STEPS <= 40})
     car = _route(plan, 1)
     assert car.last_valid == 40
     assert car.path.length > 10.0 * TIMES[40] + 200.0  # continued on the lane graph
-    assert np.all(car.v_ref[41:] == car.v_ref[40])  # the last speed held
+    np.testing.assert_allclose(car.v_ref[41:], car.v_ref[40], rtol=1e-9)  # the last speed held
 
 
 def test_without_log_routes_vehicles_follow_the_lane_from_where_they_are() -> None:

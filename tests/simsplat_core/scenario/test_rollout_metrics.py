@@ -192,6 +192,23 @@ def test_stopped_agent_counts_in_stopped_share_and_lowers_progress() -> None:
     assert prog.as_row() == {"progress": pytest.approx(prog.progress), "stopped_share": pytest.approx(0.5)}
 
 
+def test_a_stopped_box_that_jitters_is_stopped() -> None:
+    """A car that stops for good in the log, its box jittering 6 cm a step afterwards (0.6 m/s from one step to
+    the next): stopped in the log as in a rollout that stops it smoothly. A pedestrian walking at 0.7 m/s with
+    the same jitter is not."""
+    xy = _lines([10.0, 10.0, 0.7], [0.0, 10.0, 20.0])
+    stop = START + 20
+    xy[1, stop:] = xy[1, stop]
+    smooth = xy.copy()
+    jitter = 0.06 * (np.arange(T) % 2)
+    xy[1, stop:, 0] += jitter[stop:]
+    xy[2, :, 0] += jitter
+    kinds = ["vehicle", "vehicle", "pedestrian"]
+    log = _states(xy, kinds)
+    for states in (log, _states(smooth, kinds)):
+        np.testing.assert_array_equal(R.progress_and_stops(states, log, START).stopped, [False, True, False])
+
+
 def test_progress_is_clipped_and_undefined_without_moving_agents() -> None:
     log = _states(_lines([5.0], [0.0]), ["vehicle"])
     fast = _states(_lines([50.0], [0.0]), ["vehicle"])
