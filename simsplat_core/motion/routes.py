@@ -237,7 +237,9 @@ def _route_of(request: RolloutRequest, row: int, kind: str, last_obs: int, lanes
         return REVERSES, None
     times, t_count = states.times, states.num_steps
     heading0 = float(states.heading[row, last_obs])
-    future_len = float(np.linalg.norm(np.diff(xy[future], axis=0), axis=1).sum()) if len(future) > 1 else 0.0
+    # length of the logged future with box jitter thinned out (a box wobbling in place is no route)
+    future_len = float(np.linalg.norm(np.diff(_thin(xy[future], params.point_spacing_m), axis=0), axis=1).sum()) \
+        if len(future) > 1 else 0.0
     shift = _lane_shift(lanes, xy[last_obs], heading0, params) if kind == VEHICLE else (np.nan, np.nan)
     cap = pedestrian.walk_speed_mps if kind == PEDESTRIAN else params.max_speed_mps
     last_valid = int(future[-1])

@@ -93,6 +93,15 @@ def test_desired_speeds_average_out_box_jitter() -> None:
     assert travelled == pytest.approx(8.0 * (TIMES[-1] - TIMES[START - 1]), rel=0.03)
 
 
+def test_a_box_wobbling_in_place_is_no_logged_route() -> None:
+    """A car whose box wobbles 0.1 m from step to step while it creeps 0.9 m (8 m summed over the future): its log
+    fixes no direction, so it takes the lane graph."""
+    wobble = track(30.0 + 0.1 * (np.arange(T) % 2) + 0.01 * np.arange(T), 0.0)
+    wobble["speed"] = np.full(T, 1.0)  # the velocity field says it moves: not parked
+    car = _route(_plan([("car", "vehicle", wobble, CAR)]), 1)
+    assert not car.from_log
+
+
 def test_an_agent_the_log_keeps_in_place_stays_in_place() -> None:
     """A pedestrian whose box jitters in place while its velocity field says 0.6 m/s (no route to follow): its
     desired speeds cover no more than the log's displacement by its last step."""
