@@ -23,8 +23,6 @@ from simsplat_core.geometry import wrap_angle
 from simsplat_core.motion.corridor import Pairs
 from simsplat_core.motion.traffic_params import CorridorParams
 from simsplat_core.scenario.agents import AgentStates
-from simsplat_core.scenario.metrics import kind_of
-from simsplat_core.scenario.vocabulary import PEDESTRIAN
 
 
 def parked_in_log(states: AgentStates, move_m: float) -> np.ndarray:
@@ -106,11 +104,10 @@ class IgnoredLeaders:
 
     @classmethod
     def of(cls, states: AgentStates, rows: np.ndarray, step: int, given: np.ndarray, is_log: np.ndarray,
-           log_end: np.ndarray, params: CorridorParams) -> IgnoredLeaders:
+           walking: np.ndarray, log_end: np.ndarray, params: CorridorParams) -> IgnoredLeaders:
         """The filters of driven ``rows [N]`` (``log_end [N]``, 0 for lane-graph routes) at the last observed
-        ``step``; ``given`` / ``is_log`` ``[A]``: agents not driven / unedited."""
+        ``step``; ``given`` / ``is_log`` / ``walking`` ``[A]``: agents not driven / unedited / pedestrians."""
         parked = given & is_log & parked_in_log(states, params.parked_move_m)
-        walking = np.array([kind_of(c) == PEDESTRIAN for c in states.categories])
         return cls(parked=parked, clear=passes_clear(states, rows, parked),
                    unedited=is_log[rows] & (log_end > 0.0), log_end=log_end,
                    company=in_company(states, rows, step, is_log, params),

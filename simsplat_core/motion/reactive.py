@@ -212,7 +212,8 @@ class ReactivePredictor:
         cos_cross = np.cos(np.deg2rad(p.gap.crossing_deg))
         crosswalks = request.map.context.crosswalks
         last_z = z[drv.rows, start - 1].copy()
-        ignored = IgnoredLeaders.of(states, drv.rows, start - 1, given, is_log, drv.log_end, p.corridor)
+        ignored = IgnoredLeaders.of(states, drv.rows, start - 1, given, is_log, is_ped_all, drv.log_end,
+                                     p.corridor)
         for t in range(start, t_count):
             dt = float(states.times[t] - states.times[t - 1])
             cur_xy, cur_heading, cur_valid = xy[:, t - 1], heading[:, t - 1], valid[:, t - 1]

@@ -28,6 +28,7 @@ from simsplat_core.scenario.geometry import segment_distances
 from simsplat_core.scenario.lane_graph import LaneGraph
 from simsplat_core.scenario.metrics import STATIC, kind_of
 from simsplat_core.scenario.path import Path
+from simsplat_core.scenario.trajectory import moving_average
 from simsplat_core.scenario.vocabulary import PEDESTRIAN, VEHICLE
 
 logger = logging.getLogger(__name__)
@@ -118,10 +119,7 @@ def _smooth(points: np.ndarray, window: int) -> np.ndarray:
     """Moving average of ``[N, 2]`` points over ``window`` points, both ends pinned."""
     if window < 2 or len(points) <= 2:
         return points
-    half = window // 2
-    padded = np.concatenate([np.repeat(points[:1], half, 0), points, np.repeat(points[-1:], half, 0)])
-    kernel = np.ones(window) / window
-    out = np.stack([np.convolve(padded[:, c], kernel, mode="valid") for c in range(2)], axis=1)[:len(points)]
+    out = moving_average(points, window)
     out[0], out[-1] = points[0], points[-1]
     return out
 
@@ -181,8 +179,7 @@ def smoothed_speeds(v: np.ndarray, times: np.ndarray, window_s: float) -> np.nda
     half = int(round(0.5 * window_s / dt)) if dt > 0 else 0
     if half < 1 or len(v) < 2:
         return v
-    padded = np.concatenate([np.full(half, v[0]), v, np.full(half, v[-1])])
-    return np.convolve(padded, np.full(2 * half + 1, 1.0 / (2 * half + 1)), mode="valid")
+    return moving_average(v, 2 * half + 1)
 
 
 def _within_logged_displacement(v_ref: np.ndarray, times: np.ndarray, xy: np.ndarray, last_obs: int,

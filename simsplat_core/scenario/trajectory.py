@@ -53,6 +53,18 @@ def smoothed_velocity(t: np.ndarray, xy: np.ndarray, half_window_s: float) -> np
     return np.where(var > 1e-12, cov / np.maximum(var, 1e-12), 0.0)
 
 
+def moving_average(values: np.ndarray, window: int) -> np.ndarray:
+    """``values [T, ...]`` averaged over ``window`` consecutive samples along axis 0, centred, the ends
+    padded with the first / last sample (``window // 2`` each side; same length as ``values``)."""
+    values = np.asarray(values, dtype=np.float64)
+    half = window // 2
+    padded = np.concatenate([np.repeat(values[:1], half, 0), values, np.repeat(values[-1:], half, 0)])
+    kernel = np.ones(window) / window
+    flat = padded.reshape(len(padded), -1)
+    out = np.stack([np.convolve(flat[:, c], kernel, mode="valid") for c in range(flat.shape[1])], axis=1)
+    return out[:len(values)].reshape(values.shape)
+
+
 def resample_series(t: np.ndarray, values: np.ndarray, at: np.ndarray) -> np.ndarray:
     """``[L, C]`` linear interpolation of ``values`` ``[T, C]`` observed at ``t`` ``[T]`` (increasing), at
     times ``at`` ``[L]``; held constant outside ``t``'s span. Unwrap angles before resampling them."""

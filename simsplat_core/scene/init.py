@@ -52,7 +52,7 @@ from simsplat_core.scene.nodes import (
     SceneNode,
 )
 from simsplat_core.scene.transforms import poses_from_boxes
-from simsplat_core.types import CameraImage, ObjectInfo, SceneLog
+from simsplat_core.types import CameraImage, ObjectInfo, SceneLog, Track
 
 logger = logging.getLogger(__name__)
 
@@ -221,26 +221,25 @@ def _sky_cloud(dirs: np.ndarray, rgb: np.ndarray, center: np.ndarray, cfg: InitC
     return PointCloud(pts, mean(rgb), np.full(pts.shape[0], cfg.sky_radius * step), -d)
 
 
-def box_instances(points: np.ndarray, log: SceneLog, objects: list[ObjectInfo], poses: dict[str, np.ndarray],
-                  frame_idx: int, pos: int, cfg: InitConfig) -> np.ndarray:
+def box_instances(points: np.ndarray, tracks: dict[int, Track], poses: dict[str, np.ndarray], frame_idx: int,
+                  pos: int, cfg: InitConfig) -> np.ndarray:
     """``[M]`` int32 instance id of the object whose box (at frame ``frame_idx``, position ``pos`` of ``poses``,
     grown by ``cfg.box_margin`` but for its bottom, raised by ``cfg.box_ground_clearance``) holds each world
-    point ``[M, 3]``; 0 for none, the nearest box centre where boxes overlap."""
+    point ``[M, 3]``; 0 for none, the nearest box centre where boxes overlap. ``tracks``: instance id -> track."""
     inst = np.zeros(points.shape[0], np.int32)
     best = np.full(points.shape[0], np.inf)
-    for obj in objects:
-        track = log.track(obj.object_id)
-        rows = np.flatnonzero(track.frame_idx == frame_idx) if len(track) else np.zeros(0, np.int64)
+    for instance_id, track in tracks.items():
+        rows = np.flatnonzero(track.frame_idx == frame_idx)
         if not rows.size:  # not in this frame
             continue
         half = 0.5 * np.asarray(track.size[rows[0]], np.float64)
-        to_local = invert_transform(poses[obj.object_id][pos])
+        to_local = invert_transform(poses[track.object_id][pos])
         local = points @ to_local[:3, :3].T + to_local[:3, 3]
         inside = (np.abs(local[:, :2]) <= half[:2] + cfg.box_margin).all(axis=1) \
             & (local[:, 2] >= -half[2] + cfg.box_ground_clearance) & (local[:, 2] <= half[2] + cfg.box_margin)
         dist = np.linalg.norm(local, axis=1)
         take = inside & (dist < best)
-        inst[take], best[take] = obj.instance_id, dist[take]
+        inst[take], best[take] = instance_id, dist[take]
     return inst
 
 
@@ -249,6 +248,7 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
                  ) -> tuple[PointCloud, PointCloud, dict[str, PointCloud]]:
     """``(background, sky, {object_id: cloud in its box frame})`` from the depth of ``train_images``."""
     inst_to_obj = {o.instance_id: o for o in objects}
+    tracks = {o.instance_id: log.track(o.object_id) for o in objects}  # for logs without instance masks
     bg_pts, bg_rgb, bg_nrm, sky_dirs, sky_rgb = [], [], [], [], []
     obj_parts: dict[str, list[tuple[np.ndarray, ...]]] = {o.object_id: [] for o in objects}
     for img in train_images:
@@ -268,7 +268,7 @@ def depth_clouds(log: SceneLog, train_images: list[CameraImage], objects: list[O
         if img.instance is not None:
             inst_f = img.instance[ij[:, 0], ij[:, 1]][finite]
         else:  # no instance masks: an object's points are those in its box (else the background learns it)
-            inst_f = box_instances(pts, log, objects, poses, img.frame_idx, pos, cfg)
+            inst_f = box_instances(pts, tracks, poses, img.frame_idx, pos, cfg)
         rgb_f, nrm_f = rgb[finite], nrm[finite]
         footprint = depth[finite] / float(img.K[0, 0])
         is_obj = np.isin(inst_f, list(inst_to_obj)) if inst_to_obj else np.zeros(inst_f.shape, bool)

@@ -28,7 +28,7 @@ import numpy as np
 from simsplat_core.language.codebooks import cosine_scores
 from simsplat_core.language.scene_language import LanguageScene
 from simsplat_core.language.text import TextEncoder
-from simsplat_core.scenario.trajectory import ObjectTrajectory, log_trajectories
+from simsplat_core.scenario.trajectory import ObjectTrajectory, log_trajectories, moving_average
 from simsplat_core.types import SceneLog
 
 logger = logging.getLogger(__name__)
@@ -79,9 +79,7 @@ def _check_space(scene: LanguageScene, encoder: TextEncoder) -> None:
 def _smooth(values: np.ndarray, half: int = 2) -> np.ndarray:
     if len(values) <= 1:
         return values
-    kernel = np.ones(2 * half + 1) / (2 * half + 1)
-    padded = np.pad(values, half, mode="edge")
-    return np.convolve(padded, kernel, mode="valid")
+    return moving_average(values, 2 * half + 1)
 
 
 def instantaneous_states(traj: ObjectTrajectory) -> list[str]:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from simsplat_core.scenario.trajectory import curvature, resample_series, smoothed_velocity, yaw_rate
+from simsplat_core.scenario.trajectory import curvature, moving_average, resample_series, smoothed_velocity, yaw_rate
 
 
 def _circle(radius: float, speed: float, seconds: float = 4.0, hz: float = 10.0, left: bool = True):
@@ -45,3 +45,10 @@ def test_resample_series_interpolates_and_holds_the_ends() -> None:
     out = resample_series(t, values, np.array([-1.0, 0.5, 2.0, 5.0]))
     assert np.allclose(out, [[0.0, 10.0], [0.5, 15.0], [2.0, 10.0], [3.0, 0.0]])
     assert np.allclose(resample_series(t[:1], values[:1], np.zeros(3)), np.repeat(values[:1], 3, axis=0))
+
+
+def test_moving_average_is_centred_with_held_ends() -> None:
+    np.testing.assert_allclose(moving_average(np.array([0.0, 0.0, 3.0, 0.0, 0.0]), 3), [0, 1, 1, 1, 0])
+    np.testing.assert_allclose(moving_average(np.array([1.0, 4.0]), 3), [2.0, 3.0])  # ends held: (1+1+4)/3
+    pts = np.stack([np.arange(6.0), np.full(6, 2.0)], axis=1)
+    np.testing.assert_allclose(moving_average(pts, 3)[1:-1], pts[1:-1])  # a line stays a line inside
