@@ -56,11 +56,12 @@ class _RasterizeToPixels(torch.autograd.Function):
         with numba.parallel_chunksize(1):
             cpu_kernels.rasterize_fwd(rec, colors_np, bgs, offsets, ids, order, width, height, tile_size, tile_width,
                                       render, t_final, last_ids)
-        t_final_t = torch.from_numpy(t_final)
         ctx.save_for_backward(means2d, conics, colors, opacities, backgrounds, isect_offsets, flatten_ids)
         ctx.host = (rec, colors_np, offsets, ids, order, bgs, t_final, last_ids)
         ctx.shape = (width, height, tile_size, tile_width)
-        alphas = (1.0 - t_final_t).to(dtype)[..., None]  # [C, H, W, 1]
+        # numpy, not torch, for the host-side glue: a torch op this size wakes torch's thread pool, whose
+        # spinning threads then compete with numba's for the cores
+        alphas = torch.from_numpy((1.0 - t_final).astype(np_dtype, copy=False)[..., None])  # [C, H, W, 1]
         return torch.from_numpy(render).to(device), alphas.to(device)
 
     @staticmethod
@@ -123,10 +124,9 @@ def rasterize_to_pixels(
     if colors.dim() != 3 or colors.shape[:2] != (n_cams, n_gauss):
         raise ValueError(f"colors must be [C, N, D] = [{n_cams}, {n_gauss}, D], got {tuple(colors.shape)}")
     dtype = colors.dtype
-    return _RasterizeToPixels.apply(
-        means2d.to(dtype).contiguous(), conics.to(dtype).contiguous(), colors.contiguous(),
-        opacities.to(dtype).contiguous(), None if backgrounds is None else backgrounds.to(dtype).contiguous(),
-        isect_offsets, flatten_ids, width, height, tile_size,
+    return _RasterizeToPixels.apply(  # contiguous host copies are made by numpy inside (see ``_host``)
+        means2d.to(dtype), conics.to(dtype), colors, opacities.to(dtype),
+        None if backgrounds is None else backgrounds.to(dtype), isect_offsets, flatten_ids, width, height, tile_size,
     )
 
 
