@@ -121,8 +121,9 @@ class LossWeights:
         object_weight: the L1 term weights pixels of objects (ground-truth instance mask, where the log
             has one) this much more than the rest; objects are small in the image and the scene is judged
             on them too (1 = plain L1).
-        object_mask: weight of an L1 loss between the rendered object coverage (composited indicator of
-            object-node Gaussians) and the ground-truth object mask (instance > 0) where the log has
+        object_mask: weight of an L1 loss between the rendered object coverage (composited indicator of the
+            bodies of object nodes: their Gaussians above ``InitConfig.box_ground_clearance``, not their shadow
+            layers) and the ground-truth object mask (instance > 0) where the log has
             instance masks: objects become opaque inside their silhouettes, the background stops
             covering them, and object nodes stop painting background colour around themselves (without
             it a pedestrian's node fills the gap between its legs with sidewalk-coloured Gaussians and
@@ -176,7 +177,14 @@ class InitConfig:
         box_margin: without instance masks (lidar depth and 3D boxes), a depth point within this many metres
             of an object's box at that frame belongs to the object ...
         box_ground_clearance: ... unless it lies less than this above the box's bottom (the road under and
-            around it stays background).
+            around it stays background). The same height splits an object node's Gaussians into its body and
+            its shadow layer (below it), which the object-coverage loss leaves out.
+        shadow_spacing: a moving object (vehicle or pedestrian) starts with a layer of dark, nearly transparent
+            flat Gaussians this far apart on the ground under and around its box. A contact shadow moves with
+            the object: without a layer of its own the background learns it as dark smudges wherever the
+            object has been, and a removed object leaves its shadow behind (0 = no layer).
+        shadow_margin: the layer reaches this far beyond the box's footprint on every side (metres).
+        shadow_opacity: initial opacity of the layer's Gaussians (they start black).
     """
 
     pixel_stride: int = 1
@@ -196,11 +204,16 @@ class InitConfig:
     knn: int = 3
     box_margin: float = 0.2
     box_ground_clearance: float = 0.15
+    shadow_spacing: float = 0.15
+    shadow_margin: float = 0.3
+    shadow_opacity: float = 0.05
 
     def validate(self, prefix: str) -> None:
         _check(self.box_margin >= 0, f"{prefix}.box_margin", "must be >= 0", self.box_margin)
         _check(self.box_ground_clearance >= 0, f"{prefix}.box_ground_clearance", "must be >= 0",
                self.box_ground_clearance)
+        _positive(self, prefix, ("shadow_spacing", "shadow_margin"), allow_zero=True)
+        _check(0 < self.shadow_opacity < 1, f"{prefix}.shadow_opacity", "must be in (0, 1)", self.shadow_opacity)
         _positive(self, prefix, ("pixel_stride", "background_voxel_pixels", "background_voxel_min",
                                  "background_voxel_max", "object_voxel_pixels", "object_voxel_min",
                                  "object_voxel_max", "sky_radius", "sky_step_deg", "random_background_points",

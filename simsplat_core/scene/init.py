@@ -24,6 +24,10 @@ of the no-depth init, coloured from the images.
 the sky dome; object points uniform in their boxes; colours are looked up by projecting into the
 training images (grey where no image sees a point).
 
+**Shadows**: a vehicle or pedestrian node also starts with a shadow layer (:func:`shadow_layer`), dark
+nearly transparent discs on the ground under and around its box, which training darkens where the
+object's contact shadow falls.
+
 Scales start isotropic at the 3DGS nearest-neighbour distance; rotations at identity; opacity at
 ``init_opacity``. Non-rigid offsets start at zero on the node's training frames.
 """
@@ -405,6 +409,33 @@ def _gaussians(cloud: PointCloud, cfg: InitConfig, device: torch.device, max_sca
                               quats=None if quats is None else t(quats))
 
 
+#: Categories whose nodes start with a shadow layer: objects that move and cast a contact shadow.
+SHADOW_CATEGORIES: tuple[str, ...] = ("vehicle", "pedestrian")
+_SHADOW_LIFT_M = 0.01  # the layer floats this far above the box bottom, in front of the road under it
+_SHADOW_RGB = 0.02
+
+
+def shadow_layer(size: np.ndarray, cfg: InitConfig, device: torch.device) -> GaussianSet | None:
+    """The shadow layer of an object whose box is ``size [3]`` (length, width, height; box frame, z up):
+    flat black discs ``shadow_spacing`` apart on the box's bottom plane, over its footprint grown by
+    ``shadow_margin``, at opacity ``shadow_opacity``; ``None`` when ``shadow_spacing`` is 0.
+
+    A black Gaussian of opacity ``a`` in front of the road multiplies the road's colour by ``1 - a``, which
+    is what a shadow does to it; the layer is part of the object's node, so the shadow moves, is edited
+    and is removed with the object."""
+    if cfg.shadow_spacing <= 0:
+        return None
+    half = 0.5 * np.asarray(size[:2], dtype=np.float64) + cfg.shadow_margin
+    counts = np.ceil(2.0 * half / cfg.shadow_spacing).astype(int) + 1  # at most shadow_spacing apart
+    xs, ys = (np.linspace(-h, h, n) for h, n in zip(half, counts))
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    means = np.stack([gx.ravel(), gy.ravel(), np.full(gx.size, -0.5 * float(size[2]) + _SHADOW_LIFT_M)], axis=1)
+    scales = np.tile([0.6 * cfg.shadow_spacing, 0.6 * cfg.shadow_spacing, 0.6 * cfg.shadow_spacing * cfg.flat_ratio],
+                     (means.shape[0], 1))
+    t = lambda a: torch.as_tensor(np.asarray(a, dtype=np.float32), device=device)  # noqa: E731
+    return GaussianSet.create(t(means), t(scales), t(np.full((means.shape[0], 3), _SHADOW_RGB)), cfg.shadow_opacity)
+
+
 def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: int = 0,
                   device: torch.device | str = "cpu") -> SceneGraph:
     """The initial scene graph of ``log`` (see the module docstring); ``train_frames`` are the frames
@@ -442,6 +473,9 @@ def initial_graph(log: SceneLog, cfg: InitConfig, train_frames: set[int], seed: 
             local = (rng.random((cfg.random_object_points, 3)) - 0.5) * size
             cloud = PointCloud(local, np.full((local.shape[0], 3), 0.5), np.zeros(local.shape[0]))
         gs = _gaussians(cloud, cfg, device, half_diag)
+        shadow = shadow_layer(size, cfg, device) if obj.category in SHADOW_CATEGORIES else None
+        if shadow is not None:
+            gs = GaussianSet.cat([gs, shadow])
         common = NodeFields(node_id=node_id, gaussians=gs, object_id=obj.object_id, category=obj.category,
                             scale=half_diag)
         pose_kw = PoseFields(poses=torch.as_tensor(poses[obj.object_id], dtype=torch.float32, device=device),

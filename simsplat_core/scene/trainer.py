@@ -115,16 +115,44 @@ def image_loss(render: SceneRender, batch: ViewBatch, config: ReconstructionConf
     return loss, valid_mean((rgb.detach() - gt).square(), valid)
 
 
+def box_bottoms(log: SceneLog) -> dict[str, float]:
+    """``object_id -> z`` of the bottom of its box in the box frame (``-height / 2``)."""
+    out = {}
+    for obj in log.objects:
+        track = log.track(obj.object_id)
+        out[obj.object_id] = -0.5 * float(track.size[0][2]) if len(track) else -0.5
+    return out
+
+
+@torch.no_grad()
+def body_rows(graph: SceneGraph, bottoms: dict[str, float], clearance: float) -> Tensor:
+    """``[N] bool`` over the graph's canonical rows: Gaussians of object nodes that lie at least ``clearance``
+    above their box's bottom (the object's body; below it is its shadow layer and the road it stands on)."""
+    parts = []
+    for node in graph.nodes:
+        z = node.gaussians.means[:, 2]
+        if node.node_id == BACKGROUND_ID:
+            parts.append(torch.zeros_like(z, dtype=torch.bool))
+        else:
+            parts.append(z >= bottoms.get(node.object_id, -math.inf) + clearance)
+    return torch.cat(parts)
+
+
 def train_step(graph: SceneGraph, optimizer: torch.optim.Optimizer, strategy: DensifyStrategy, state: DensifyState,
-               batch: ViewBatch, step: int, config: ReconstructionConfig, holdout: bool, use_mask: bool
-               ) -> tuple[float, float]:
+               batch: ViewBatch, step: int, config: ReconstructionConfig, holdout: bool,
+               bottoms: dict[str, float] | None) -> tuple[float, float]:
     """One optimisation step on one view batch: compose, render, loss, Adam, densification.
 
+    ``bottoms`` (box bottoms per object, :func:`box_bottoms`) turns on the object-coverage term, which
+    counts the bodies of object nodes (:func:`body_rows`); ``None`` leaves it off.
     Returns ``(loss, mse)`` of the step (the MSE of the colour render, for a running PSNR).
     """
     set_means_lr(optimizer, step, config.iterations, config.lr.means_final_factor)
     composed = graph.at(batch.frame_idx, holdout_offsets=holdout)
-    extra = (composed.node_ids != BACKGROUND_ID).to(composed.means.dtype)[:, None] if use_mask else None
+    extra = None
+    if bottoms is not None:
+        body = body_rows(graph, bottoms, config.init.box_ground_clearance)
+        extra = body[composed.gaussian_ids.to(body.device)].to(composed.means.dtype)[:, None]
     render = render_composed(composed, batch.cam_to_world, batch.Ks, batch.width, batch.height,
                              with_node_ids=False, backend=config.backend, extra=extra, eps2d=graph.eps2d)
     loss, mse = image_loss(render, batch, config)
@@ -186,6 +214,7 @@ def _reconstruct(log: SceneLog, config: ReconstructionConfig, progress: Progress
                 log.seq_id, graph.num_gaussians, len(graph.nodes), t_init - t_start, config.iterations, device)
 
     use_mask = config.loss.object_mask > 0 and all(b.instance is not None for b in train)
+    bottoms = box_bottoms(log) if use_mask else None
     order: list[int] = []
     loss_value = math.nan
     for step in range(config.iterations):
@@ -195,7 +224,7 @@ def _reconstruct(log: SceneLog, config: ReconstructionConfig, progress: Progress
         if config.cameras_per_step < batch.num_cameras:
             batch = batch.subset(sorted(rng.choice(batch.num_cameras, config.cameras_per_step, replace=False).tolist()))
         holdout = bool(rng.random() < config.deform_holdout)
-        loss_value, mse_value = train_step(graph, optimizer, strategy, state, batch, step, config, holdout, use_mask)
+        loss_value, mse_value = train_step(graph, optimizer, strategy, state, batch, step, config, holdout, bottoms)
         report = {"loss": loss_value, "psnr": float(psnr_from_mse(mse_value)),
                   "num_gaussians": float(graph.num_gaussians)}
         if config.eval_every and (step + 1) % config.eval_every == 0 and test:

@@ -38,6 +38,8 @@ def test_defaults_are_valid_and_frozen() -> None:
         ({"densify": DensifyConfig(refine_every=0)}, "ReconstructionConfig.densify.refine_every"),
         ({"densify": DensifyConfig(refine_stop_fraction=2.0)}, "ReconstructionConfig.densify.refine_stop_fraction"),
         ({"init": InitConfig(init_opacity=1.0)}, "ReconstructionConfig.init.init_opacity"),
+        ({"init": InitConfig(shadow_spacing=-0.1)}, "ReconstructionConfig.init.shadow_spacing"),
+        ({"init": InitConfig(shadow_opacity=0.0)}, "ReconstructionConfig.init.shadow_opacity"),
         ({"init": InitConfig(object_voxel_min=1.0, object_voxel_max=0.5)},
          "ReconstructionConfig.init.object_voxel_max"),
         ({"lr": LearningRates(rigid=ParamLRs(colors=-1.0))}, "ReconstructionConfig.lr.rigid.colors"),

@@ -9,7 +9,7 @@ import pytest
 import torch
 
 from simsplat_core.scene import InitConfig, NonRigidNode, ObjectNode, RigidNode
-from simsplat_core.scene.init import initial_graph, normal_map, quats_from_normals, voxel_merge
+from simsplat_core.scene.init import SHADOW_CATEGORIES, initial_graph, normal_map, quats_from_normals, voxel_merge
 from simsplat_core.scene.knn import BRUTE_FORCE_MAX, knn_sq_distances
 from simsplat_core.scene.transforms import quat_to_rotmat
 from simsplat_core.types import CameraImage, SceneLog
@@ -116,7 +116,7 @@ def test_held_out_images_are_not_used(tiny_log: SceneLog) -> None:
 def test_random_init_without_depth(tiny_log: SceneLog) -> None:
     images = tuple(dataclasses.replace(img, depth=None, instance=None) for img in tiny_log.images)
     log = dataclasses.replace(tiny_log, images=images)
-    cfg = InitConfig(random_background_points=2000, random_object_points=50)
+    cfg = InitConfig(random_background_points=2000, random_object_points=50, shadow_spacing=0.0)
     train = {img.frame_idx for img in log.images if img.split == "train"}
     graph = initial_graph(log, cfg, train, seed=3)
     assert graph.metadata["init"] == "random"
@@ -134,7 +134,7 @@ def test_depth_without_instance_masks_assigns_points_by_box(tiny_log: SceneLog) 
     node, not the background, so that removing the node removes the object."""
     images = tuple(dataclasses.replace(img, instance=None) for img in tiny_log.images)
     log = dataclasses.replace(tiny_log, images=images)
-    cfg = InitConfig()
+    cfg = InitConfig(shadow_spacing=0.0)
     train = {img.frame_idx for img in log.images if img.split == "train"}
     graph = initial_graph(log, cfg, train)
     assert graph.metadata["init"] == "depth"
@@ -153,3 +153,61 @@ def test_depth_without_instance_masks_assigns_points_by_box(tiny_log: SceneLog) 
             deep = (np.abs(local) < size / 2 - 0.3).all(axis=1) & (local[:, 2] > -size[2] / 2 + 0.3)
             assert int(deep.sum()) == 0, (node.object_id, f)
     assert seen >= 2
+
+
+def _shadow_rows(node: ObjectNode, size: np.ndarray, cfg: InitConfig) -> torch.Tensor:
+    """Rows of a freshly initialised node that look like its shadow layer: black, ``shadow_opacity``, flat on
+    the box's bottom plane."""
+    g = node.gaussians
+    on_floor = (g.means[:, 2] - (-0.5 * float(size[2]))).abs() < 0.05
+    dark = g.rgb.amax(dim=-1) < 0.05
+    faint = (torch.sigmoid(g.opacity_logits) - cfg.shadow_opacity).abs() < 1e-4
+    return on_floor & dark & faint
+
+
+def test_moving_objects_start_with_a_shadow_layer(tiny_log: SceneLog) -> None:
+    """Vehicles and pedestrians get a grid of faint black discs over their footprint grown by the margin;
+    other objects and the layer-less configuration get none."""
+    cfg = InitConfig()
+    train = {img.frame_idx for img in tiny_log.images if img.split == "train"}
+    graph = initial_graph(tiny_log, cfg, train)
+    without = {n.node_id: n for n in initial_graph(tiny_log, dataclasses.replace(cfg, shadow_spacing=0.0), train).nodes}
+    checked = 0
+    for node in graph.nodes[1:]:
+        assert isinstance(node, ObjectNode)
+        size = tiny_log.track(node.object_id).size[0]
+        shadow = _shadow_rows(node, size, cfg)
+        extra = len(node.gaussians) - len(without[node.node_id].gaussians)
+        if node.category not in SHADOW_CATEGORIES:
+            assert extra == 0 and int(shadow.sum()) == 0
+            continue
+        checked += 1
+        assert int(shadow.sum()) == extra > 0
+        xy = node.gaussians.means[shadow, :2].double().numpy()
+        reach = size[:2] / 2 + cfg.shadow_margin
+        np.testing.assert_allclose(np.abs(xy).max(axis=0), reach, atol=1e-5)  # the grid spans the grown footprint
+        assert (np.diff(np.unique(xy[:, 0].round(6))) <= cfg.shadow_spacing + 1e-6).all()
+    assert checked >= 2
+
+
+def test_body_rows_leave_out_background_and_shadow_layers(tiny_log: SceneLog) -> None:
+    """The object-coverage term counts an object's body, not its shadow layer nor the background."""
+    from simsplat_core.scene.trainer import body_rows, box_bottoms
+
+    cfg = InitConfig()
+    train = {img.frame_idx for img in tiny_log.images if img.split == "train"}
+    graph = initial_graph(tiny_log, cfg, train)
+    body = body_rows(graph, box_bottoms(tiny_log), cfg.box_ground_clearance)
+    offsets = graph.node_offsets()
+    assert body.shape == (graph.num_gaussians,)
+    start, stop = offsets[0]
+    assert not bool(body[start:stop].any())
+    for node in graph.nodes[1:]:
+        assert isinstance(node, ObjectNode)
+        start, stop = offsets[node.node_id]
+        size = tiny_log.track(node.object_id).size[0]
+        rows = body[start:stop]
+        shadow = _shadow_rows(node, size, cfg)
+        assert not bool(rows[shadow].any())
+        high = node.gaussians.means[:, 2] > -0.5 * float(size[2]) + cfg.box_ground_clearance + 1e-4
+        assert bool(rows[high].all())
