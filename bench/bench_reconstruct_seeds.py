@@ -231,33 +231,42 @@ def main() -> None:
         return
     configured(args.set, args.iterations, 1, 0)  # a bad --set fails here, before any work
     threads = args.threads or max(1, (os.cpu_count() or 1) // args.jobs)
-    load_before = load_average()
+    header = {"machine": machine_info(), "load_average_before": load_average(), "jobs": args.jobs,
+              "threads_per_job": threads, "tag": args.tag, "settings": args.set, "iterations": args.iterations,
+              "seeds": args.seeds}
     t0 = time.perf_counter()
     rows: list[dict[str, Any]] = []
     pending = list(args.seeds)
-    running: list[tuple[int, subprocess.Popen]] = []
+    running: dict[int, subprocess.Popen] = {}
     while pending or running:
         while pending and len(running) < args.jobs:
             seed = pending.pop(0)
-            running.append((seed, _spawn(seed, args, threads)))
-        seed, proc = running.pop(0)
-        rows.append(_collect(proc, seed))
-        logger.info("seed %d: test %.2f dB, dynamic %.2f dB, train %.2f dB (%d of %d done)", seed,
-                    rows[-1]["psnr_test"], rows[-1]["psnr_test_dynamic"], rows[-1]["psnr_train"], len(rows),
-                    len(args.seeds))
-    rows.sort(key=lambda r: r["seed"])
-    lines = table(rows)
-    for line in lines:
+            running[seed] = _spawn(seed, args, threads)
+        done = [seed for seed, proc in running.items() if proc.poll() is not None]
+        if not done:
+            time.sleep(1.0)
+            continue
+        for seed in done:
+            rows.append(_collect(running.pop(seed), seed))
+            logger.info("seed %d: test %.2f dB, dynamic %.2f dB, train %.2f dB (%d of %d done)", seed,
+                        rows[-1]["psnr_test"], rows[-1]["psnr_test_dynamic"], rows[-1]["psnr_train"], len(rows),
+                        len(args.seeds))
+        _write(header, rows, t0, args.out, complete=not (pending or running))
+    for line in table(sorted(rows, key=lambda r: r["seed"])):
         logger.info("%s", line)
+
+
+def _write(header: dict[str, Any], rows: list[dict[str, Any]], t0: float, out: Path, complete: bool) -> None:
+    """The JSON so far (written after every seed, so an interrupted run keeps the seeds it finished)."""
+    rows = sorted(rows, key=lambda r: r["seed"])
     write_json_result({
-        "machine": machine_info(), "load_average_before": load_before, "load_average_after": load_average(),
-        "wall_s": round(time.perf_counter() - t0, 1), "jobs": args.jobs, "threads_per_job": threads,
-        "tag": args.tag, "settings": args.set, "iterations": args.iterations,
+        **header, "complete": complete, "load_average_after": load_average(),
+        "wall_s": round(time.perf_counter() - t0, 1),
         "mean_psnr_test": round(float(np.mean([r["psnr_test"] for r in rows])), 3),
         "min_psnr_test": min(r["psnr_test"] for r in rows),
         "min_psnr_test_dynamic": min(r["psnr_test_dynamic"] for r in rows),
-        "rows": rows, "table": lines,
-    }, args.out)
+        "rows": rows, "table": table(rows),
+    }, out)
 
 
 if __name__ == "__main__":
