@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import json
 import logging
 import os
 import platform
@@ -35,6 +34,7 @@ import torch
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_rasterizer import CAMERA_SETUPS, make_scene  # noqa: E402
+from run_info import write_json_result  # noqa: E402
 
 logger = logging.getLogger("bench.rasterizer_compare")
 
@@ -151,9 +151,7 @@ def main() -> None:
                   "alternated in one process (order swapped every rep)",
         "cases": rows,
     }
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    args.out.write_text(json.dumps(result, indent=2))
-    logger.info("wrote %s", args.out)
+    write_json_result(result, args.out)
 
 
 if __name__ == "__main__":
